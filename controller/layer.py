@@ -1,0 +1,87 @@
+"""The one shape every layer of the chain has: tick(ctx, ref) -> ref, params, status."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+from controller.errors import InvalidCommand
+from controller.types import Reference, TickContext
+
+
+@dataclass(frozen=True)
+class Params:
+    """Base of the per-layer frozen parameter dataclasses.
+
+    Subclasses declare fields with defaults and describe unit and range in `metadata`
+    (`field(default=2.5, metadata={"unit": "s", "min": 0.0})`); `validate()` checks them once.
+    """
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            lo, hi = f.metadata.get("min"), f.metadata.get("max")
+            choices = f.metadata.get("choices")
+            if choices is not None and value not in choices:
+                raise InvalidCommand(f"{type(self).__name__}.{f.name}={value!r}; allowed: {list(choices)}")
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                continue
+            if value != value:  # NaN
+                raise InvalidCommand(f"{type(self).__name__}.{f.name} is NaN")
+            if lo is not None and value < lo or hi is not None and value > hi:
+                raise InvalidCommand(
+                    f"{type(self).__name__}.{f.name}={value!r} [{f.metadata.get('unit', '')}] "
+                    f"out of range [{lo}, {hi}]"
+                )
+
+    def replaced(self, **changes: Any):
+        """A validated copy with `changes`; unknown names are rejected with the valid ones listed."""
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise InvalidCommand(f"unknown parameter(s) {unknown} for {type(self).__name__}; valid: {sorted(names)}")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict())
+
+    @classmethod
+    def describe(cls) -> list[dict[str, Any]]:
+        """Field name, default, unit, range: what a GUI or schema needs to render the parameters."""
+        out = []
+        for f in dataclasses.fields(cls):
+            out.append({"name": f.name, "default": f.default, **dict(f.metadata)})
+        return out
+
+
+class Layer:
+    """A stage of the real-time chain.
+
+    `tick` reads the measured state in `ctx` and the upstream reference and returns the reference for
+    the next layer. A disabled layer returns its input unchanged (hrpsys `qRef -> q`).
+    Commands are plain methods, called only by the loop at a tick boundary.
+    """
+
+    name: ClassVar[str] = "layer"
+    description: ClassVar[str] = ""
+
+    def __init__(self) -> None:
+        self.enabled = True
+
+    def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        raise NotImplementedError
+
+    def status(self) -> dict[str, Any]:
+        """A small JSON-able dict that goes into every snapshot."""
+        return {"enabled": self.enabled}
+
+    def reset(self, ctx: TickContext, ref: Reference) -> None:  # noqa: B027 - optional hook
+        """Re-initialise internal state from the current measured state and reference."""

@@ -1,0 +1,283 @@
+"""The fixed-rate control loop: one door in (a command queue drained at tick boundaries), immutable
+snapshots out, paced to wall time or run as fast as possible with the same trajectory either way."""
+
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+import traceback
+from collections.abc import Callable
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from controller.chain import Chain, TickTimer
+from controller.errors import InvalidCommand
+from controller.types import Estimate, Reference, TickContext, frozen_array
+from robot.sensors import GroundTruth, Sensors
+
+log = logging.getLogger(__name__)
+
+
+class Plant(Protocol):
+    """The hardware interface the loop drives (robot.plant.MujocoPlant, or a real robot)."""
+
+    dt_physics: float
+
+    def read(self) -> Sensors: ...
+    def write(self, q_ref_rad: np.ndarray) -> None: ...
+    def step(self, n: int = 1) -> None: ...
+    def ground_truth(self) -> GroundTruth: ...
+    def warnings(self) -> dict[str, int]: ...
+
+
+@dataclass(frozen=True, slots=True)
+class Snapshot:
+    """Everything published after one tick. Immutable: readers may keep it as long as they like."""
+
+    tick: int
+    time_s: float
+    q_cmd_rad: np.ndarray  # (30,) final command written to the servos
+    q_seq_rad: np.ndarray  # (30,) the planned stream (SequencePlayer output)
+    q_meas_rad: np.ndarray  # (30,) encoders
+    reference: Reference  # the final reference (base pose, zmp, wrenches) after the last layer
+    base_rpy_est_rad: np.ndarray  # (3,) KalmanFilter attitude
+    wrenches_ext: np.ndarray  # (4, 6) RemoveForceOffset output, sensor frame
+    cog_world: np.ndarray  # (3,) estimated from encoders + attitude [m]
+    zmp_world: np.ndarray  # (3,) estimated from the foot F/T sensors [m]
+    layers: dict[str, dict[str, Any]]  # per-layer status
+    emergency: dict[str, Any]
+    fault: str | None
+    truth: GroundTruth  # simulator ground truth: GUI and tests only
+    fallen: bool  # from ground truth: BODY below 0.35 m or tilted over 45 deg
+    loop_ms: float  # wall time of the whole tick (chain + physics) [ms]
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+def is_fallen(truth: GroundTruth) -> bool:
+    """BODY lower than 0.35 m, or its z axis more than 45 deg from vertical."""
+    w, x, y, z = truth.base_quat_wxyz
+    up_z = 1.0 - 2.0 * (x * x + y * y)  # z component of BODY's z axis in world
+    return bool(truth.base_pos_world[2] < 0.35 or up_z < np.cos(np.deg2rad(45.0)))
+
+
+StateEstimatorFn = Callable[[Sensors, Estimate, Reference], tuple[np.ndarray, np.ndarray]]
+
+
+class ControlLoop:
+    """Runs the chain every `dt_control_s` against a plant.
+
+    Synchronous use (tests, scenarios, benchmarks): `step()`, `run_for(s)`, `run_until(pred)`.
+    Threaded use (the console): `start(speed)` / `stop()`; commands through `submit(fn)`.
+    A command is a callable run inside the loop at a tick boundary; its result or exception goes to
+    the returned Future. An exception inside the chain is a fault: the loop holds the last command,
+    engages the hard e-stop when present, reports the fault, and keeps running.
+    """
+
+    def __init__(self, plant: Plant, chain_factory: Callable[[Sensors, float], Chain],
+                 dt_control_s: float = 0.005,
+                 state_estimator: StateEstimatorFn | None = None,
+                 on_snapshot: Callable[[Snapshot], None] | None = None) -> None:
+        if dt_control_s <= 0:
+            raise InvalidCommand(f"dt_control_s must be > 0, got {dt_control_s}")
+        self._chain_factory = chain_factory
+        self._state_estimator = state_estimator
+        self._on_snapshot = on_snapshot
+        self.dt_control_s = float(dt_control_s)
+        self._queue: queue.SimpleQueue[tuple[Callable[[], Any], Future]] = queue.SimpleQueue()
+        self._thread: threading.Thread | None = None
+        self._stop_event = threading.Event()
+        self.speed: float | None = 1.0
+        self.tick_timer = TickTimer()
+        self.physics_timer = TickTimer()
+        self._attach(plant)
+
+    # ---- construction / reset -------------------------------------------------------------
+    def _attach(self, plant: Plant) -> None:
+        substeps = self.dt_control_s / plant.dt_physics
+        if abs(substeps - round(substeps)) > 1e-9 or round(substeps) < 1:
+            raise InvalidCommand(
+                f"control period {self.dt_control_s} s must be a whole multiple of the physics step "
+                f"{plant.dt_physics} s"
+            )
+        self.plant = plant
+        self.substeps = int(round(substeps))
+        sensors = plant.read()
+        self.chain = self._chain_factory(sensors, self.dt_control_s)
+        self.tick_count = 0
+        self.fault: str | None = None
+        self._last_ref = Reference.from_arrays(sensors.q_rad)
+        self._last_q_cmd = np.array(sensors.q_rad, dtype=float)
+        self.snapshot: Snapshot = self._make_snapshot(
+            sensors, Estimate(), self._last_ref, self._last_ref, 0.0)
+
+    def replace_plant(self, plant: Plant) -> None:
+        """Swap in a new plant (simulation reset) and rebuild the chain from its sensors."""
+        self._attach(plant)
+
+    # ---- commands -------------------------------------------------------------------------
+    def submit(self, fn: Callable[[], Any]) -> Future:
+        """Queue `fn` to run at the next tick boundary; returns a Future with its result."""
+        fut: Future = Future()
+        self._queue.put((fn, fut))
+        if not self.running:
+            # Nobody is ticking in the background: run it now, still between ticks.
+            self._drain()
+        return fut
+
+    def call(self, fn: Callable[[], Any], timeout_s: float = 5.0) -> Any:
+        """Submit and wait for the result (re-raising the command's exception)."""
+        return self.submit(fn).result(timeout=timeout_s)
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                fn, fut = self._queue.get_nowait()
+            except queue.Empty:
+                return
+            if not fut.set_running_or_notify_cancel():
+                continue
+            try:
+                fut.set_result(fn())
+            except BaseException as exc:  # noqa: BLE001 - a command never kills the loop
+                fut.set_exception(exc)
+
+    # ---- one tick -------------------------------------------------------------------------
+    def step(self) -> Snapshot:
+        t_start = time.perf_counter()
+        self._drain()
+        sensors = self.plant.read()
+        est = Estimate()
+        ctx = TickContext(tick=self.tick_count, time_s=sensors.time_s, dt_s=self.dt_control_s,
+                          sensors=sensors, estimate=est)
+        ref_in = self._last_ref
+        try:
+            ref = self.chain.tick(ctx, ref_in)
+            q_cmd = np.asarray(ref.q_rad, dtype=float)
+            if not np.all(np.isfinite(q_cmd)):
+                raise FloatingPointError("non-finite joint command")
+        except Exception as exc:  # noqa: BLE001 - a fault ends in a safe stop, reported
+            self._on_fault(exc)
+            ref = ref_in.with_(q_rad=self._last_q_cmd)
+            q_cmd = self._last_q_cmd
+        self.plant.write(q_cmd)
+        self._last_q_cmd = np.array(q_cmd, dtype=float)
+        self._last_ref = ref
+        t_phys = time.perf_counter()
+        self.plant.step(self.substeps)
+        self.physics_timer.add((time.perf_counter() - t_phys) * 1e3)
+        self.tick_count += 1
+        seq_ref = getattr(self.chain.layers.get("seq"), "last_output", None) or ref
+        loop_ms = (time.perf_counter() - t_start) * 1e3
+        self.tick_timer.add(loop_ms)
+        self.snapshot = self._make_snapshot(sensors, est, ref, seq_ref, loop_ms)
+        if self._on_snapshot is not None:
+            self._on_snapshot(self.snapshot)
+        return self.snapshot
+
+    def _on_fault(self, exc: BaseException) -> None:
+        msg = f"{type(exc).__name__}: {exc}"
+        if self.fault != msg:
+            log.error("controller fault at t=%.3f s: %s\n%s", self.plant.read().time_s, msg,
+                      traceback.format_exc())
+        self.fault = msg
+        hes = self.chain.layers.get("hes")
+        if hes is not None and hasattr(hes, "engage"):
+            hes.engage(self._last_q_cmd)
+
+    def clear_fault(self) -> None:
+        self.fault = None
+
+    def _make_snapshot(self, sensors: Sensors, est: Estimate, ref: Reference, seq_ref: Reference,
+                       loop_ms: float) -> Snapshot:
+        truth = self.plant.ground_truth()
+        if self._state_estimator is not None:
+            cog, zmp = self._state_estimator(sensors, est, ref)
+        else:
+            cog, zmp = np.zeros(3), np.zeros(3)
+        layers = {}
+        emergency: dict[str, Any] = {"hard_stop": False}
+        for name, layer in self.chain.layers.items():
+            st = layer.status()
+            st["tick_ms"] = self.chain.timers[name].last_ms
+            layers[name] = st
+        hes = self.chain.layers.get("hes")
+        if hes is not None:
+            emergency["hard_stop"] = bool(layers["hes"].get("engaged", False))
+        emergency["fault"] = self.fault
+        return Snapshot(
+            tick=self.tick_count, time_s=float(sensors.time_s if self.tick_count == 0 else truth.time_s),
+            q_cmd_rad=frozen_array(self._last_q_cmd), q_seq_rad=frozen_array(seq_ref.q_rad),
+            q_meas_rad=sensors.q_rad, reference=ref,
+            base_rpy_est_rad=frozen_array(est.base_rpy_rad), wrenches_ext=frozen_array(est.wrenches_ext),
+            cog_world=frozen_array(cog), zmp_world=frozen_array(zmp), layers=layers,
+            emergency=emergency, fault=self.fault, truth=truth, fallen=is_fallen(truth), loop_ms=loop_ms,
+        )
+
+    # ---- synchronous running ----------------------------------------------------------------
+    def run_for(self, seconds: float) -> Snapshot:
+        n = int(round(seconds / self.dt_control_s))
+        snap = self.snapshot
+        for _ in range(n):
+            snap = self.step()
+        return snap
+
+    def run_until(self, predicate: Callable[[Snapshot], bool], timeout_s: float) -> Snapshot:
+        """Step until `predicate(snapshot)` holds; raise TimeoutError after `timeout_s` of sim time."""
+        n = int(round(timeout_s / self.dt_control_s))
+        for _ in range(n):
+            snap = self.step()
+            if predicate(snap):
+                return snap
+        raise TimeoutError(f"condition not reached within {timeout_s} s of simulated time")
+
+    # ---- threaded running -------------------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    def start(self, speed: float | None = 1.0) -> None:
+        """Run in a background thread; `speed` 1.0 = real time, None = as fast as possible."""
+        if speed is not None and not speed > 0:
+            raise InvalidCommand(f"speed must be > 0 or None (as fast as possible), got {speed}")
+        if self.running:
+            return
+        self.speed = speed
+        self._stop_event.clear()
+        self._thread = threading.Thread(target=self._run, name="control-loop", daemon=True)
+        self._thread.start()
+
+    def stop(self, timeout_s: float = 5.0) -> None:
+        self._stop_event.set()
+        if self._thread is not None:
+            self._thread.join(timeout_s)
+        self._thread = None
+        self._drain()
+
+    def _run(self) -> None:
+        wall0 = time.perf_counter()
+        sim0 = self.snapshot.time_s
+        self.overruns = 0
+        while not self._stop_event.is_set():
+            try:
+                self.step()
+            except Exception as exc:  # noqa: BLE001 - the plant itself failed: report, hold, go on
+                self._on_fault(exc)
+                time.sleep(self.dt_control_s)
+                continue
+            if self.speed is not None:
+                target = wall0 + (self.snapshot.time_s - sim0) / self.speed
+                delay = target - time.perf_counter()
+                if delay > 0:
+                    time.sleep(delay)
+                elif delay < -0.25:  # far behind (debugger, overload): re-anchor instead of racing
+                    self.overruns += 1
+                    wall0 = time.perf_counter()
+                    sim0 = self.snapshot.time_s
+            if self.speed is not None and self.speed != getattr(self, "_anchored_speed", self.speed):
+                wall0, sim0 = time.perf_counter(), self.snapshot.time_s
+            self._anchored_speed = self.speed

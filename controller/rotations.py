@@ -1,0 +1,44 @@
+"""Small rotation helpers (roll-pitch-yaw = fixed-axis XYZ, as hrpsys)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def rpy_to_matrix(rpy: np.ndarray) -> np.ndarray:
+    """R = Rz(yaw) Ry(pitch) Rx(roll)."""
+    r, p, y = rpy
+    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+    return np.array([
+        [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+        [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+        [-sp, cp * sr, cp * cr],
+    ])
+
+
+def matrix_to_rpy(R: np.ndarray) -> np.ndarray:
+    """Inverse of rpy_to_matrix (pitch in [-pi/2, pi/2])."""
+    pitch = np.arcsin(np.clip(-R[2, 0], -1.0, 1.0))
+    roll = np.arctan2(R[2, 1], R[2, 2])
+    yaw = np.arctan2(R[1, 0], R[0, 0])
+    return np.array([roll, pitch, yaw])
+
+
+def quat_wxyz_to_matrix(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def euler_rate_matrix_inv(rpy: np.ndarray) -> np.ndarray:
+    """E^-1 such that d(rpy)/dt = E^-1 @ omega_body for R = Rz Ry Rx."""
+    r, p, _ = rpy
+    cr, sr, cp, tp = np.cos(r), np.sin(r), np.cos(p), np.tan(p)
+    return np.array([
+        [1.0, sr * tp, cr * tp],
+        [0.0, cr, -sr],
+        [0.0, sr / cp, cr / cp],
+    ])

@@ -1,0 +1,60 @@
+"""Actual COG and ZMP from encoders, the KalmanFilter attitude and the foot F/T sensors."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controller.kinematics import RobotKinematics
+from controller.types import Estimate, Reference
+from robot.names import FORCE_SENSOR_NAMES
+
+FOOT_SENSORS = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
+CONTACT_FZ_N = 20.0  # a foot carrying less than this is not in contact
+
+
+def zmp_from_foot_wrenches(pos_world: np.ndarray, wrench_world: np.ndarray, z0: float,
+                           min_fz: float = CONTACT_FZ_N) -> np.ndarray | None:
+    """ZMP on the plane z = z0 from per-foot wrenches at the sensor origins (world axes).
+
+    pos_world (n, 3), wrench_world (n, 6) = [f, tau]; feet with fz < min_fz are ignored.
+    Returns None when no foot carries load.
+    """
+    num_x = num_y = fz_sum = 0.0
+    for p, w in zip(pos_world, wrench_world, strict=True):
+        f, tau = w[:3], w[3:]
+        if f[2] < min_fz:
+            continue
+        dz = p[2] - z0
+        num_x += p[0] * f[2] - tau[1] - dz * f[0]
+        num_y += p[1] * f[2] + tau[0] - dz * f[1]
+        fz_sum += f[2]
+    if fz_sum <= 0.0:
+        return None
+    return np.array([num_x / fz_sum, num_y / fz_sum, z0])
+
+
+class ActualStateEstimator:
+    """Places the measured robot in the world by anchoring the loaded soles where the reference puts them
+    (a support foot does not slip), then reads COG and ZMP off it. No simulator ground truth is used."""
+
+    def __init__(self, kinematics: RobotKinematics) -> None:
+        self.kin = kinematics
+        self.last_zmp = np.zeros(3)
+
+    def reference_soles(self, ref: Reference) -> np.ndarray:
+        """World positions of the two sole sensors in the reference posture, (2, 3)."""
+        self.kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
+        return np.array([self.kin.frame_pose(FORCE_SENSOR_NAMES[i])[0] for i in FOOT_SENSORS])
+
+    def __call__(self, sensors, est: Estimate, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
+        ref_soles = self.reference_soles(ref)
+        meas_soles = est.sensor_pos_from_base[list(FOOT_SENSORS)]
+        fz = np.clip(est.wrenches_ext_world[list(FOOT_SENSORS), 2], 0.0, None)
+        w = fz / fz.sum() if fz.sum() > 2 * CONTACT_FZ_N else np.array([0.5, 0.5])
+        offset = w @ (ref_soles - meas_soles)
+        cog = est.com_from_base + offset
+        soles = meas_soles + offset
+        zmp = zmp_from_foot_wrenches(soles, est.wrenches_ext_world[list(FOOT_SENSORS)], float(w @ soles[:, 2]))
+        if zmp is not None:
+            self.last_zmp = zmp
+        return cog, self.last_zmp.copy()

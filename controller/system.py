@@ -1,0 +1,64 @@
+"""Builds the real-time controller for a plant: the layers in chain order, the loop, the estimators."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+from controller.chain import Chain
+from controller.collision_detector import CollisionDetector
+from controller.hard_emergency_stopper import HardEmergencyStopper
+from controller.kalman_filter import AttitudeKalmanFilter, KalmanFilter
+from controller.kinematics import RobotKinematics
+from controller.loop import ControlLoop, Plant, Snapshot
+from controller.remove_force_offset import RemoveForceOffset
+from controller.sequence_player import SequencePlayer
+from controller.soft_error_limiter import SoftErrorLimiter
+from controller.state_estimation import ActualStateEstimator
+from controller.types import Reference
+from robot.sensors import Sensors
+
+
+def initial_reference(kin: RobotKinematics, q_rad: np.ndarray) -> Reference:
+    """The reference a freshly started controller assumes: the encoder posture, BODY level at x = y = 0
+    and at the height that puts the lower sole on the ground (z = 0)."""
+    kin.update_rpy(np.zeros(3), np.zeros(3), q_rad)
+    sole_z = min(kin.frame_pose("rfsensor")[0][2], kin.frame_pose("lfsensor")[0][2])
+    base = np.array([0.0, 0.0, -sole_z])
+    kin.update_rpy(base, np.zeros(3), q_rad)
+    com = kin.com_world()
+    zmp_base = np.array([com[0], com[1], 0.0]) - base
+    return Reference.from_arrays(q_rad, base_pos_world=base, zmp_base=zmp_base)
+
+
+class ControllerSystem:
+    """The controller side of the robot: kinematic model, chain factory, state estimator, loop."""
+
+    def __init__(self, plant: Plant, dt_control_s: float = 0.005,
+                 on_snapshot: Callable[[Snapshot], None] | None = None) -> None:
+        self.kin = RobotKinematics()
+        # separate kinematics objects: each user updates its own pinocchio data
+        self._kin_est = RobotKinematics()
+        self._kin_seq = RobotKinematics()
+        self.estimator = ActualStateEstimator(self._kin_est)
+        self.loop = ControlLoop(plant, self.build_chain, dt_control_s=dt_control_s,
+                                state_estimator=self.estimator, on_snapshot=on_snapshot)
+
+    def build_chain(self, sensors: Sensors, dt_s: float) -> Chain:
+        q0 = np.array(sensors.q_rad, dtype=float)
+        ref0 = initial_reference(self.kin, q0)
+        tilt = AttitudeKalmanFilter.tilt_from_accel(sensors.accel_m_s2)
+        layers = [
+            KalmanFilter(rpy0=(tilt[0], tilt[1], 0.0)),
+            RemoveForceOffset(RobotKinematics()),
+            SequencePlayer(ref0, dt_s, ik_solver=self._kin_seq.limb_ik),
+            CollisionDetector(q0),
+            HardEmergencyStopper(q0),
+            SoftErrorLimiter(self.kin.q_lower, self.kin.q_upper, q0),
+        ]
+        return Chain({layer.name: layer for layer in layers})
+
+    @property
+    def chain(self) -> Chain:
+        return self.loop.chain

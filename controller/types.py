@@ -1,0 +1,72 @@
+"""Data that flows through the chain: the per-tick context, the reference, and small helpers."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
+from robot.sensors import Sensors, frozen_array
+
+__all__ = ["Estimate", "Reference", "TickContext", "frozen_array"]
+
+
+@dataclass(frozen=True, slots=True)
+class Reference:
+    """The command stream passed from layer to layer (hrpsys qRef/basePos/baseRpy/zmp/wrenches).
+
+    Immutable: a layer that changes it returns `ref.with_(q_rad=...)`.
+    """
+
+    q_rad: np.ndarray  # (30,) joint angles, JOINT_NAMES order
+    base_pos_world: np.ndarray  # (3,) BODY position [m]
+    base_rpy_rad: np.ndarray  # (3,) BODY roll, pitch, yaw [rad]
+    zmp_base: np.ndarray  # (3,) reference ZMP in the BODY frame [m]
+    wrenches: np.ndarray  # (4, 6) reference wrenches at the force sensors, world frame [N, N m]
+
+    @staticmethod
+    def from_arrays(q_rad, base_pos_world=(0.0, 0.0, 0.0), base_rpy_rad=(0.0, 0.0, 0.0),
+                    zmp_base=(0.0, 0.0, 0.0), wrenches=None) -> Reference:
+        if wrenches is None:
+            wrenches = np.zeros((len(FORCE_SENSOR_NAMES), 6))
+        return Reference(
+            q_rad=frozen_array(q_rad, (NUM_JOINTS,)),
+            base_pos_world=frozen_array(base_pos_world, (3,)),
+            base_rpy_rad=frozen_array(base_rpy_rad, (3,)),
+            zmp_base=frozen_array(zmp_base, (3,)),
+            wrenches=frozen_array(wrenches, (len(FORCE_SENSOR_NAMES), 6)),
+        )
+
+    def with_(self, **changes) -> Reference:
+        """A copy with some fields replaced (arrays are copied and frozen)."""
+        shapes = {"q_rad": (NUM_JOINTS,), "base_pos_world": (3,), "base_rpy_rad": (3,),
+                  "zmp_base": (3,), "wrenches": (len(FORCE_SENSOR_NAMES), 6)}
+        return replace(self, **{k: frozen_array(v, shapes[k]) for k, v in changes.items()})
+
+
+@dataclass(slots=True)
+class Estimate:
+    """What the estimators (kf, rmfo, and later st) know this tick. Filled in chain order."""
+
+    base_rpy_rad: np.ndarray = field(default_factory=lambda: np.zeros(3))  # KalmanFilter attitude
+    base_angvel_rad_s: np.ndarray = field(default_factory=lambda: np.zeros(3))  # gyro, BODY frame
+    # RemoveForceOffset: external wrench on the part below each sensor, sensor frame [N, N m]
+    wrenches_ext: np.ndarray = field(default_factory=lambda: np.zeros((len(FORCE_SENSOR_NAMES), 6)))
+    # wrench_ext expressed in the world-aligned frame at the sensor origin (yaw from kinematics)
+    wrenches_ext_world: np.ndarray = field(default_factory=lambda: np.zeros((len(FORCE_SENSOR_NAMES), 6)))
+    # Measured kinematics (encoders + KF attitude), world-aligned axes with the origin at BODY [m]:
+    sensor_pos_from_base: np.ndarray = field(default_factory=lambda: np.zeros((len(FORCE_SENSOR_NAMES), 3)))
+    sensor_R_world: np.ndarray = field(default_factory=lambda: np.tile(np.eye(3), (len(FORCE_SENSOR_NAMES), 1, 1)))
+    com_from_base: np.ndarray = field(default_factory=lambda: np.zeros(3))
+
+
+@dataclass(slots=True)
+class TickContext:
+    """Everything a layer may read in one tick besides the upstream reference."""
+
+    tick: int
+    time_s: float
+    dt_s: float
+    sensors: Sensors
+    estimate: Estimate

@@ -1,0 +1,49 @@
+"""What the hardware interface hands the controller each tick (hrpsys RobotHardware ports), and the
+simulator's ground truth kept apart from it (for tests and the GUI only, never for the controller)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+def frozen_array(values, shape: tuple[int, ...] | None = None) -> np.ndarray:
+    """A float64 copy of `values` that cannot be written to."""
+    a = np.array(values, dtype=float, copy=True)
+    if shape is not None and a.shape != shape:
+        raise ValueError(f"expected shape {shape}, got {a.shape}")
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, slots=True)
+class Sensors:
+    """One reading of the robot's own sensors.
+
+    Wrench convention (as a real F/T sensor between a limb and its end part): the wrench that the
+    distal side (foot + ground, hand + load) exerts on the proximal side, at the sensor origin, in the
+    sensor frame, `[fx, fy, fz, tx, ty, tz]` [N, N m]. Standing still, each foot sensor reads a positive
+    fz: its share of the weight minus the weight of the foot below it.
+    """
+
+    time_s: float
+    q_rad: np.ndarray  # (30,) joint encoders, JOINT_NAMES order
+    dq_rad_s: np.ndarray  # (30,) joint velocities (encoder differentiation)
+    wrenches: np.ndarray  # (4, 6) FORCE_SENSOR_NAMES order, sensor frame
+    gyro_rad_s: np.ndarray  # (3,) angular velocity of BODY in the BODY frame
+    accel_m_s2: np.ndarray  # (3,) specific force of BODY in the BODY frame (+9.81 z when still)
+
+
+@dataclass(frozen=True, slots=True)
+class GroundTruth:
+    """The simulator's view. Tests and the GUI may read it; the controller must not."""
+
+    time_s: float
+    base_pos_world: np.ndarray  # (3,) BODY origin [m]
+    base_quat_wxyz: np.ndarray  # (4,) BODY orientation
+    base_linvel_world: np.ndarray  # (3,) [m/s]
+    base_angvel_world: np.ndarray  # (3,) [rad/s]
+    com_world: np.ndarray  # (3,) whole-robot centre of mass [m]
+    body_pos_world: np.ndarray  # (nbody, 3) every MuJoCo body, for rendering
+    body_quat_wxyz: np.ndarray  # (nbody, 4)
