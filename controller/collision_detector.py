@@ -31,6 +31,7 @@ class SelfCollisionChecker:
         self.data = mujoco.MjData(self.model)
         self.qpos_adr = np.array([self.model.joint(n).qposadr[0] for n in JOINT_NAMES])
         self._free_geom_margin = self.model.geom_margin.copy()
+        self._body_names = [self.model.body(i).name for i in range(self.model.nbody)]
         self.set_margin(margin_m)
 
     def set_margin(self, margin_m: float) -> None:
@@ -42,13 +43,14 @@ class SelfCollisionChecker:
         d.qpos[self.qpos_adr] = q_rad
         mujoco.mj_kinematics(self.model, d)
         mujoco.mj_collision(self.model, d)
-        pairs = []
-        for c in d.contact[: d.ncon]:
-            if c.dist < self.margin_m:
-                b1 = self.model.body(self.model.geom_bodyid[c.geom1]).name
-                b2 = self.model.body(self.model.geom_bodyid[c.geom2]).name
-                pairs.append((b1, b2))
-        return pairs
+        n = d.ncon
+        if n == 0:
+            return []
+        con = d.contact
+        close = np.flatnonzero(con.dist[:n] < self.margin_m)
+        body = self.model.geom_bodyid
+        names = self._body_names
+        return [(names[body[con.geom1[i]]], names[body[con.geom2[i]]]) for i in close]
 
 
 class CollisionDetector(Layer):

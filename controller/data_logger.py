@@ -63,7 +63,7 @@ class DataLogger:
     def to_csv(self, path: str | Path | None = None) -> str:
         """Write the buffer as CSV to `path` (if given) and return the text."""
         out = io.StringIO()
-        w = csv.writer(out)
+        w = csv.writer(out, lineterminator="\n")
         w.writerow(csv_header())
         for snap in self.snapshots():
             w.writerow([f"{v:.6g}" for v in snapshot_row(snap)])

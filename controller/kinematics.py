@@ -10,7 +10,6 @@ from controller.rotations import rpy_to_matrix
 from robot.names import (
     END_EFFECTORS,
     FORCE_SENSOR_NAMES,
-    FORCE_SENSOR_POS_IN_LINK,
     FORCE_SENSORS,
     JOINT_GROUPS,
     JOINT_NAMES,
@@ -22,16 +21,12 @@ LIMB_OF_GROUP = {"rarm": "rarm", "larm": "larm", "rleg": "rleg", "lleg": "lleg"}
 
 
 class RobotKinematics:
-    """Pinocchio model with a free-flyer base; joint vectors are in JOINT_NAMES order."""
+    """Pinocchio model with a free-flyer base; joint vectors are in JOINT_NAMES order.
+
+    The URDF carries the sensor and end-effector frames (same names and places as the MJCF sites)."""
 
     def __init__(self, urdf_path=URDF) -> None:
         self.model = pin.buildModelFromUrdf(str(urdf_path), pin.JointModelFreeFlyer())
-        # sensor frames, placed from the shared table (same numbers as the MJCF sites)
-        for sensor, link in FORCE_SENSORS.items():
-            parent_frame = self.model.getFrameId(link)
-            pf = self.model.frames[parent_frame]
-            placement = pf.placement * pin.SE3(np.eye(3), np.array(FORCE_SENSOR_POS_IN_LINK[sensor]))
-            self.model.addFrame(pin.Frame(sensor, pf.parentJoint, parent_frame, placement, pin.FrameType.OP_FRAME))
         self.data = self.model.createData()
         self.total_mass = float(sum(i.mass for i in self.model.inertias))
         self.idx_q = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in JOINT_NAMES])
@@ -99,7 +94,8 @@ class RobotKinematics:
         Damped least squares, joint limits enforced; raises InvalidCommand if it does not converge.
         """
         if group not in LIMB_OF_GROUP:
-            raise InvalidCommand(f"setTargetPose group {group!r} has no end effector; valid: {sorted(LIMB_OF_GROUP)}")
+            raise InvalidCommand(
+                f"setTargetPose group {group!r} has no end effector; valid: {sorted(LIMB_OF_GROUP)}")
         ee = END_EFFECTORS[LIMB_OF_GROUP[group]]
         q_rad = np.array(q_init_rad, dtype=float)
         base_R = rpy_to_matrix(base_rpy_rad)
@@ -123,6 +119,7 @@ class RobotKinematics:
             dq = J.T @ np.linalg.solve(J @ J.T + lam * np.eye(6), err)
             q_rad[idx] = np.clip(q_rad[idx] + dq, self.q_lower[idx], self.q_upper[idx])
         raise InvalidCommand(
-            f"setTargetPose: {group} cannot reach the target (residual {np.linalg.norm(err[:3]) * 1e3:.1f} mm, "
+            f"setTargetPose: {group} cannot reach the target "
+            f"(residual {np.linalg.norm(err[:3]) * 1e3:.1f} mm, "
             f"{np.rad2deg(np.linalg.norm(err[3:])):.2f} deg) within joint limits"
         )
