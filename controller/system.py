@@ -13,6 +13,7 @@ from controller.kalman_filter import AttitudeKalmanFilter, KalmanFilter
 from controller.kinematics import RobotKinematics
 from controller.loop import ControlLoop, Plant, Snapshot
 from controller.remove_force_offset import RemoveForceOffset
+from controller.rotations import rpy_to_matrix
 from controller.sequence_player import SequencePlayer
 from controller.soft_error_limiter import SoftErrorLimiter
 from controller.state_estimation import ActualStateEstimator
@@ -52,12 +53,17 @@ class ControllerSystem:
         layers = [
             KalmanFilter(rpy0=(tilt[0], tilt[1], 0.0)),
             RemoveForceOffset(RobotKinematics()),
-            SequencePlayer(ref0, dt_s, ik_solver=self._kin_seq.limb_ik),
+            SequencePlayer(ref0, dt_s, ik_solver=self._solve_limb_ik),
             CollisionDetector(q0),
             HardEmergencyStopper(q0),
             SoftErrorLimiter(self.kin.q_lower, self.kin.q_upper, q0),
         ]
         return Chain({layer.name: layer for layer in layers})
+
+    def _solve_limb_ik(self, group, q_rad, base_pos_world, base_rpy_rad, target_pos, target_rpy_rad, frame):
+        """SequencePlayer's setTargetPose solver: targets as position + roll-pitch-yaw."""
+        return self._kin_seq.limb_ik(group, q_rad, base_pos_world, base_rpy_rad, target_pos,
+                                     rpy_to_matrix(target_rpy_rad), frame)
 
     @property
     def chain(self) -> Chain:

@@ -127,3 +127,27 @@ def test_standing_thirty_seconds_with_the_chain_does_not_drift():
         worst_tilt = max(worst_tilt, tilt_deg(snap.truth.base_quat_wxyz))
     assert worst_tilt < 1.0
     assert np.linalg.norm(snap.truth.base_pos_world[:2] - start[:2]) < 0.005
+
+
+def test_set_target_pose_reaches_the_joint_angles_that_produced_the_pose():
+    # hrpsys-notes 3.5 case 11: read LARM's end pose at two elbow angles, command those poses back
+    from controller.kinematics import RobotKinematics
+    from controller.rotations import matrix_to_rpy
+
+    system = make_system()
+    loop = system.loop
+    kin = RobotKinematics()
+    larm = list(JOINT_GROUPS["larm"])
+    ref = loop.snapshot.reference
+    for elbow_deg in (-90.0, -45.0):
+        q_goal = np.deg2rad(pose_deg(LARM_JOINT3=elbow_deg))
+        kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, q_goal)
+        body_pos, body_R = kin.frame_pose("BODY")
+        pos, R = kin.frame_pose("larm_end")
+        pos_in_body = body_R.T @ (pos - body_pos)
+        rpy_in_body = matrix_to_rpy(body_R.T @ R)
+        seq_call(system, "set_target_pose", "larm:BODY", pos_in_body, rpy_in_body, 2.0)
+        snap = loop.run_for(2.5)
+        assert np.max(np.abs(snap.q_seq_rad[larm] - q_goal[larm])) < 0.01
+        assert np.max(np.abs(snap.q_meas_rad[larm] - q_goal[larm])) < 0.01
+    assert not snap.fallen
