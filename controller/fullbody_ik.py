@@ -57,7 +57,7 @@ class FullbodyIK:
         reachable = True
         com = np.zeros(3)
         it = 0
-        for it in range(1, p.max_iterations + 1):
+        for it in range(1, p.max_iterations + 1):  # noqa: B007 - reported after the loop
             base = np.array([base_xy[0], base_xy[1], base_z_m])
             qr, ok_r = leg_ik(RLEG, base, R_world_body, *T_world_rsole)
             ql, ok_l = leg_ik(LLEG, base, R_world_body, *T_world_lsole)

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from controller.layer import Layer, Params
-from controller.rotations import euler_rate_matrix_inv
 from controller.types import Reference, TickContext
 
 G = 9.80665  # [m/s^2]
@@ -33,37 +33,52 @@ class AttitudeKalmanFilter:
         self.params = params
         self.rpy = np.array(rpy0, dtype=float)
         self.bias = np.zeros(2)  # roll, pitch gyro bias [rad/s]
-        self.P = np.tile(np.eye(2) * 1e-2, (2, 1, 1))  # per axis (angle, bias)
+        # per axis covariance of (angle, bias): [p00, p01, p11]
+        self._P = [[1e-2, 0.0, 1e-2], [1e-2, 0.0, 1e-2]]
+
+    @property
+    def P(self) -> np.ndarray:
+        return np.array([[[p00, p01], [p01, p11]] for p00, p01, p11 in self._P])
 
     @staticmethod
     def tilt_from_accel(accel_m_s2: np.ndarray) -> np.ndarray:
         """Roll and pitch of the body from the specific force it feels when not accelerating."""
-        ax, ay, az = accel_m_s2
-        return np.array([np.arctan2(ay, az), np.arctan2(-ax, np.hypot(ay, az))])
+        ax, ay, az = (float(v) for v in accel_m_s2)
+        return np.array([math.atan2(ay, az), math.atan2(-ax, math.hypot(ay, az))])
 
     def update(self, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray, dt_s: float) -> np.ndarray:
+        """One predict (gyro) + correct (accelerometer tilt) step; scalar maths, it runs every tick."""
         p = self.params
-        omega = np.array(gyro_rad_s, dtype=float)
-        omega[:2] -= self.bias
-        rate = euler_rate_matrix_inv(self.rpy) @ omega
-        self.rpy = self.rpy + rate * dt_s
-        # covariance prediction, x = [angle, bias], angle' = angle + (w - bias) dt
-        F = np.array([[1.0, -dt_s], [0.0, 1.0]])
-        Q = np.diag([p.q_angle, p.q_bias])
-        self.P = F @ self.P @ F.T + Q
-        # measurement: accelerometer tilt, trusted less under acceleration
-        z = self.tilt_from_accel(accel_m_s2)
-        excess = abs(np.linalg.norm(accel_m_s2) - G) / p.accel_trust_band
-        r = p.r_angle * (1.0 + 100.0 * excess * excess)
+        wx, wy, wz = (float(v) for v in gyro_rad_s)
+        wx -= self.bias[0]
+        wy -= self.bias[1]
+        r, pi, y = (float(v) for v in self.rpy)
+        # Euler-angle rates of R = Rz Ry Rx from the body rate
+        cr, sr, cp, tp = math.cos(r), math.sin(r), math.cos(pi), math.tan(pi)
+        r += (wx + sr * tp * wy + cr * tp * wz) * dt_s
+        pi += (cr * wy - sr * wz) * dt_s
+        y += (sr * wy + cr * wz) / cp * dt_s
+        ax, ay, az = (float(v) for v in accel_m_s2)
+        z = (math.atan2(ay, az), math.atan2(-ax, math.hypot(ay, az)))
+        excess = abs(math.sqrt(ax * ax + ay * ay + az * az) - G) / p.accel_trust_band
+        r_meas = p.r_angle * (1.0 + 100.0 * excess * excess)
+        angles = [r, pi]
         for i in range(2):
-            Pi = self.P[i]
-            s = Pi[0, 0] + r
-            k = Pi[:, 0] / s  # gain for (angle, bias)
-            innov = np.arctan2(np.sin(z[i] - self.rpy[i]), np.cos(z[i] - self.rpy[i]))
-            self.rpy[i] += k[0] * innov
-            self.bias[i] += k[1] * innov
-            self.P[i] = Pi - np.outer(k, Pi[0, :])
-        self.rpy[2] = np.arctan2(np.sin(self.rpy[2]), np.cos(self.rpy[2]))
+            p00, p01, p11 = self._P[i]
+            # predict: angle' = angle + (w - bias) dt  ->  F = [[1, -dt], [0, 1]]
+            p00 = p00 - dt_s * (2.0 * p01 - dt_s * p11) + p.q_angle
+            p01 = p01 - dt_s * p11
+            p11 = p11 + p.q_bias
+            # correct with the accelerometer tilt
+            s = p00 + r_meas
+            k0, k1 = p00 / s, p01 / s
+            innov = z[i] - angles[i]
+            innov = math.atan2(math.sin(innov), math.cos(innov))
+            angles[i] += k0 * innov
+            self.bias[i] += k1 * innov
+            self._P[i] = [p00 - k0 * p00, p01 - k0 * p01, p11 - k1 * p01]
+        y = math.atan2(math.sin(y), math.cos(y))
+        self.rpy = np.array((angles[0], angles[1], y))
         return self.rpy.copy()
 
 
@@ -93,5 +108,5 @@ class KalmanFilter(Layer):
         self.filter = AttitudeKalmanFilter(self.params, (tilt[0], tilt[1], 0.0))
 
     def status(self) -> dict:
-        return {"enabled": self.enabled, "rpy_deg": np.rad2deg(self.filter.rpy).round(3).tolist(),
-                "gyro_bias_deg_s": np.rad2deg(self.filter.bias).round(4).tolist()}
+        return {"enabled": self.enabled, "rpy_rad": self.filter.rpy.tolist(),
+                "gyro_bias_rad_s": self.filter.bias.tolist()}

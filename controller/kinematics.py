@@ -36,11 +36,9 @@ class RobotKinematics:
         self.frame_ids = {name: self.model.getFrameId(name)
                           for name in (*END_EFFECTORS.values(), *FORCE_SENSOR_NAMES, "BODY")}
         self.sensor_frame_ids = np.array([self.frame_ids[s] for s in FORCE_SENSOR_NAMES])
-        # joints whose bodies hang below each sensor (the sensor link's joint and its subtree)
-        self._below: dict[str, list[int]] = {}
-        for sensor, link in FORCE_SENSORS.items():
-            jid = self.model.frames[self.model.getFrameId(link)].parentJoint
-            self._below[sensor] = list(self.model.subtrees[jid])
+        # the joint whose subtree hangs below each sensor (pinocchio keeps subtree masses and COMs)
+        self._below_joint = {sensor: self.model.frames[self.model.getFrameId(link)].parentJoint
+                             for sensor, link in FORCE_SENSORS.items()}
         self.q = pin.neutral(self.model)
 
     # ---- configuration ------------------------------------------------------------------------
@@ -56,7 +54,7 @@ class RobotKinematics:
         self.q = self.configuration(base_pos_world, base_R_world, q_rad)
         pin.forwardKinematics(self.model, self.data, self.q)
         pin.updateFramePlacements(self.model, self.data)
-        pin.centerOfMass(self.model, self.data, self.q, False)
+        pin.centerOfMass(self.model, self.data, self.q, True)  # True: subtree COMs too
 
     def update_rpy(self, base_pos_world, base_rpy_rad, q_rad) -> None:
         self.update(base_pos_world, rpy_to_matrix(base_rpy_rad), q_rad)
@@ -77,12 +75,8 @@ class RobotKinematics:
 
     def mass_below(self, sensor: str) -> tuple[float, np.ndarray]:
         """Mass [kg] and world COM [m] of the links below a force sensor."""
-        m, mc = 0.0, np.zeros(3)
-        for j in self._below[sensor]:
-            inertia = self.model.inertias[j]
-            m += inertia.mass
-            mc += inertia.mass * (self.data.oMi[j].act(inertia.lever))
-        return m, mc / m
+        j = self._below_joint[sensor]
+        return float(self.data.mass[j]), self.data.com[j].copy()
 
     # ---- inverse kinematics ---------------------------------------------------------------------
     def limb_ik(self, group: str, q_init_rad, base_pos_world, base_rpy_rad, target_pos, target_R,

@@ -9,6 +9,7 @@ import numpy as np
 from controller.errors import InvalidCommand
 from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params
+from controller.rotations import cross3
 from controller.types import Reference, TickContext
 from robot.names import FORCE_SENSOR_NAMES
 
@@ -25,8 +26,8 @@ def gravity_wrench_in_sensor(mass_kg: float, com_world: np.ndarray, sensor_pos_w
                              R_world_sensor: np.ndarray, g: float = G) -> np.ndarray:
     """Wrench [N, N m] of the weight of a part, about the sensor origin, in the sensor frame."""
     f_world = np.array([0.0, 0.0, -mass_kg * g])
-    tau_world = np.cross(com_world - sensor_pos_world, f_world)
-    return np.concatenate([R_world_sensor.T @ f_world, R_world_sensor.T @ tau_world])
+    tau_world = cross3(com_world - sensor_pos_world, f_world)
+    return np.concatenate((R_world_sensor.T @ f_world, R_world_sensor.T @ tau_world))
 
 
 class RemoveForceOffset(Layer):
@@ -94,4 +95,4 @@ class RemoveForceOffset(Layer):
 
     def status(self) -> dict:
         return {"enabled": self.enabled, "calibrating": sorted(self._calibrating),
-                "offsets": {s: self.offsets[i].round(4).tolist() for i, s in enumerate(FORCE_SENSOR_NAMES)}}
+                "offsets": self.offsets.tolist()}

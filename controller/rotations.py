@@ -33,12 +33,6 @@ def quat_wxyz_to_matrix(q: np.ndarray) -> np.ndarray:
     ])
 
 
-def euler_rate_matrix_inv(rpy: np.ndarray) -> np.ndarray:
-    """E^-1 such that d(rpy)/dt = E^-1 @ omega_body for R = Rz Ry Rx."""
-    r, p, _ = rpy
-    cr, sr, cp, tp = np.cos(r), np.sin(r), np.cos(p), np.tan(p)
-    return np.array([
-        [1.0, sr * tp, cr * tp],
-        [0.0, cr, -sr],
-        [0.0, sr / cp, cr / cp],
-    ])
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a x b for 3-vectors, without np.cross's axis handling (10x faster on the hot path)."""
+    return np.array((a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]))

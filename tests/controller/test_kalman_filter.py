@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from controller.kalman_filter import G, AttitudeKalmanFilter, KalmanFilter, KalmanFilterParams
+from controller.kalman_filter import AttitudeKalmanFilter, G, KalmanFilter, KalmanFilterParams
 from controller.rotations import rpy_to_matrix
 from tests.controller.fakes import make_ctx
 

@@ -1,0 +1,204 @@
+"""Command line: `hrp2-console` runs simulation, controller, HTTP API and 3D viewer; `bench` times the chain."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import math
+import sys
+import threading
+import time
+from collections.abc import Sequence
+
+from robot.plant import available_scenes
+
+log = logging.getLogger("hrp2-console")
+
+
+# ---- argument types: each error names what would have been accepted ------------------------------
+def _speed(text: str) -> float | None:
+    if text.strip().lower() == "max":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(
+            f"invalid value {text!r}: expected a positive real-time factor (e.g. 1.0, 0.5, 4) or 'max'")
+    return value
+
+
+def _positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a number of seconds > 0")
+    return value
+
+
+def _port(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = -1
+    if not 0 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a TCP port in 0..65535 "
+                                         "(0 picks a free one)")
+    return value
+
+
+def _scene(text: str) -> str:
+    scenes = available_scenes()
+    if text not in scenes:
+        raise argparse.ArgumentTypeError(f"unknown scene {text!r}; available scenes: {', '.join(scenes)}")
+    return text
+
+
+def run_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="hrp2-console",
+        description="Operator console for the simulated HRP-2 No.10: simulation + controller loop, "
+                    "HTTP API (OpenAPI at /docs, operator page at /) and a viser 3D view.",
+        epilog="Subcommand: `hrp2-console bench --help` times the controller chain.")
+    p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
+    p.add_argument("--speed", type=_speed, default=1.0,
+                   help="real-time factor (1.0 = real time) or 'max' (as fast as possible)")
+    p.add_argument("--headless", action="store_true", help="no 3D viewer")
+    p.add_argument("--duration", type=_positive_seconds, default=None,
+                   help="run this many seconds of simulated time, print a summary and exit")
+    p.add_argument("--host", default="127.0.0.1", help="address of the HTTP API and the viewer")
+    p.add_argument("--port", type=_port, default=8000, help="HTTP API port")
+    p.add_argument("--viewer-port", type=_port, default=8080, help="viser viewer port")
+    p.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
+    return p
+
+
+def bench_parser() -> argparse.ArgumentParser:
+    from app.bench import SCENARIOS
+
+    p = argparse.ArgumentParser(prog="hrp2-console bench",
+                                description="Run the chain synchronously as fast as possible (no servers) "
+                                            "and print its timing as JSON.")
+    p.add_argument("--scenario", choices=tuple(SCENARIOS), default="stand",
+                   help="; ".join(f"{k}: {v.description}" for k, v in SCENARIOS.items()))
+    p.add_argument("--duration", type=_positive_seconds, default=5.0, help="simulated seconds (default 5)")
+    p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
+    return p
+
+
+# ---- commands -------------------------------------------------------------------------------------
+def bench(argv: Sequence[str]) -> int:
+    from app.bench import run_bench
+
+    args = bench_parser().parse_args(argv)
+    report = run_bench(args.scenario, args.duration, args.scene)
+    print(json.dumps(report, indent=2))
+    return 0
+
+
+def _start_http(app, host: str, port: int, log_level: str):
+    import uvicorn
+
+    server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level=log_level, lifespan="on"))
+    thread = threading.Thread(target=server.run, name="http", daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 15.0
+    while not server.started:
+        if not thread.is_alive() or time.monotonic() > deadline:
+            raise RuntimeError(f"the HTTP server could not start on {host}:{port} (port in use?)")
+        time.sleep(0.02)
+    bound = port
+    for s in getattr(server, "servers", []):
+        for sock in getattr(s, "sockets", []):
+            bound = sock.getsockname()[1]
+    return server, thread, bound
+
+
+def run(argv: Sequence[str]) -> int:
+    args = run_parser().parse_args(argv)
+    logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
+
+    from app.main import create_app
+    from app.runtime import Runtime
+    from app.settings import Settings
+
+    runtime = Runtime(scene=args.scene, speed=args.speed)
+    viewer = None
+    viewer_port = None
+    if not args.headless:
+        from app.viewer import Viewer
+
+        viewer = Viewer(runtime, host=args.host, port=args.viewer_port)
+        viewer_port = viewer.port
+    settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
+                        viewer_port=viewer_port)
+    app = create_app(settings, runtime=runtime)
+    try:
+        server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)
+    except RuntimeError as exc:
+        if viewer is not None:
+            viewer.stop()
+        print(f"hrp2-console: error: {exc}", file=sys.stderr)
+        return 2
+    speed = "max" if args.speed is None else f"{args.speed:g}x real time"
+    print(f"hrp2-console: scene {args.scene!r}, {speed}; chain {runtime.loop.chain.describe()}")
+    print(f"  operator page  http://{args.host}:{http_port}/   (API docs /docs)")
+    if viewer_port is not None:
+        print(f"  3D viewer      http://{args.host}:{viewer_port}/")
+    sys.stdout.flush()
+
+    dt = runtime.loop.dt_control_s
+    wall0 = time.perf_counter()
+    runtime.start()
+    try:
+        while True:
+            # simulated time of this run, counted in ticks so that a reset does not restart it
+            if args.duration is not None and runtime.stats.ticks * dt >= args.duration - 1e-9:
+                break
+            if not runtime.running:
+                print("hrp2-console: error: the control loop stopped", file=sys.stderr)
+                break
+            time.sleep(0.005 if args.duration is not None else 0.1)
+    except KeyboardInterrupt:
+        pass
+    finally:
+        runtime.stop()
+        wall_s = time.perf_counter() - wall0
+        server.should_exit = True
+        http_thread.join(timeout=5.0)
+        if viewer is not None:
+            viewer.stop()
+
+    stats = runtime.stats
+    snap = runtime.loop.snapshot
+    sim_s = stats.ticks * dt
+    fallen = stats.fallen or snap.fallen
+    faults = sorted(stats.faults)
+    print("summary:")
+    print(f"  scene: {runtime.scene}")
+    print(f"  sim time: {sim_s:.3f} s")
+    print(f"  ticks: {stats.ticks}")
+    print(f"  wall time: {wall_s:.3f} s")
+    print(f"  real-time factor: {sim_s / wall_s if wall_s > 0 else float('inf'):.2f}")
+    print(f"  fallen: {str(fallen).lower()}")
+    print(f"  max loop ms: {stats.max_loop_ms:.3f}")
+    print(f"  hard stop: {str(bool(snap.emergency.get('hard_stop', False))).lower()}")
+    print(f"  faults: {'; '.join(faults) if faults else 'none'}")
+    return 1 if (fallen or faults) else 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv and argv[0] == "bench":
+        code = bench(argv[1:])
+    else:
+        code = run(argv)
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())

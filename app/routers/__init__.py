@@ -1,0 +1,1 @@
+"""HTTP routers of the operator console, one per concern."""

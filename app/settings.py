@@ -1,0 +1,15 @@
+"""Console settings: one frozen dataclass filled by the CLI and injected into the app."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Settings:
+    scene: str = "default"
+    speed: float | None = 1.0  # 1.0 = real time, None = as fast as possible
+    dt_control_s: float = 0.005  # [s]
+    host: str = "127.0.0.1"
+    port: int = 8000
+    viewer_port: int | None = 8080  # None: no viser viewer (--headless)

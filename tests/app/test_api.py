@@ -1,0 +1,246 @@
+"""HTTP API contract: state fields, e-stop, sequence commands, validation, reset, push, log, docs."""
+
+import math
+
+import numpy as np
+import pytest
+
+from robot.names import JOINT_NAMES, joint_index
+
+HALF_SITTING_DEG = [0, 0, -26, 50, -24, 0] * 2 + [0, 0, 0, 0] + [15, -10, 0, -30, 0, 0, 10] + [15, 10, 0, -30, 0, 0, 10]
+RARM0 = joint_index("RARM_JOINT0")
+
+
+def step(runtime, seconds):
+    return runtime.system.loop.run_for(seconds)
+
+
+def q_cmd_deg(runtime):
+    return np.rad2deg(np.array(runtime.loop.snapshot.q_cmd_rad))
+
+
+def test_state_has_every_contract_field_with_the_right_types(client, runtime):
+    step(runtime, 0.05)
+    s = client.get("/api/state").json()
+    assert isinstance(s["time"], float) and s["time"] == pytest.approx(0.05)
+    assert isinstance(s["tick"], int) and s["tick"] == 10
+    assert s["fallen"] is False
+    assert len(s["base"]["pos"]) == 3 and len(s["base"]["rpy_deg"]) == 3
+    assert s["base"]["source"] == "simulation"
+    assert 0.5 < s["base"]["pos"][2] < 0.8
+    assert len(s["estimate"]["rpy_deg"]) == 3
+    assert list(s["joints"]) == list(JOINT_NAMES)
+    for j in s["joints"].values():
+        assert set(j) == {"cmd_deg", "meas_deg", "seq_deg"}
+        assert all(isinstance(v, float) for v in j.values())
+    assert len(s["cog"]) == 3 and len(s["zmp"]) == 3
+    assert s["emergency"] == {"hard_stop": False, "fault": None}
+    assert set(s["layers"]) == set(runtime.loop.chain.order())
+    assert all(isinstance(v, dict) for v in s["layers"].values())
+    assert s["chain"] == runtime.loop.chain.describe() and s["chain"].startswith("kf -> ")
+    assert s["speed"] is None
+
+
+def test_estop_freezes_the_command_even_when_a_motion_is_requested(client, runtime):
+    step(runtime, 0.05)
+    assert client.post("/api/estop").status_code == 200
+    step(runtime, 0.01)
+    frozen = q_cmd_deg(runtime)
+    assert client.get("/api/state").json()["emergency"]["hard_stop"] is True
+    r = client.post("/api/sequence/joint-angles", json={"angles_deg": {"RARM_JOINT0": -40.0}, "time": 0.5})
+    assert r.status_code == 200
+    step(runtime, 0.8)
+    np.testing.assert_allclose(q_cmd_deg(runtime), frozen, atol=1e-9)
+    assert client.get("/api/state").json()["joints"]["RARM_JOINT0"]["seq_deg"] == pytest.approx(-40.0, abs=0.01)
+
+
+def test_release_unfreezes_and_releasing_twice_is_a_conflict(client, runtime):
+    client.post("/api/estop")
+    step(runtime, 0.02)
+    r = client.post("/api/estop/release")
+    assert r.status_code == 200
+    step(runtime, 0.02)
+    assert client.get("/api/state").json()["emergency"]["hard_stop"] is False
+    r = client.post("/api/estop/release")
+    assert r.status_code == 409
+    assert "not engaged" in r.json()["detail"]
+
+
+def test_joint_angles_by_dict_move_only_the_named_joint(client, runtime):
+    r = client.post("/api/sequence/joint-angles", json={"angles_deg": {"RARM_JOINT0": -20.0}, "time": 0.5})
+    assert r.status_code == 200, r.text
+    assert client.get("/api/sequence/status").json() == {"interpolating": True}
+    step(runtime, 0.7)
+    q = q_cmd_deg(runtime)
+    assert q[RARM0] == pytest.approx(-20.0, abs=0.1)
+    assert q[joint_index("LARM_JOINT0")] == pytest.approx(15.0, abs=0.1)
+    assert client.get("/api/sequence/status").json() == {"interpolating": False}
+
+
+def test_joint_angles_by_list_move_the_commanded_joints(client, runtime):
+    target = list(HALF_SITTING_DEG)
+    target[joint_index("LARM_JOINT0")] = -10.0
+    r = client.post("/api/sequence/joint-angles", json={"angles_deg": target, "time": 0.5})
+    assert r.status_code == 200, r.text
+    step(runtime, 0.7)
+    assert q_cmd_deg(runtime)[joint_index("LARM_JOINT0")] == pytest.approx(-10.0, abs=0.1)
+
+
+def rarm_in_body(runtime, q_rad):
+    """rarm_end position [m] and rpy [deg] in the BODY frame for joint angles q_rad."""
+    from controller.rotations import matrix_to_rpy
+
+    kin = runtime.system.kin
+    kin.update_rpy(np.zeros(3), np.zeros(3), np.asarray(q_rad))
+    pos, R = kin.frame_pose("rarm_end")
+    return np.array(pos), np.rad2deg(matrix_to_rpy(np.asarray(R)))
+
+
+def test_target_pose_moves_the_hand_to_the_requested_position(client, runtime):
+    pos0, rpy0 = rarm_in_body(runtime, runtime.loop.snapshot.q_cmd_rad)
+    target = pos0 + np.array([0.05, 0.0, 0.03])
+    r = client.post("/api/sequence/target-pose", json={"limb": "rarm", "frame": "BODY", "pos": target.tolist(),
+                                                       "rpy_deg": rpy0.tolist(), "time": 0.5})
+    assert r.status_code == 200, r.text
+    step(runtime, 0.8)
+    pos1, _ = rarm_in_body(runtime, runtime.loop.snapshot.q_cmd_rad)
+    np.testing.assert_allclose(pos1, target, atol=0.01)
+
+
+def test_clear_stops_the_motion_where_it_is(client, runtime):
+    client.post("/api/sequence/joint-angles", json={"angles_deg": {"RARM_JOINT0": -60.0}, "time": 1.0})
+    step(runtime, 0.3)
+    assert client.post("/api/sequence/clear").status_code == 200
+    step(runtime, 0.02)
+    held = q_cmd_deg(runtime)[RARM0]
+    assert client.get("/api/sequence/status").json() == {"interpolating": False}
+    step(runtime, 0.5)
+    assert q_cmd_deg(runtime)[RARM0] == pytest.approx(held, abs=0.05)
+    assert -60.0 < held < 15.0
+
+
+BAD_INPUTS = [
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINTX": 1.0}, "time": 1.0},
+     ["angles_deg", "RARM_JOINTX", "RARM_JOINT0", "LARM_JOINT6"]),
+    ("/api/sequence/joint-angles", {"angles_deg": [0.0] * 29, "time": 1.0}, ["angles_deg", "30", "29"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": 500.0}, "time": 1.0},
+     ["RARM_JOINT0", "500", "range", "deg"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}, "time": 0.0}, ["time", "greater than 0"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}, "time": 4000},
+     ["time", "3600"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}}, ["time", "required"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": "a lot"}, "time": 1.0},
+     ["angles_deg", "RARM_JOINT0"]),
+    ("/api/sequence/target-pose", {"limb": "tail", "pos": [0, 0, 0], "rpy_deg": [0, 0, 0], "time": 1.0},
+     ["limb", "rarm", "lleg"]),
+    ("/api/sequence/target-pose", {"limb": "rarm", "pos": [0, 0], "rpy_deg": [0, 0, 0], "time": 1.0},
+     ["pos", "3"]),
+    ("/api/sequence/target-pose", {"limb": "rarm", "frame": "NOPE", "pos": [0.3, -0.2, 0.0], "rpy_deg": [0, 0, 0],
+                                   "time": 1.0}, ["frame", "NOPE", "BODY"]),
+    ("/api/sequence/target-pose", {"limb": "rarm", "frame": "BODY", "pos": [3.0, 0.0, 0.0], "rpy_deg": [0, 0, 0],
+                                   "time": 1.0}, ["rarm", "cannot reach"]),
+    ("/api/sim/reset", {"scene": "mars"}, ["scene", "mars", "default"]),
+    ("/api/sim/push", {"body": "TAIL", "force": [10, 0, 0], "duration": 0.1}, ["body", "TAIL", "BODY"]),
+    ("/api/sim/push", {"body": "BODY", "force": [3000, 0, 0], "duration": 0.1}, ["force", "2000"]),
+    ("/api/sim/push", {"body": "BODY", "force": [10, 0, 0], "duration": 6}, ["duration", "5"]),
+    ("/api/sim/push", {"body": "BODY", "force": [10, 0, 0], "duration": 0}, ["duration", "greater than 0"]),
+]
+
+
+@pytest.mark.parametrize(("url", "body", "words"), BAD_INPUTS, ids=[f"{u.rsplit('/', 1)[-1]}-{i}"
+                                                                    for i, (u, _, _) in enumerate(BAD_INPUTS)])
+def test_bad_input_gets_a_422_naming_the_field_and_changes_nothing(client, runtime, url, body, words):
+    step(runtime, 0.02)
+    before = q_cmd_deg(runtime)
+    tick = runtime.loop.snapshot.tick
+    r = client.post(url, json=body)
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    assert isinstance(detail, str)
+    for w in words:
+        assert w in detail, f"{w!r} not in {detail!r}"
+    step(runtime, 0.3)
+    assert runtime.loop.snapshot.tick == tick + 60  # no reset happened
+    np.testing.assert_allclose(q_cmd_deg(runtime), before, atol=1e-6)
+    assert client.get("/api/sequence/status").json() == {"interpolating": False}
+
+
+@pytest.mark.parametrize("bad", ["NaN", "Infinity", "-Infinity"])
+def test_non_finite_numbers_are_rejected_naming_the_field(client, runtime, bad):
+    for url, raw, field in [
+        ("/api/sequence/joint-angles", '{"angles_deg": {"RARM_JOINT0": BAD}, "time": 1}', "RARM_JOINT0"),
+        ("/api/sequence/joint-angles", '{"angles_deg": {"RARM_JOINT0": 1}, "time": BAD}', "time"),
+        ("/api/sequence/joint-angles", '{"angles_deg": [BAD' + ', 0' * 29 + '], "time": 1}', "angles_deg"),
+        ("/api/sim/push", '{"body": "BODY", "force": [BAD, 0, 0], "duration": 0.1}', "force"),
+    ]:
+        raw = raw.replace("BAD", bad)
+        r = client.post(url, content=raw, headers={"Content-Type": "application/json"})
+        assert r.status_code == 422, (url, raw, r.text)
+        assert field in r.json()["detail"] and "finite" in r.json()["detail"]
+    step(runtime, 0.2)
+    assert client.get("/api/sequence/status").json() == {"interpolating": False}
+
+
+def test_an_error_raised_inside_the_loop_is_a_500_and_the_loop_keeps_running(client, runtime, monkeypatch):
+    from fastapi.testclient import TestClient
+
+    loop = runtime.loop
+
+    def broken(*_args):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(loop.chain["seq"], "clear", broken)
+    app = client.app
+    with TestClient(app, raise_server_exceptions=False) as c:
+        r = c.post("/api/sequence/clear")
+    assert r.status_code == 500 and "boom" in r.json()["detail"]
+    tick = loop.snapshot.tick
+    step(runtime, 0.05)
+    assert loop.snapshot.tick == tick + 10 and loop.snapshot.fault is None
+
+
+def test_reset_restarts_the_simulation(client, runtime):
+    step(runtime, 0.2)
+    client.post("/api/estop")
+    r = client.post("/api/sim/reset", json={"scene": "default"})
+    assert r.status_code == 200, r.text
+    s = client.get("/api/state").json()
+    assert s["time"] == 0.0 and s["tick"] == 0 and s["emergency"]["hard_stop"] is False
+    assert client.post("/api/sim/reset").status_code == 200
+
+
+def test_push_changes_the_base_velocity(client, runtime):
+    step(runtime, 0.1)
+    v0 = np.array(runtime.loop.snapshot.truth.base_linvel_world)
+    r = client.post("/api/sim/push", json={"body": "BODY", "force": [300.0, 0.0, 0.0], "duration": 0.1})
+    assert r.status_code == 200, r.text
+    step(runtime, 0.1)
+    v1 = np.array(runtime.loop.snapshot.truth.base_linvel_world)
+    assert v1[0] - v0[0] > 0.05
+
+
+def test_chain_reports_order_and_per_layer_timing(client, runtime):
+    step(runtime, 0.1)
+    c = client.get("/api/chain").json()
+    assert c["order"] == runtime.loop.chain.order()
+    for name in c["order"]:
+        assert c["timing"][name]["n"] == 20 and c["timing"][name]["p99_ms"] >= c["timing"][name]["p50_ms"]
+
+
+def test_log_csv_has_a_header_and_one_row_per_tick(client, runtime):
+    step(runtime, 0.05)
+    r = client.get("/api/log.csv")
+    assert r.status_code == 200 and r.headers["content-type"].startswith("text/csv")
+    lines = r.text.strip().splitlines()
+    assert lines[0].startswith("time_s,q_cmd/RLEG_JOINT0")
+    assert len(lines) == 1 + 10
+    assert math.isclose(float(lines[-1].split(",")[0]), 0.05)
+
+
+def test_docs_the_operator_page_and_config_are_served(client):
+    assert client.get("/docs").status_code == 200
+    assert "/api/sequence/joint-angles" in client.get("/openapi.json").json()["paths"]
+    page = client.get("/")
+    assert page.status_code == 200 and "E-STOP" in page.text
+    cfg = client.get("/api/config").json()
+    assert cfg["viewer_port"] == 8080 and cfg["joints"] == list(JOINT_NAMES)

@@ -1,0 +1,63 @@
+"""The hrp2-console command: a headless timed run, the bench subcommand, argument errors."""
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def console() -> list[str]:
+    script = Path(sys.executable).with_name("hrp2-console")
+    if script.exists():
+        return [str(script)]
+    found = shutil.which("hrp2-console")
+    return [found] if found else [sys.executable, "-m", "app.cli"]
+
+
+def run(*args: str, timeout: float = 60.0) -> subprocess.CompletedProcess:
+    return subprocess.run([*console(), *args], capture_output=True, text=True, timeout=timeout, cwd=ROOT)
+
+
+def test_a_headless_timed_run_exits_zero_and_prints_the_summary():
+    r = run("--headless", "--duration", "5", "--speed", "max", "--port", "0")
+    assert r.returncode == 0, r.stdout + r.stderr
+    out = r.stdout
+    assert "summary:" in out
+    assert "fallen: false" in out
+    assert "faults: none" in out
+    sim_line = next(line for line in out.splitlines() if "sim time:" in line)
+    assert float(sim_line.split(":")[1].split()[0]) >= 5.0
+    for key in ("ticks:", "real-time factor:", "max loop ms:"):
+        assert key in out
+
+
+def test_bench_prints_json_with_every_chain_layer_timed():
+    r = run("bench", "--duration", "1")
+    assert r.returncode == 0, r.stdout + r.stderr
+    report = json.loads(r.stdout)
+    assert report["scenario"] == "stand"
+    assert report["sim_time_s"] == pytest.approx(1.0)
+    assert report["real_time_factor"] > 0
+    for key in ("tick_ms", "physics_ms"):
+        assert report[key]["p99_ms"] >= report[key]["p50_ms"] > 0
+    layers = report["chain"].split(" -> ")
+    assert list(report["layers"]) == layers and "seq" in layers
+    for name in layers:
+        assert set(report["layers"][name]) == {"p50_ms", "p99_ms"}
+
+
+def test_an_unknown_speed_fails_naming_the_option_and_what_is_allowed():
+    r = run("--speed", "fast")
+    assert r.returncode == 2
+    assert "--speed" in r.stderr and "max" in r.stderr
+
+
+def test_an_unknown_bench_scenario_lists_the_valid_ones():
+    r = run("bench", "--scenario", "moonwalk")
+    assert r.returncode == 2
+    assert "--scenario" in r.stderr and "stand" in r.stderr and "arms" in r.stderr
