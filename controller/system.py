@@ -6,6 +6,7 @@ from collections.abc import Callable
 
 import numpy as np
 
+from controller.auto_balancer import AutoBalancer
 from controller.chain import Chain
 from controller.collision_detector import CollisionDetector
 from controller.hard_emergency_stopper import HardEmergencyStopper
@@ -37,7 +38,8 @@ class ControllerSystem:
     """The controller side of the robot: kinematic model, chain factory, state estimator, loop."""
 
     def __init__(self, plant: Plant, dt_control_s: float = 0.005,
-                 on_snapshot: Callable[[Snapshot], None] | None = None) -> None:
+                 on_snapshot: Callable[[Snapshot], None] | None = None, start_auto_balancer: bool = True) -> None:
+        self.start_auto_balancer = start_auto_balancer
         self.kin = RobotKinematics()
         # separate kinematics objects: each user updates its own pinocchio data
         self._kin_est = RobotKinematics()
@@ -54,6 +56,7 @@ class ControllerSystem:
             KalmanFilter(rpy0=(tilt[0], tilt[1], 0.0)),
             RemoveForceOffset(RobotKinematics()),
             SequencePlayer(ref0, dt_s, ik_solver=self._solve_limb_ik),
+            AutoBalancer(ref0, dt_s, active=self.start_auto_balancer),
             CollisionDetector(q0),
             HardEmergencyStopper(q0),
             SoftErrorLimiter(self.kin.q_lower, self.kin.q_upper, q0),

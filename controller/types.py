@@ -9,7 +9,24 @@ import numpy as np
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
-__all__ = ["Estimate", "Reference", "TickContext", "frozen_array"]
+__all__ = ["Estimate", "GaitState", "Reference", "TickContext", "frozen_array"]
+
+
+@dataclass(frozen=True, slots=True)
+class GaitState:
+    """What the AutoBalancer hands the Stabilizer each tick (hrpsys abc -> st ports), world frame."""
+
+    walking: bool
+    support: str  # "both" | "rleg" | "lleg"
+    contact: tuple[bool, bool]  # (right, left) soles meant to be on the ground
+    p_rsole_world: np.ndarray  # (3,) [m]
+    R_rsole_world: np.ndarray  # (3, 3)
+    p_lsole_world: np.ndarray  # (3,) [m]
+    R_lsole_world: np.ndarray  # (3, 3)
+    zmp_world: np.ndarray  # (3,) reference ZMP [m]
+    cog_world: np.ndarray  # (3,) x_G^abc [m]
+    cog_vel_world: np.ndarray  # (3,) [m/s]
+    cog_pc_world: np.ndarray  # (3,) preview-control COG before the hand-force offset (Eq. 6) [m]
 
 
 @dataclass(frozen=True, slots=True)
@@ -24,6 +41,7 @@ class Reference:
     base_rpy_rad: np.ndarray  # (3,) BODY roll, pitch, yaw [rad]
     zmp_base: np.ndarray  # (3,) reference ZMP in the BODY frame [m]
     wrenches: np.ndarray  # (4, 6) reference wrenches at the force sensors, world frame [N, N m]
+    gait: GaitState | None = None  # set by the AutoBalancer
 
     @staticmethod
     def from_arrays(q_rad, base_pos_world=(0.0, 0.0, 0.0), base_rpy_rad=(0.0, 0.0, 0.0),
@@ -42,7 +60,7 @@ class Reference:
         """A copy with some fields replaced (arrays are copied and frozen)."""
         shapes = {"q_rad": (NUM_JOINTS,), "base_pos_world": (3,), "base_rpy_rad": (3,),
                   "zmp_base": (3,), "wrenches": (len(FORCE_SENSOR_NAMES), 6)}
-        return replace(self, **{k: frozen_array(v, shapes[k]) for k, v in changes.items()})
+        return replace(self, **{k: (frozen_array(v, shapes[k]) if k in shapes else v) for k, v in changes.items()})
 
 
 @dataclass(slots=True)

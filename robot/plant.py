@@ -97,13 +97,15 @@ class MujocoPlant:
             raise ValueError(f"unknown keyframe {keyframe!r}; valid keyframes: {', '.join(names)}")
         mujoco.mj_resetDataKeyframe(self._model, self._data, names.index(keyframe))
         self._push_end_s.clear()
+        self._sensor_mean = None
         mujoco.mj_forward(self._model, self._data)
 
     def read(self) -> Sensors:
         """The robot's own sensors: encoders, F/T wrenches (sensor frames), BODY gyro and accelerometer."""
         d = self._data
+        data = self._sensor_mean if self._sensor_mean is not None else d.sensordata
         wrenches = np.array([
-            MUJOCO_TO_HARDWARE_WRENCH_SIGN * np.concatenate([d.sensordata[f], d.sensordata[t]])
+            MUJOCO_TO_HARDWARE_WRENCH_SIGN * np.concatenate([data[f], data[t]])
             for f, t in self._wrench_adr
         ])
         return Sensors(
@@ -111,8 +113,8 @@ class MujocoPlant:
             q_rad=frozen_array(d.qpos[self._qpos_adr]),
             dq_rad_s=frozen_array(d.qvel[self._dof_adr]),
             wrenches=frozen_array(wrenches),
-            gyro_rad_s=frozen_array(d.sensordata[self._gyro]),
-            accel_m_s2=frozen_array(d.sensordata[self._accel]),
+            gyro_rad_s=frozen_array(data[self._gyro]),
+            accel_m_s2=frozen_array(data[self._accel]),
         )
 
     def ground_truth(self) -> GroundTruth:
@@ -145,9 +147,17 @@ class MujocoPlant:
         """Advance `n` physics steps, ending pushes whose duration has elapsed."""
         if n < 0:
             raise ValueError(f"n must be >= 0, got {n}")
+        if n == 0:
+            return
+        # The IMU and F/T sensors report the mean over the steps since the last read, as a real
+        # sensor's anti-aliasing filter does: a single sample, taken in phase with the servo command
+        # updates, would see the 1 kHz servo vibration as a biased acceleration.
+        total = np.zeros_like(self._data.sensordata)
         for _ in range(n):
             mujoco.mj_step(self._model, self._data)
+            total += self._data.sensordata
             self._end_pushes()
+        self._sensor_mean = total / n
 
     def push(self, body: str, force_world_n, duration_s: float) -> None:
         """Apply a world-frame force [N] at `body`'s COM for `duration_s` of simulated time."""

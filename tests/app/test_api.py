@@ -19,6 +19,11 @@ def q_cmd_deg(runtime):
     return np.rad2deg(np.array(runtime.loop.snapshot.q_cmd_rad))
 
 
+def q_seq_deg(runtime):
+    """The planned stream: what a command could change (the AutoBalancer keeps adjusting the legs)."""
+    return np.rad2deg(np.array(runtime.loop.snapshot.q_seq_rad))
+
+
 def test_state_has_every_contract_field_with_the_right_types(client, runtime):
     step(runtime, 0.05)
     s = client.get("/api/state").json()
@@ -151,7 +156,7 @@ BAD_INPUTS = [
                                                                     for i, (u, _, _) in enumerate(BAD_INPUTS)])
 def test_bad_input_gets_a_422_naming_the_field_and_changes_nothing(client, runtime, url, body, words):
     step(runtime, 0.02)
-    before = q_cmd_deg(runtime)
+    before = q_seq_deg(runtime)
     tick = runtime.loop.snapshot.tick
     r = client.post(url, json=body)
     assert r.status_code == 422, r.text
@@ -161,7 +166,7 @@ def test_bad_input_gets_a_422_naming_the_field_and_changes_nothing(client, runti
         assert w in detail, f"{w!r} not in {detail!r}"
     step(runtime, 0.3)
     assert runtime.loop.snapshot.tick == tick + 60  # no reset happened
-    np.testing.assert_allclose(q_cmd_deg(runtime), before, atol=1e-6)
+    np.testing.assert_allclose(q_seq_deg(runtime), before, atol=1e-6)
     assert client.get("/api/sequence/status").json() == {"interpolating": False}
 
 

@@ -28,8 +28,10 @@ MOVE_POSE_DEG = pose_deg(RARM_JOINT0=-50, RARM_JOINT3=-70, LARM_JOINT0=-50, LARM
                          CHEST_JOINT1=8, HEAD_JOINT1=15, HEAD_JOINT0=20)
 
 
-def make_system(scene: str = "default") -> ControllerSystem:
-    return ControllerSystem(MujocoPlant(scene))
+def make_system(scene: str = "default", auto_balancer: bool = True) -> ControllerSystem:
+    """The simulated robot with the chain; `auto_balancer=False` plays the plan on the joints as is
+    (the hrpsys SequencePlayer and EmergencyStopper samples run that way)."""
+    return ControllerSystem(MujocoPlant(scene), start_auto_balancer=auto_balancer)
 
 
 def seq_call(system: ControllerSystem, method: str, *args):

@@ -43,8 +43,8 @@ def test_standing_with_the_chain_the_estimates_match_the_simulation():
 
 
 def test_sequence_motion_is_tracked_by_the_simulated_joints():
-    # 1. play the move pose over 2 s, then settle 1 s
-    system = make_system()
+    # 1. play the move pose over 2 s, then settle 1 s (plan played as is: no AutoBalancer)
+    system = make_system(auto_balancer=False)
     seq_call(system, "set_joint_angles", np.deg2rad(MOVE_POSE_DEG), 2.0)
     snap = system.loop.run_for(3.0)
     # 2. the reference is exactly the target; the joints follow within 0.5 deg
@@ -66,8 +66,8 @@ def test_sequence_motion_is_tracked_by_the_simulated_joints():
 
 
 def test_hard_estop_freezes_a_playing_motion_and_release_reaches_the_target():
-    # hrpsys-notes 3.1 demoEmergencyStopJointAngle, adapted to HRP-2
-    system = make_system()
+    # hrpsys-notes 3.1 demoEmergencyStopJointAngle, adapted to HRP-2 (plan played as is)
+    system = make_system(auto_balancer=False)
     loop = system.loop
     target = np.deg2rad(MOVE_POSE_DEG)
     # 1. a 10 s setJointAngles; after 4 s the pose has changed
