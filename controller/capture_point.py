@@ -172,10 +172,12 @@ class FootRectangle(Params):
         return self.corners_foot() @ R.T + np.array([x, y])
 
 
-# HRP-2 soles in the ankle frame (published foot mesh; see the hrp2 reference parameters):
-# the right foot spans x -0.1056..0.1356, y -0.079..0.059 (outside is -y); the left foot is mirrored.
-HRP2_RIGHT_SOLE = FootRectangle(front_m=0.1356, rear_m=0.1056, left_m=0.059, right_m=0.079)
-HRP2_LEFT_SOLE = FootRectangle(front_m=0.1356, rear_m=0.1056, left_m=0.079, right_m=0.059)
+# HRP-2 soles in the sole frame (directly below the ankle):
+# the model's sole box (robot/generate.py): 0.2172 x 0.138 m centred at (0.015, -+0.01) m from the
+# ankle's vertical, so the right sole spans x -0.0936..0.1236, y -0.079..0.059 (outside is -y);
+# the left sole is mirrored.
+HRP2_RIGHT_SOLE = FootRectangle(front_m=0.1236, rear_m=0.0936, left_m=0.059, right_m=0.079)
+HRP2_LEFT_SOLE = FootRectangle(front_m=0.1236, rear_m=0.0936, left_m=0.079, right_m=0.059)
 
 
 def support_polygon(feet: Iterable[tuple[object, FootRectangle]]) -> np.ndarray:

@@ -84,16 +84,16 @@ def test_nearest_point_outside_is_the_projection_on_the_edge():
 
 
 def test_hrp2_soles_span_the_published_mesh_extents():
-    assert np.allclose(HRP2_RIGHT_SOLE.corners_foot().min(0), [-0.1056, -0.079])
-    assert np.allclose(HRP2_RIGHT_SOLE.corners_foot().max(0), [0.1356, 0.059])
-    assert np.allclose(HRP2_LEFT_SOLE.corners_foot().min(0), [-0.1056, -0.059])
+    assert np.allclose(HRP2_RIGHT_SOLE.corners_foot().min(0), [-0.0936, -0.079])
+    assert np.allclose(HRP2_RIGHT_SOLE.corners_foot().max(0), [0.1236, 0.059])
+    assert np.allclose(HRP2_LEFT_SOLE.corners_foot().min(0), [-0.0936, -0.059])
     assert np.allclose(HRP2_LEFT_SOLE.corners_foot().mean(0), [0.015, 0.01])
 
 
 def test_support_polygon_of_two_hrp2_feet_side_by_side():
     poly = support_polygon([((0.0, -0.095, 0.0), HRP2_RIGHT_SOLE), ((0.0, 0.095, 0.0), HRP2_LEFT_SOLE)])
-    # x from the heel -0.1056 to the toe 0.1356; y from -0.095 - 0.079 to 0.095 + 0.079
-    expected = [[-0.1056, -0.174], [0.1356, -0.174], [0.1356, 0.174], [-0.1056, 0.174]]
+    # x from the heel -0.0936 to the toe 0.1236; y from -0.095 - 0.079 to 0.095 + 0.079
+    expected = [[-0.0936, -0.174], [0.1236, -0.174], [0.1236, 0.174], [-0.0936, 0.174]]
     assert same_polygon(poly, expected)
     assert point_in_convex_polygon([0.015, 0.0], poly)  # between the feet is supported
 

@@ -164,3 +164,17 @@ def test_stereo_baseline_is_horizontal(mj):
     model, _ = mj
     baseline = model.camera("narrow_left").pos - model.camera("narrow_right").pos
     assert baseline[1] == pytest.approx(0.144) and abs(baseline[0]) < 1e-12 and abs(baseline[2]) < 1e-12
+
+
+def test_the_controllers_sole_rectangles_match_the_model_sole_boxes():
+    """The Stabilizer's support polygon is the simulated sole, not the mesh outline."""
+    from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
+
+    m = mujoco.MjModel.from_xml_path(str(MJCF_ROBOT))
+    for geom, rect in (("rleg_sole", HRP2_RIGHT_SOLE), ("lleg_sole", HRP2_LEFT_SOLE)):
+        g = m.geom(geom)
+        lo = g.pos[:2] - g.size[:2]
+        hi = g.pos[:2] + g.size[:2]
+        corners = rect.corners_foot()
+        assert np.allclose(corners.min(0), lo, atol=1e-9)
+        assert np.allclose(corners.max(0), hi, atol=1e-9)
