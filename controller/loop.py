@@ -195,7 +195,9 @@ class ControlLoop:
     def _make_snapshot(self, sensors: Sensors, est: Estimate, ref: Reference, seq_ref: Reference,
                        loop_ms: float) -> Snapshot:
         truth = self.plant.ground_truth()
-        if self._state_estimator is not None:
+        if est.cog_world is not None:  # the Stabilizer estimated them this tick
+            cog, zmp = est.cog_world, est.zmp_world
+        elif self._state_estimator is not None:
             cog, zmp = self._state_estimator(sensors, est, ref)
         else:
             cog, zmp = np.zeros(3), np.zeros(3)

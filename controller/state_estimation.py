@@ -40,6 +40,7 @@ class ActualStateEstimator:
     def __init__(self, kinematics: RobotKinematics) -> None:
         self.kin = kinematics
         self.last_zmp = np.zeros(3)
+        self.base_pos_world = np.zeros(3)  # where the anchoring put BODY [m]
 
     def reference_soles(self, ref: Reference) -> np.ndarray:
         """World positions of the two sole sensors in the reference posture, (2, 3)."""
@@ -47,11 +48,15 @@ class ActualStateEstimator:
         return np.array([self.kin.frame_pose(FORCE_SENSOR_NAMES[i])[0] for i in FOOT_SENSORS])
 
     def __call__(self, sensors, est: Estimate, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
-        ref_soles = self.reference_soles(ref)
+        if ref.gait is not None:  # the AutoBalancer says where the soles are meant to be
+            ref_soles = np.array([ref.gait.p_rsole_world, ref.gait.p_lsole_world])
+        else:
+            ref_soles = self.reference_soles(ref)
         meas_soles = est.sensor_pos_from_base[list(FOOT_SENSORS)]
         fz = np.clip(est.wrenches_ext_world[list(FOOT_SENSORS), 2], 0.0, None)
         w = fz / fz.sum() if fz.sum() > 2 * CONTACT_FZ_N else np.array([0.5, 0.5])
         offset = w @ (ref_soles - meas_soles)
+        self.base_pos_world = offset
         cog = est.com_from_base + offset
         soles = meas_soles + offset
         zmp = zmp_from_foot_wrenches(soles, est.wrenches_ext_world[list(FOOT_SENSORS)], float(w @ soles[:, 2]))

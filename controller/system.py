@@ -17,6 +17,7 @@ from controller.remove_force_offset import RemoveForceOffset
 from controller.rotations import rpy_to_matrix
 from controller.sequence_player import SequencePlayer
 from controller.soft_error_limiter import SoftErrorLimiter
+from controller.stabilizer import Stabilizer
 from controller.state_estimation import ActualStateEstimator
 from controller.types import Reference
 from robot.sensors import Sensors
@@ -38,8 +39,10 @@ class ControllerSystem:
     """The controller side of the robot: kinematic model, chain factory, state estimator, loop."""
 
     def __init__(self, plant: Plant, dt_control_s: float = 0.005,
-                 on_snapshot: Callable[[Snapshot], None] | None = None, start_auto_balancer: bool = True) -> None:
+                 on_snapshot: Callable[[Snapshot], None] | None = None, start_auto_balancer: bool = True,
+                 start_stabilizer: bool = True) -> None:
         self.start_auto_balancer = start_auto_balancer
+        self.start_stabilizer = start_stabilizer and start_auto_balancer
         self.kin = RobotKinematics()
         # separate kinematics objects: each user updates its own pinocchio data
         self._kin_est = RobotKinematics()
@@ -57,6 +60,7 @@ class ControllerSystem:
             RemoveForceOffset(RobotKinematics()),
             SequencePlayer(ref0, dt_s, ik_solver=self._solve_limb_ik),
             AutoBalancer(ref0, dt_s, active=self.start_auto_balancer),
+            Stabilizer(dt_s, active=self.start_stabilizer),
             CollisionDetector(q0),
             HardEmergencyStopper(q0),
             SoftErrorLimiter(self.kin.q_lower, self.kin.q_upper, q0),

@@ -77,6 +77,10 @@ class Estimate:
     sensor_pos_from_base: np.ndarray = field(default_factory=lambda: np.zeros((len(FORCE_SENSOR_NAMES), 3)))
     sensor_R_world: np.ndarray = field(default_factory=lambda: np.tile(np.eye(3), (len(FORCE_SENSOR_NAMES), 1, 1)))
     com_from_base: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    # Stabilizer: actual COG, its velocity and the ZMP in the world frame (None when it did not run)
+    cog_world: np.ndarray | None = None
+    cog_vel_world: np.ndarray | None = None
+    zmp_world: np.ndarray | None = None
 
 
 @dataclass(slots=True)

@@ -1,0 +1,265 @@
+"""Stabilizer layer ([MLC] III-D): LIP state feedback (Eq. 7-8) on the actual COG, COG velocity and
+ZMP; QP force-moment distribution to the feet (Eq. 9-14); foot force-moment damping control (Eq. 3
+with m = 0); body attitude control; the capture-point error and the emergency flag ([MLC] III-E)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from controller.capture_point import (
+    HRP2_LEFT_SOLE,
+    HRP2_RIGHT_SOLE,
+    FootRectangle,
+    point_in_convex_polygon,
+    shrink_polygon,
+    support_polygon,
+)
+from controller.errors import InvalidState
+from controller.force_distribution import FootPolygon, alpha_from_zmp, distribute_zmp_to_feet
+from controller.hand_force_cog_offset import cog_offset_against_hand_forces
+from controller.kinematics import RobotKinematics
+from controller.layer import Layer, Params
+from controller.leg_ik import LEG_INDICES, LLEG, RLEG, leg_ik
+from controller.rotations import rpy_to_matrix
+from controller.state_estimation import ActualStateEstimator
+from controller.types import Reference, TickContext
+from robot.names import FORCE_SENSOR_NAMES
+
+G = 9.80665
+FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
+HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
+HAND_FORCE_DEADBAND_N = 2.0
+EMERGENCY_MODES = ("cp_error", "cp_support", "none")
+
+
+@dataclass(frozen=True)
+class StabilizerParams(Params):
+    # LIP state feedback u = zmp_ref + k1 (cog_ref - cog) + k2 (cogvel_ref - cogvel) + k3 (zmp_ref - zmp):
+    # hrpsys's EEFM gains (pole placement for the LIP with a first-order ZMP lag, Kajita 2010) x 0.9
+    k1: float = field(default=-1.41429 * 0.9, metadata={"unit": "-", "min": -20.0, "max": 0.0})
+    k2: float = field(default=-0.404082 * 0.9, metadata={"unit": "s", "min": -5.0, "max": 0.0})
+    k3: float = field(default=-0.18 * 0.9, metadata={"unit": "-", "min": -2.0, "max": 0.0})
+    # foot moment damping control d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T
+    rot_damping_gain: float = field(default=300.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
+    rot_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
+    rot_limit_deg: float = field(default=10.0, metadata={"unit": "deg", "min": 0.0, "max": 30.0})
+    # foot vertical force difference control
+    z_damping_gain: float = field(default=35000.0, metadata={"unit": "N s/m", "min": 100.0, "max": 1e7})
+    z_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
+    z_limit_m: float = field(default=0.025, metadata={"unit": "m", "min": 0.0, "max": 0.1})
+    # body attitude control d(rpy)/dt = k (ref - act) - rpy / T. Off by default: when the robot tips
+    # about a foot edge the loop integrates that tilt into the hips and pushes it over (measured:
+    # a 40 N s sideways push falls with hrpsys's 0.5, stands with 0; forward 28 N s likewise)
+    body_attitude_gain: float = field(default=0.0, metadata={"unit": "1/s", "min": 0.0, "max": 20.0})
+    body_attitude_time_const_s: float = field(default=1e3, metadata={"unit": "s", "min": 0.01, "max": 1e6})
+    cogvel_cutoff_hz: float = field(default=4.0, metadata={"unit": "Hz", "min": 0.1, "max": 100.0})
+    contact_threshold_n: float = field(default=25.0, metadata={"unit": "N", "min": 0.0, "max": 500.0})
+    transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
+    # emergency flag: "cp_error" = |CP_ref - CP_act| > threshold ([MLC]); "cp_support" = actual CP
+    # outside the support polygon shrunk by cp_margin_m (later hrpsys); "none"
+    emergency_mode: str = field(default="cp_error", metadata={"choices": EMERGENCY_MODES})
+    cp_threshold_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.001, "max": 0.5})
+    cp_margin_m: float = field(default=0.03, metadata={"unit": "m", "min": 0.0, "max": 0.1})
+    estop_while_walking: bool = field(default=False, metadata={"unit": "-"})
+
+
+def sigmoid_transition(s: float) -> float:
+    """Smooth start/stop weight for progress s in [0, 1]: hrpsys's 1 / (1 + exp(-9.19 (s - 0.5))),
+    rescaled to be exactly 0 at s = 0 and 1 at s = 1 (hrpsys's curve jumps by 1 % at both ends)."""
+    def raw(x: float) -> float:
+        return 1.0 / (1.0 + math.exp(-9.19 * (x - 0.5)))
+    lo, hi = raw(0.0), raw(1.0)
+    return (raw(min(1.0, max(0.0, s))) - lo) / (hi - lo)
+
+
+def _rot_xy(roll: float, pitch: float) -> np.ndarray:
+    return rpy_to_matrix(np.array([roll, pitch, 0.0]))
+
+
+class Stabilizer(Layer):
+    """Modifies the legs of the AutoBalancer's posture so the measured ZMP and COG track the reference.
+
+    Without a gait reference (AutoBalancer stopped) it only estimates and passes the reference through.
+    """
+
+    name = "st"
+    description = "Stabilizer: LIP feedback, QP force distribution, foot damping, CP emergency flag"
+
+    def __init__(self, dt_s: float, params: StabilizerParams | None = None, active: bool = True,
+                 kinematics: RobotKinematics | None = None) -> None:
+        super().__init__()
+        self.params = params or StabilizerParams()
+        self.dt_s = dt_s
+        self.kin = kinematics or RobotKinematics()
+        self.estimator = ActualStateEstimator(self.kin)
+        self.total_mass = self.kin.total_mass
+        self.soles: tuple[FootRectangle, FootRectangle] = (HRP2_RIGHT_SOLE, HRP2_LEFT_SOLE)
+        self.d_foot_rpy = np.zeros((2, 2))  # (foot, [roll, pitch]) [rad]
+        self.dz_diff = 0.0  # right minus left sole height offset [m]
+        self.d_body_rp = np.zeros(2)  # [rad]
+        self._prev_cog: np.ndarray | None = None
+        self.act_cogvel = np.zeros(3)
+        self.active = False
+        self._transition = None  # (from_w, to_w, elapsed)
+        self.weight = 0.0
+        self.cp_ref = np.zeros(2)
+        self.cp_act = np.zeros(2)
+        self.cp_error = np.zeros(2)
+        self.emergency = False
+        self.flag_rise_time_s: float | None = None
+        self.new_zmp = np.zeros(3)
+        self.projected = False
+        if active:
+            self.start()
+
+    # ---- operations ------------------------------------------------------------------------
+    def start(self) -> None:
+        if self.active:
+            raise InvalidState("Stabilizer is already running")
+        self.active = True
+        self._transition = (self.weight, 1.0, 0.0)
+
+    def stop(self) -> None:
+        if not self.active:
+            raise InvalidState("Stabilizer is not running")
+        self.active = False
+        self._transition = (self.weight, 0.0, 0.0)
+
+    def set_params(self, params: StabilizerParams) -> None:
+        self.params = params
+
+    # ---- tick --------------------------------------------------------------------------------
+    def _advance_transition(self, dt: float) -> None:
+        if self._transition is None:
+            return
+        w0, w1, elapsed = self._transition
+        elapsed += dt
+        s = min(1.0, elapsed / self.params.transition_time_s)
+        self.weight = w0 + (w1 - w0) * sigmoid_transition(s) if s < 1.0 else w1
+        self._transition = None if s >= 1.0 else (w0, w1, elapsed)
+
+    def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        p = self.params
+        dt = ctx.dt_s
+        est = ctx.estimate
+        self._advance_transition(dt)
+        # actual COG and ZMP (always: the operator and the emergency flag need them)
+        cog, zmp = self.estimator(ctx.sensors, est, ref)
+        if self._prev_cog is None:
+            self._prev_cog = cog
+        alpha = 1.0 - math.exp(-2.0 * math.pi * p.cogvel_cutoff_hz * dt)
+        self.act_cogvel = self.act_cogvel + alpha * ((cog - self._prev_cog) / dt - self.act_cogvel)
+        self._prev_cog = cog
+        est.cog_world, est.zmp_world, est.cog_vel_world = cog, zmp, self.act_cogvel
+        gait = ref.gait
+        if gait is None:
+            self.emergency = False
+            return ref
+        # capture points
+        height = max(0.1, cog[2] - gait.zmp_world[2])
+        omega = math.sqrt(G / height)
+        self.cp_ref = gait.cog_world[:2] + gait.cog_vel_world[:2] / omega
+        self.cp_act = cog[:2] + self.act_cogvel[:2] / omega
+        self.cp_error = self.cp_ref - self.cp_act
+        fz = est.wrenches_ext_world[list(FEET), 2]
+        contact_act = fz > p.contact_threshold_n
+        self._update_emergency(ctx.time_s, gait, contact_act)
+        if self.weight <= 0.0:
+            return ref
+        w = self.weight
+        # LIP state feedback (Eq. 8): the ZMP the feet should realise. References as the paper says:
+        # p_G^pc (preview COG, before the hand-force offset) and p_zmp^abc. The actual side is the
+        # static balance point, the COG shifted by the measured hand forces (hrpsys does the same):
+        # with hands loaded the LIP's "COG" is where the ZMP would sit at rest.
+        sbp = self.static_balance_point(cog, est, gait.zmp_world[2])
+        d_cog = gait.cog_pc_world - sbp
+        d_vel = gait.cog_vel_world - self.act_cogvel
+        d_zmp = gait.zmp_world - zmp
+        new_zmp = gait.zmp_world + w * (p.k1 * d_cog + p.k2 * d_vel + p.k3 * d_zmp)
+        # QP distribution (Eq. 9-14) over the feet meant to be in contact
+        soles_world = ((gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
+        polygons, idx = [], []
+        for i, (pos, R) in enumerate(soles_world):
+            if gait.contact[i]:
+                yaw = math.atan2(R[1, 0], R[0, 0])
+                polygons.append(FootPolygon(self.soles[i].corners_world((pos[0], pos[1], yaw)), pos[:2]))
+                idx.append(i)
+        a = alpha_from_zmp(new_zmp[:2], gait.p_rsole_world[:2], gait.p_lsole_world[:2]) if len(idx) == 2 else 0.5
+        forces = distribute_zmp_to_feet(new_zmp[:2], self.total_mass * G, polygons, a)
+        self.new_zmp = np.array([*forces.zmp_world_xy, gait.zmp_world[2]])
+        self.projected = forces.projected
+        # foot moment damping (Eq. 3, m = 0) and force-difference control
+        tau_act = est.wrenches_ext_world[list(FEET), 3:5]
+        for k, i in enumerate(idx):
+            tau_ref = -forces.n_xy_nm[k]  # ground-reaction moment about the sole origin
+            if contact_act[i]:
+                rate = (tau_act[i] - tau_ref) / p.rot_damping_gain - self.d_foot_rpy[i] / p.rot_time_const_s
+            else:
+                rate = -self.d_foot_rpy[i] / p.rot_time_const_s
+            self.d_foot_rpy[i] = self.d_foot_rpy[i] + rate * dt
+        for i in range(2):
+            if i not in idx:
+                self.d_foot_rpy[i] -= self.d_foot_rpy[i] * dt / 0.08  # swing foot: back to the plan quickly
+        lim = math.radians(p.rot_limit_deg)
+        np.clip(self.d_foot_rpy, -lim, lim, out=self.d_foot_rpy)
+        if len(idx) == 2 and contact_act.all():
+            df_ref = forces.fz_n[0] - forces.fz_n[1]
+            df_act = fz[0] - fz[1]
+            self.dz_diff += ((df_act - df_ref) / p.z_damping_gain - self.dz_diff / p.z_time_const_s) * dt
+        else:
+            self.dz_diff -= self.dz_diff / p.z_time_const_s * dt
+        self.dz_diff = float(np.clip(self.dz_diff, -2 * p.z_limit_m, 2 * p.z_limit_m))
+        # body attitude control
+        act_rp = est.base_rpy_rad[:2]
+        self.d_body_rp += (p.body_attitude_gain * (ref.base_rpy_rad[:2] - act_rp)
+                           - self.d_body_rp / p.body_attitude_time_const_s) * dt
+        np.clip(self.d_body_rp, -lim, lim, out=self.d_body_rp)
+        # legs re-solved for the modified sole targets and BODY attitude
+        R_body = rpy_to_matrix(ref.base_rpy_rad + w * np.array([*self.d_body_rp, 0.0]))
+        base = ref.base_pos_world
+        q = np.array(ref.q_rad, dtype=float)
+        dz = (0.5 * w * self.dz_diff, -0.5 * w * self.dz_diff)
+        for i, (geom, leg) in enumerate(((RLEG, "rleg"), (LLEG, "lleg"))):
+            pos, R = soles_world[i]
+            R_mod = _rot_xy(*(w * self.d_foot_rpy[i])) @ R
+            q[LEG_INDICES[leg]], _ = leg_ik(geom, base, R_body, pos + np.array([0.0, 0.0, dz[i]]), R_mod)
+        return ref.with_(q_rad=q)
+
+    def static_balance_point(self, cog: np.ndarray, est, zmp_z: float) -> np.ndarray:
+        """COG (3,) moved to where the measured hand forces put the ZMP of a robot at rest [m]."""
+        f_on = est.wrenches_ext_world[list(HANDS), :3]
+        if not np.any(np.abs(f_on) > HAND_FORCE_DEADBAND_N):
+            return cog
+        hands = est.sensor_pos_from_base[list(HANDS)] + self.estimator.base_pos_world
+        # Eq. 6 evaluated with the force on the robot is the static ZMP (see hand_force_cog_offset)
+        xy = cog_offset_against_hand_forces(cog[:2], self.total_mass, hands, -f_on, zmp_z, G)
+        return np.array([xy[0], xy[1], cog[2]])
+
+    def _update_emergency(self, time_s: float, gait, contact_act: np.ndarray) -> None:
+        p = self.params
+        if p.emergency_mode == "none" or (gait.walking and not p.estop_while_walking) or not contact_act.any():
+            flag = False
+        elif p.emergency_mode == "cp_error":
+            flag = bool(np.hypot(*self.cp_error) > p.cp_threshold_m)
+        else:
+            feet = []
+            for i, (pos, R) in enumerate(((gait.p_rsole_world, gait.R_rsole_world),
+                                          (gait.p_lsole_world, gait.R_lsole_world))):
+                if contact_act[i]:
+                    feet.append(((pos[0], pos[1], math.atan2(R[1, 0], R[0, 0])), self.soles[i]))
+            poly = shrink_polygon(support_polygon(feet), p.cp_margin_m)
+            flag = poly.shape[0] < 3 or not point_in_convex_polygon(self.cp_act, poly)
+        if flag and not self.emergency:
+            self.flag_rise_time_s = time_s
+        self.emergency = flag
+
+    def status(self) -> dict:
+        return {"enabled": self.enabled, "active": self.active, "weight": round(self.weight, 4),
+                "cp_ref": self.cp_ref.tolist(), "cp_act": self.cp_act.tolist(), "cp_error": self.cp_error.tolist(),
+                "cp_error_norm": float(np.hypot(*self.cp_error)), "threshold": self.params.cp_threshold_m,
+                "emergency": self.emergency, "flag_rise_time": self.flag_rise_time_s,
+                "d_foot_rpy_deg": np.rad2deg(self.d_foot_rpy).tolist(), "dz_diff_m": self.dz_diff,
+                "new_zmp": self.new_zmp.tolist()}
