@@ -36,6 +36,23 @@ def jsonable(value: Any) -> Any:
     return str(value)
 
 
+def _opt_float(v: Any) -> float | None:
+    return None if v is None else float(v)
+
+
+def _xy(v: Any) -> list[float]:
+    a = np.zeros(2) if v is None else np.asarray(v, dtype=float).reshape(-1)[:2]
+    return [round(float(c), 6) for c in a]
+
+
+def capture_point_state(st: dict[str, Any]) -> dict[str, Any]:
+    """The Stabilizer's capture point (ref, act, error [m], |error| [m], threshold [m]) from its status;
+    zeros when the layer is absent."""
+    return {"ref": _xy(st.get("cp_ref")), "act": _xy(st.get("cp_act")), "error": _xy(st.get("cp_error")),
+            "error_norm": round(float(st.get("cp_error_norm", 0.0)), 6),
+            "threshold": float(st.get("threshold", 0.0))}
+
+
 def _deg(a) -> list[float]:
     return [round(float(v), 4) for v in np.rad2deg(np.asarray(a, dtype=float))]
 
@@ -137,6 +154,8 @@ class Runtime:
         cmd, meas, seq = (_deg(snap.q_cmd_rad), _deg(snap.q_meas_rad), _deg(snap.q_seq_rad))
         joints = {n: {"cmd_deg": cmd[i], "meas_deg": meas[i], "seq_deg": seq[i]}
                   for i, n in enumerate(JOINT_NAMES)}
+        abc = snap.layers.get("abc") or {}
+        st = snap.layers.get("st") or {}
         return jsonable({
             "time": round(float(snap.time_s), 6),
             "tick": int(snap.tick),
@@ -147,7 +166,12 @@ class Runtime:
             "joints": joints,
             "cog": np.asarray(snap.cog_world).round(5),
             "zmp": np.asarray(snap.zmp_world).round(5),
-            "emergency": {"hard_stop": bool(snap.emergency.get("hard_stop", False)), "fault": snap.fault},
+            "walking": bool(abc.get("walking", False)),
+            "support": str(abc.get("support", "both")),
+            "capture_point": capture_point_state(st),
+            "emergency": {"hard_stop": bool(snap.emergency.get("hard_stop", False)), "fault": snap.fault,
+                          "flag": bool(st.get("emergency", False)),
+                          "flag_rise_time": _opt_float(st.get("flag_rise_time"))},
             "layers": snap.layers,
             "chain": self.loop.chain.describe(),
             "speed": self.speed,

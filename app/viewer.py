@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
+from collections import deque
 
 import mujoco
 import numpy as np
@@ -12,11 +14,17 @@ import trimesh
 import viser
 
 from app.runtime import Runtime
+from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
 from controller.errors import ControllerError
 
 log = logging.getLogger(__name__)
 
 _VISUAL_GROUPS = (0, 1, 2)  # MJCF geom groups drawn by default; group 3 holds the collision shapes
+PLOT_WINDOW_S = 10.0  # [s] of simulated time shown by the capture-point error plot
+PLOT_RATE_HZ = 10.0  # plot samples and redraws per second (wall time)
+MAX_FOOTSTEPS = 16  # planned footsteps drawn (fixed buffer: the handles are only updated, never rebuilt)
+_FLOOR_LIFT_M = 0.002  # floor markers drawn this far above the sole plane so they are not hidden
+_SOLES = {"rleg": HRP2_RIGHT_SOLE, "lleg": HRP2_LEFT_SOLE}
 
 
 def _rgb_opacity(rgba: np.ndarray) -> tuple[tuple[int, int, int], float | None]:
@@ -47,6 +55,71 @@ def geom_mesh(model: mujoco.MjModel, g: int) -> trimesh.Trimesh | None:
     return None
 
 
+def _yaw(R) -> float:
+    R = np.asarray(R, dtype=float)
+    return float(math.atan2(R[1, 0], R[0, 0]))
+
+
+def _closed_segments(xy: np.ndarray, z: float) -> np.ndarray:
+    """(M, 2, 3) segments of the closed polygon through the (M, 2) points `xy` at height z."""
+    p = np.column_stack([xy, np.full(len(xy), z)])
+    return np.stack([p, np.roll(p, -1, axis=0)], axis=1)
+
+
+def _padded(segments: np.ndarray, n: int) -> np.ndarray:
+    """Exactly n segments: the extra slots repeat the last real one (drawn over it, so invisible)."""
+    segments = segments[:n]
+    if len(segments) < n:
+        segments = np.concatenate([segments, np.repeat(segments[-1:], n - len(segments), axis=0)])
+    return segments.astype(np.float32)
+
+
+def footstep_rectangles(steps, z: float) -> np.ndarray:
+    """(4 * len(steps), 2, 3) outline segments of footsteps given as {"leg", "pos": [3], "yaw"} [m, rad]."""
+    segs = []
+    for step in steps:
+        rect = _SOLES.get(str(step.get("leg")), HRP2_RIGHT_SOLE)
+        pos = np.asarray(step.get("pos", (0.0, 0.0, z)), dtype=float)
+        corners = rect.corners_world((pos[0], pos[1], float(step.get("yaw", 0.0))))
+        segs.append(_closed_segments(corners, (float(pos[2]) if len(pos) > 2 else z) + _FLOOR_LIFT_M))
+    return np.concatenate(segs) if segs else np.zeros((0, 2, 3))
+
+
+class CpErrorHistory:
+    """Ring buffer of (sim time [s], CP error x, y [mm], threshold [mm]) over the last `window_s`."""
+
+    def __init__(self, window_s: float = PLOT_WINDOW_S, maxlen: int = 2000) -> None:
+        self.window_s = float(window_s)
+        self._rows: deque[tuple[float, float, float, float]] = deque(maxlen=maxlen)
+
+    def __len__(self) -> int:
+        return len(self._rows)
+
+    def add(self, snap) -> bool:
+        """Sample the snapshot's Stabilizer status; False when it has none. A reset clears the buffer."""
+        st = snap.layers.get("st")
+        if not st:
+            return False
+        t = float(snap.time_s)
+        if self._rows and t < self._rows[-1][0]:
+            self._rows.clear()  # the simulation was reset
+        if self._rows and t == self._rows[-1][0]:
+            return False
+        err = np.asarray(st.get("cp_error", (0.0, 0.0)), dtype=float)
+        self._rows.append((t, 1e3 * float(err[0]), 1e3 * float(err[1]), 1e3 * float(st.get("threshold", 0.0))))
+        while self._rows and self._rows[0][0] < t - self.window_s:
+            self._rows.popleft()
+        return True
+
+    def data(self) -> tuple[np.ndarray, ...]:
+        """(time, err x, err y, +threshold, -threshold) arrays for the uPlot."""
+        if not self._rows:
+            z = np.zeros(1)
+            return z, z, z, z, z
+        a = np.asarray(self._rows, dtype=float)
+        return a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3]
+
+
 def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
     mat = model.geom_matid[g]
     if mat >= 0 and np.allclose(model.geom_rgba[g], [0.5, 0.5, 0.5, 1.0]):
@@ -68,6 +141,8 @@ class Viewer:
         self._scene_nodes: list = []
         self._model_key: tuple[str, ...] = ()
         self._model: mujoco.MjModel | None = None
+        self._cp_history = CpErrorHistory()
+        self._build_markers()
         self._build_scene()
         self._build_gui()
         self._stop = threading.Event()
@@ -127,11 +202,92 @@ class Viewer:
                                      position=pos, wxyz=wxyz)
 
     def _apply_poses(self, truth) -> None:
-        pos, quat = truth.body_pos_world, truth.body_quat_wxyz
         with self.server.atomic():
-            for b, frame in enumerate(self._frames, start=1):
-                frame.position = pos[b]
-                frame.wxyz = quat[b]
+            self._set_body_poses(truth)
+
+    def _set_body_poses(self, truth) -> None:
+        pos, quat = truth.body_pos_world, truth.body_quat_wxyz
+        for b, frame in enumerate(self._frames, start=1):
+            frame.position = pos[b]
+            frame.wxyz = quat[b]
+
+    def apply_snapshot(self, snap) -> None:
+        """Body poses and the balance markers of one snapshot, in one atomic batch."""
+        with self.server.atomic():
+            self._set_body_poses(snap.truth)
+            self._update_markers(snap)
+
+    # ---- balance markers: built once, then only moved / shown / hidden ---------------------------
+    def _build_markers(self) -> None:
+        scene = self.server.scene
+        m: dict = {}
+        m["cog"] = scene.add_icosphere("/markers/cog", radius=0.03, color=(255, 140, 0), subdivisions=2,
+                                       cast_shadow=False, receive_shadow=False)
+        m["zmp"] = scene.add_cylinder("/markers/zmp", radius=0.02, height=0.004, color=(40, 200, 60),
+                                      radial_segments=16, cast_shadow=False, receive_shadow=False)
+        m["cp_ref"] = scene.add_icosphere("/markers/cp_ref", radius=0.015, color=(30, 110, 255), subdivisions=1,
+                                          cast_shadow=False, receive_shadow=False)
+        m["cp_act"] = scene.add_icosphere("/markers/cp_act", radius=0.015, color=(230, 30, 60), subdivisions=1,
+                                          cast_shadow=False, receive_shadow=False)
+        seg = np.zeros((1, 2, 3), dtype=np.float32)
+        m["support"] = scene.add_line_segments("/markers/support_polygon", _padded(seg, 8), (255, 215, 0),
+                                               thickness=0.004, visible=False)
+        m["soles"] = scene.add_line_segments("/markers/soles", _padded(seg, 8), (90, 90, 110),
+                                             thickness=0.003, visible=False)
+        m["footsteps"] = scene.add_line_segments("/markers/footsteps", _padded(seg, 4 * MAX_FOOTSTEPS),
+                                                 (0, 170, 200), thickness=0.003, visible=False)
+        self._markers = m
+
+    @staticmethod
+    def _show(handle, visible: bool) -> None:
+        if handle.visible != visible:
+            handle.visible = visible
+
+    def _place(self, handle, pos) -> None:
+        p = np.asarray(pos, dtype=float)
+        ok = p.shape == (3,) and bool(np.all(np.isfinite(p)))
+        if ok:
+            handle.position = p
+        self._show(handle, ok)
+
+    def _update_markers(self, snap) -> None:
+        m = self._markers
+        gait = getattr(snap.reference, "gait", None)
+        zmp = np.asarray(snap.zmp_world, dtype=float)
+        if gait is not None:
+            floor_z = 0.5 * (float(gait.p_rsole_world[2]) + float(gait.p_lsole_world[2]))
+        else:
+            floor_z = float(zmp[2]) if np.isfinite(zmp[2]) else 0.0
+        self._place(m["cog"], snap.cog_world)
+        self._place(m["zmp"], (zmp[0], zmp[1], floor_z + _FLOOR_LIFT_M))
+        st = snap.layers.get("st") or {}
+        for key in ("cp_ref", "cp_act"):
+            xy = st.get(key)
+            if xy is None:
+                self._show(m[key], False)
+            else:
+                self._place(m[key], (float(xy[0]), float(xy[1]), floor_z + 2 * _FLOOR_LIFT_M))
+        if gait is None:
+            for key in ("support", "soles"):
+                self._show(m[key], False)
+        else:
+            feet = [((p[0], p[1], _yaw(R)), rect) for p, R, rect in (
+                (gait.p_rsole_world, gait.R_rsole_world, HRP2_RIGHT_SOLE),
+                (gait.p_lsole_world, gait.R_lsole_world, HRP2_LEFT_SOLE))]
+            steps = [{"leg": "rleg", "pos": gait.p_rsole_world, "yaw": feet[0][0][2]},
+                     {"leg": "lleg", "pos": gait.p_lsole_world, "yaw": feet[1][0][2]}]
+            m["soles"].points = _padded(footstep_rectangles(steps, floor_z), 8)
+            self._show(m["soles"], True)
+            in_contact = [f for f, on in zip(feet, gait.contact, strict=True) if on]
+            if in_contact:
+                poly = support_polygon(in_contact)
+                m["support"].points = _padded(_closed_segments(poly, floor_z + _FLOOR_LIFT_M), 8)
+            self._show(m["support"], bool(in_contact))
+        planned = (snap.layers.get("abc") or {}).get("footsteps") or []
+        if planned:
+            m["footsteps"].points = _padded(footstep_rectangles(planned[:MAX_FOOTSTEPS], floor_z),
+                                            4 * MAX_FOOTSTEPS)
+        self._show(m["footsteps"], bool(planned))
 
     # ---- GUI ----------------------------------------------------------------------------------
     def _build_gui(self) -> None:
@@ -144,6 +300,18 @@ class Viewer:
         self._fallen = gui.add_checkbox("fallen", False, disabled=True)
         self._fault = gui.add_text("fault", "none", disabled=True)
         self._message = gui.add_text("last action", "", disabled=True)
+        self._cp_history.add(self.runtime.loop.snapshot)
+        self._cp_plot = gui.add_uplot(
+            self._cp_history.data(),
+            ({"label": "t [s]"},
+             {"label": "CP err x [mm]", "stroke": "#e6194b", "width": 1.5},
+             {"label": "CP err y [mm]", "stroke": "#3c78d8", "width": 1.5},
+             {"label": "+threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
+             {"label": "-threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)}),
+            title="capture-point error [mm]",
+            scales={"x": {"time": False}},
+            aspect=1.6,
+        )
 
         @self._estop.on_click
         def _(_event) -> None:
@@ -181,6 +349,10 @@ class Viewer:
         if self._fault.value != fault:
             self._fault.value = fault
 
+    def _update_plot(self, snap) -> None:
+        if self._cp_history.add(snap):
+            self._cp_plot.data = self._cp_history.data()
+
     # ---- background update ----------------------------------------------------------------------
     def _run(self) -> None:
         period = 1.0 / self.rate_hz
@@ -194,11 +366,13 @@ class Viewer:
                         self._build_scene()  # the simulation was reset to another scene
                 snap = self.runtime.loop.snapshot
                 if snap.tick != last_tick:
-                    self._apply_poses(snap.truth)
+                    self.apply_snapshot(snap)
                     last_tick = snap.tick
                 n += 1
                 if n % max(1, int(self.rate_hz / 5)) == 0:
                     self._update_gui(snap)
+                if n % max(1, round(self.rate_hz / PLOT_RATE_HZ)) == 0:
+                    self._update_plot(snap)
             except Exception:  # noqa: BLE001 - keep drawing whatever happens
                 log.exception("viewer update failed")
                 time.sleep(0.5)

@@ -240,7 +240,9 @@ class Stabilizer(Layer):
 
     def _update_emergency(self, time_s: float, gait, contact_act: np.ndarray) -> None:
         p = self.params
-        if p.emergency_mode == "none" or (gait.walking and not p.estop_while_walking) or not contact_act.any():
+        settled = self.active and self._transition is None  # hrpsys: only in MODE_ST, transition done
+        if (p.emergency_mode == "none" or not settled or (gait.walking and not p.estop_while_walking)
+                or not contact_act.any()):
             flag = False
         elif p.emergency_mode == "cp_error":
             flag = bool(np.hypot(*self.cp_error) > p.cp_threshold_m)

@@ -64,7 +64,7 @@ def test_a_reference_cog_behind_the_actual_one_moves_the_feedback_zmp_backward()
 
 
 def test_capture_point_error_over_the_threshold_raises_the_flag_and_records_its_time():
-    st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05))
+    st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05, transition_time_s=0.01))
     calm = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
     run_ticks(st, calm, 5)
     assert not st.emergency and st.flag_rise_time_s is None
@@ -76,7 +76,7 @@ def test_capture_point_error_over_the_threshold_raises_the_flag_and_records_its_
 
 
 def test_support_polygon_mode_flags_only_a_capture_point_outside_the_shrunk_feet():
-    st = Stabilizer(0.005, StabilizerParams(emergency_mode="cp_support", cp_margin_m=0.03))
+    st = Stabilizer(0.005, StabilizerParams(emergency_mode="cp_support", cp_margin_m=0.03, transition_time_s=0.01))
     ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_vel_xy=(0.3, 0.0)))
     run_ticks(st, ref, 5)
     assert not st.emergency  # the reference moves, the actual CP is still over the feet
@@ -94,3 +94,12 @@ def test_stopping_twice_is_an_invalid_state():
 def test_unknown_emergency_mode_is_rejected_listing_the_modes():
     with pytest.raises(ValueError, match="cp_error"):
         StabilizerParams(emergency_mode="tilt")
+
+
+def test_no_flag_while_the_stabilizer_is_still_blending_in():
+    st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05, transition_time_s=1.0))
+    fast = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_vel_xy=(0.3, 0.0)))
+    run_ticks(st, fast, 100)  # 0.5 s into a 1 s start
+    assert not st.emergency and st.flag_rise_time_s is None
+    run_ticks(st, fast, 120)
+    assert st.emergency

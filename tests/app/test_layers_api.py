@@ -1,0 +1,117 @@
+"""Balance state in /api/state, generic layer parameter endpoints, layer start/stop."""
+
+import pytest
+
+from controller.auto_balancer import AutoBalancerParams
+from controller.stabilizer import StabilizerParams
+
+
+def step(runtime, seconds):
+    return runtime.system.loop.run_for(seconds)
+
+
+def test_state_has_walking_support_capture_point_and_the_emergency_flag(client, runtime):
+    step(runtime, 0.05)
+    s = client.get("/api/state").json()
+    assert s["walking"] is False
+    assert s["support"] in ("rleg", "lleg", "both") and s["support"] == "both"
+    cp = s["capture_point"]
+    assert set(cp) == {"ref", "act", "error", "error_norm", "threshold"}
+    for key in ("ref", "act", "error"):
+        assert len(cp[key]) == 2 and all(isinstance(v, float) for v in cp[key])
+    assert isinstance(cp["error_norm"], float) and cp["error_norm"] >= 0.0
+    assert cp["error_norm"] == pytest.approx(abs(complex(*cp["error"])), abs=1e-5)
+    assert cp["threshold"] == pytest.approx(StabilizerParams().cp_threshold_m)
+    st = runtime.loop.snapshot.layers["st"]
+    assert cp["error"] == pytest.approx(st["cp_error"], abs=1e-6)
+    assert s["emergency"]["flag"] is bool(st["emergency"])
+    rise = s["emergency"]["flag_rise_time"]
+    assert rise is None or isinstance(rise, float)
+
+
+@pytest.mark.parametrize(("segment", "cls"), [("auto-balancer", AutoBalancerParams),
+                                              ("stabilizer", StabilizerParams)])
+def test_get_params_gives_values_and_the_schema_declared_by_the_controller(client, segment, cls):
+    r = client.get(f"/api/{segment}/params")
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert body["params"] == cls().to_dict()
+    assert [f["name"] for f in body["schema"]] == [f["name"] for f in cls.describe()]
+    for f in body["schema"]:
+        assert "default" in f
+
+
+def test_put_stabilizer_params_roundtrip_and_is_applied_to_the_layer(client, runtime):
+    r = client.put("/api/stabilizer/params", json={"cp_threshold_m": 0.06})
+    assert r.status_code == 200, r.text
+    assert r.json()["params"]["cp_threshold_m"] == 0.06
+    assert client.get("/api/stabilizer/params").json()["params"]["cp_threshold_m"] == 0.06
+    assert runtime.loop.chain["st"].params.cp_threshold_m == 0.06
+    step(runtime, 0.01)
+    assert client.get("/api/state").json()["capture_point"]["threshold"] == pytest.approx(0.06)
+    # an integer is accepted for a float field and stored as a float
+    r = client.put("/api/auto-balancer/params", json={"transition_time_s": 3})
+    assert r.status_code == 200, r.text
+    assert runtime.loop.chain["abc"].params.transition_time_s == 3.0
+
+
+PARAM_ERRORS = [
+    ("stabilizer", {"cp_threshold_m": -1}, ["cp_threshold_m", "0.001", "0.5"]),
+    ("stabilizer", {"bogus": 1}, ["bogus", "cp_threshold_m", "k1", "emergency_mode"]),
+    ("stabilizer", {"emergency_mode": "panic"}, ["emergency_mode", "cp_error", "cp_support", "none"]),
+    ("stabilizer", {"cp_threshold_m": "wide"}, ["cp_threshold_m", "number"]),
+    ("stabilizer", {"estop_while_walking": 1}, ["estop_while_walking", "true or false"]),
+    ("stabilizer", {}, ["cp_threshold_m", "at least one"]),
+    ("auto-balancer", {"zmp_offset_y_m": 0.2}, ["zmp_offset_y_m", "-0.05", "0.05"]),
+    ("auto-balancer", {"nope": 0}, ["nope", "transition_time_s", "preview_q"]),
+]
+
+
+@pytest.mark.parametrize(("segment", "body", "words"), PARAM_ERRORS)
+def test_bad_params_get_a_422_naming_the_field_and_change_nothing(client, runtime, segment, body, words):
+    before = client.get(f"/api/{segment}/params").json()["params"]
+    r = client.put(f"/api/{segment}/params", json=body)
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    for w in words:
+        assert w in detail, f"{w!r} not in {detail!r}"
+    assert client.get(f"/api/{segment}/params").json()["params"] == before
+
+
+def test_non_finite_param_values_are_rejected(client):
+    r = client.put("/api/stabilizer/params", content='{"cp_threshold_m": NaN}',
+                   headers={"Content-Type": "application/json"})
+    assert r.status_code == 422 and "cp_threshold_m" in r.json()["detail"]
+
+
+def test_stabilizer_stop_then_start_and_double_stop_is_a_conflict(client, runtime):
+    st = runtime.loop.chain["st"]
+    assert st.active
+    r = client.post("/api/stabilizer/stop")
+    assert r.status_code == 200, r.text
+    assert not st.active
+    r = client.post("/api/stabilizer/stop")
+    assert r.status_code == 409 and "not running" in r.json()["detail"]
+    step(runtime, 0.05)
+    assert client.post("/api/stabilizer/start").status_code == 200
+    assert st.active
+    r = client.post("/api/stabilizer/start")
+    assert r.status_code == 409 and "already" in r.json()["detail"]
+    step(runtime, 0.05)
+    assert runtime.loop.snapshot.fault is None
+
+
+def test_auto_balancer_stop_then_start_and_double_stop_is_a_conflict(client, runtime):
+    abc = runtime.loop.chain["abc"]
+    assert client.post("/api/auto-balancer/stop").status_code == 200 and not abc.active
+    r = client.post("/api/auto-balancer/stop")
+    assert r.status_code == 409 and "not active" in r.json()["detail"]
+    assert client.post("/api/auto-balancer/start").status_code == 200 and abc.active
+    assert client.post("/api/auto-balancer/start").status_code == 409
+
+
+def test_the_layer_endpoints_are_documented(client):
+    paths = client.get("/openapi.json").json()["paths"]
+    for segment in ("auto-balancer", "stabilizer"):
+        assert {"get", "put"} <= set(paths[f"/api/{segment}/params"])
+        assert "post" in paths[f"/api/{segment}/start"] and "post" in paths[f"/api/{segment}/stop"]
