@@ -6,16 +6,20 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+import math
+
 import numpy as np
 import pinocchio as pin
 
 from controller.errors import InvalidState
+from controller.footsteps import StepParams
 from controller.fullbody_ik import FullbodyIK
+from controller.gait_generator import GaitGenerator, GaitParams
 from controller.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.hoff_arbib import hoff_arbib
 from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params
-from controller.preview_control import PreviewController, PreviewControlParams, PreviewQueue
+from controller.preview_control import PreviewController, PreviewControlParams
 from controller.rotations import rpy_to_matrix
 from controller.types import GaitState, Reference, TickContext
 from robot.names import FORCE_SENSOR_NAMES
@@ -27,9 +31,6 @@ HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsenso
 @dataclass(frozen=True)
 class AutoBalancerParams(Params):
     transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
-    # ZMP (and COG when standing) offset from each sole frame, in the sole frame (hrpsys default_zmp_offsets)
-    zmp_offset_x_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.1, "max": 0.1})
-    zmp_offset_y_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.05})
     use_hand_force_offset: bool = field(default=True, metadata={"unit": "-"})
     preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6})
     preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0})
@@ -52,16 +53,14 @@ class AutoBalancer(Layer):
         self.ik = FullbodyIK(self.kin)
         self.total_mass = self.kin.total_mass
         self.kin.update_rpy(initial.base_pos_world, initial.base_rpy_rad, initial.q_rad)
-        self.rsole = self.kin.frame_pose("rleg_end")
-        self.lsole = self.kin.frame_pose("lleg_end")
+        T_r, T_l = (_homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
+        self.gait = GaitGenerator(GaitParams(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l)
         com = self.kin.com_world()
-        ground_z = 0.5 * (self.rsole[0][2] + self.lsole[0][2])
+        ground_z = 0.5 * (T_r[2, 3] + T_l[2, 3])
         self.com_height_m = float(com[2] - ground_z)
         self.preview = PreviewController(PreviewControlParams(
             dt_s=dt_s, com_height_m=self.com_height_m, q=self.params.preview_q, r=self.params.preview_r))
-        target = self.standing_zmp()
-        self.preview.reset(target[:2])
-        self.queue = PreviewQueue(self.preview.preview_length, target[:2])
+        self.preview.reset(self.gait.tick().zmp_world[:2])
         self._hand_pos = np.zeros((2, 3))
         self._hand_frame_ids = [self.kin.model.getFrameId(n) for n in ("rarm_end", "larm_end")]
         # blend between the plain plan (0) and the balanced posture (1)
@@ -89,14 +88,42 @@ class AutoBalancer(Layer):
     def set_params(self, params: AutoBalancerParams) -> None:
         self.params = params
 
-    # ---- pieces ----------------------------------------------------------------------------------
-    def standing_zmp(self) -> np.ndarray:
-        """Mid-point of the two sole frames plus the per-foot offset, (3,) [m]."""
-        off = np.array([self.params.zmp_offset_x_m, 0.0, 0.0])
-        r = self.rsole[0] + self.rsole[1] @ (off - [0.0, self.params.zmp_offset_y_m, 0.0])
-        left = self.lsole[0] + self.lsole[1] @ (off + [0.0, self.params.zmp_offset_y_m, 0.0])
-        return 0.5 * (r + left)
+    def _require_active(self, what: str) -> None:
+        if not self.active or self._blend is not None:
+            raise InvalidState(f"{what}: the AutoBalancer must be running (start it first)")
 
+    def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> int:
+        """hrpsys goPos relative to the current feet mid-coords; returns the number of footsteps."""
+        self._require_active("goPos")
+        if self.gait.walking:
+            raise InvalidState("goPos while walking: stop first (goStop) or use goVelocity")
+        return len(self.gait.go_pos(x_m, y_m, theta_rad))
+
+    def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
+        self._require_active("goVelocity")
+        self.gait.go_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
+
+    def go_stop(self) -> None:
+        self.gait.go_stop()
+
+    def emergency_stop_walking(self) -> None:
+        """Remaining footsteps replaced so the robot stops in place (manipulation is left alone)."""
+        self.gait.emergency_stop()
+
+    def set_footsteps(self, footsteps: list[tuple], step_params: list[StepParams | None] | None = None) -> int:
+        """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
+        the current pose of that leg."""
+        self._require_active("setFootSteps")
+        if self.gait.walking:
+            raise InvalidState("setFootSteps while walking is not supported; wait for the steps to finish")
+        return len(self.gait.set_footsteps(footsteps, step_params))
+
+    def remaining_footsteps(self) -> list[dict]:
+        return [{"leg": f.leg, "pos": [f.x, f.y, f.z], "rpy": [f.roll, f.pitch, f.yaw],
+                 "step_time_s": f.step_time_s, "step_height_m": f.step_height_m}
+                for f in self.gait.remaining_footsteps()]
+
+    # ---- pieces ----------------------------------------------------------------------------------
     def _hand_force_offset(self, ref: Reference, cog_pc_xy: np.ndarray, zmp_z: float) -> np.ndarray:
         if not self.params.use_hand_force_offset:
             return cog_pc_xy
@@ -115,32 +142,45 @@ class AutoBalancer(Layer):
         if self._weight <= 0.0 and not self.active:
             self.last_gait = None
             return ref
-        zmp = self.standing_zmp()
-        self.queue.push(zmp[:2])
-        cog_xy, cog_vel_xy, _, _ = self.preview.update(self.queue.view)
+        future = self.gait.zmp_preview(self.preview.preview_length)
+        cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
+        g = self.gait.tick()
+        zmp = g.zmp_world
         cog_abc_xy = self._hand_force_offset(ref, cog_xy, zmp[2])
-        R_body = rpy_to_matrix(ref.base_rpy_rad)
-        res = self.ik.solve(ref.q_rad, float(ref.base_pos_world[2]), R_body, cog_abc_xy, self.rsole, self.lsole)
+        # BODY yaw follows the feet (mean of the two sole yaws); roll and pitch from the plan
+        yaw = math.atan2(g.R_rfoot_world[1, 0] + g.R_lfoot_world[1, 0], g.R_rfoot_world[0, 0] + g.R_lfoot_world[0, 0])
+        base_rpy = np.array([ref.base_rpy_rad[0], ref.base_rpy_rad[1], ref.base_rpy_rad[2] + yaw])
+        R_body = rpy_to_matrix(base_rpy)
+        rsole, lsole = (g.p_rfoot_world, g.R_rfoot_world), (g.p_lfoot_world, g.R_lfoot_world)
+        res = self.ik.solve(ref.q_rad, float(ref.base_pos_world[2]), R_body, cog_abc_xy, rsole, lsole)
         self.has_ik_failed = not res.reachable
         for i, fid in enumerate(self._hand_frame_ids):
             self._hand_pos[i] = pin.updateFramePlacement(self.kin.model, self.kin.data, fid).translation
         gait = GaitState(
-            walking=False, support="both", contact=(True, True),
-            p_rsole_world=self.rsole[0], R_rsole_world=self.rsole[1],
-            p_lsole_world=self.lsole[0], R_lsole_world=self.lsole[1],
+            walking=g.walking, support=g.support, contact=g.contact,
+            p_rsole_world=g.p_rfoot_world, R_rsole_world=g.R_rfoot_world,
+            p_lsole_world=g.p_lfoot_world, R_lsole_world=g.R_lfoot_world,
             zmp_world=zmp, cog_world=np.array([cog_abc_xy[0], cog_abc_xy[1], res.com_world[2]]),
             cog_vel_world=np.array([cog_vel_xy[0], cog_vel_xy[1], 0.0]),
             cog_pc_world=np.array([cog_xy[0], cog_xy[1], res.com_world[2]]),
+            cog_acc_world=np.array([cog_acc_xy[0], cog_acc_xy[1], 0.0]),
         )
         self.last_gait = gait
         w = self._weight
         q = res.q_rad if w >= 1.0 else (1.0 - w) * ref.q_rad + w * res.q_rad
         base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         zmp_base = R_body.T @ (zmp - base)
-        return ref.with_(q_rad=q, base_pos_world=base, zmp_base=zmp_base, gait=gait)
+        return ref.with_(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base, gait=gait)
 
     def status(self) -> dict:
         g = self.last_gait
         return {"enabled": self.enabled, "active": self.active, "weight": round(self._weight, 4),
                 "walking": bool(g.walking) if g else False, "support": g.support if g else "both",
-                "has_ik_failed": self.has_ik_failed}
+                "has_ik_failed": self.has_ik_failed,
+                "footsteps": self.remaining_footsteps() if self.gait.walking else []}
+
+
+def _homogeneous(p: np.ndarray, R: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, p
+    return T

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from controller.layer import Layer, Params
+from controller.rotations import rpy_to_matrix
 from controller.types import Reference, TickContext
 
 G = 9.80665  # [m/s^2]
@@ -20,6 +21,7 @@ class KalmanFilterParams(Params):
     r_angle: float = field(default=1e-2, metadata={"unit": "rad^2", "min": 1e-9, "max": 10.0})
     # the accelerometer is trusted less when |a| differs from g by this much or more
     accel_trust_band: float = field(default=0.5 * G, metadata={"unit": "m/s^2", "min": 1e-3, "max": 100.0})
+    use_planned_acceleration: bool = field(default=True, metadata={"unit": "-"})
 
 
 class AttitudeKalmanFilter:
@@ -99,7 +101,13 @@ class KalmanFilter(Layer):
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         s = ctx.sensors
-        ctx.estimate.base_rpy_rad = self.filter.update(s.gyro_rad_s, s.accel_m_s2, ctx.dt_s)
+        accel = s.accel_m_s2
+        gait = ref.gait  # the loop hands the chain last tick's final reference
+        if self.params.use_planned_acceleration and gait is not None and gait.cog_acc_world is not None:
+            # the accelerometer feels tilt AND the body's acceleration: remove the planned one (the COG's,
+            # the body moves with it) so the walking sway is not read as roll
+            accel = accel - rpy_to_matrix(self.filter.rpy).T @ gait.cog_acc_world
+        ctx.estimate.base_rpy_rad = self.filter.update(s.gyro_rad_s, accel, ctx.dt_s)
         ctx.estimate.base_angvel_rad_s = np.array(s.gyro_rad_s, dtype=float)
         return ref
 

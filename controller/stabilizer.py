@@ -42,8 +42,11 @@ class StabilizerParams(Params):
     k1: float = field(default=-1.41429 * 0.9, metadata={"unit": "-", "min": -20.0, "max": 0.0})
     k2: float = field(default=-0.404082 * 0.9, metadata={"unit": "s", "min": -5.0, "max": 0.0})
     k3: float = field(default=-0.18 * 0.9, metadata={"unit": "-", "min": -2.0, "max": 0.0})
-    # foot moment damping control d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T
+    # foot moment damping control d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T. D is scheduled: soft
+    # standing (more push margin: 26 N s forward stands), stiff walking (D = 300 walking sideways
+    # drives the COP to the sole edge at each support switch and tips the robot over; 3000 walks)
     rot_damping_gain: float = field(default=300.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
+    rot_damping_gain_walking: float = field(default=3000.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
     rot_limit_deg: float = field(default=10.0, metadata={"unit": "deg", "min": 0.0, "max": 30.0})
     # foot vertical force difference control
@@ -193,10 +196,11 @@ class Stabilizer(Layer):
         self.projected = forces.projected
         # foot moment damping (Eq. 3, m = 0) and force-difference control
         tau_act = est.wrenches_ext_world[list(FEET), 3:5]
+        damping = p.rot_damping_gain_walking if gait.walking else p.rot_damping_gain
         for k, i in enumerate(idx):
             tau_ref = -forces.n_xy_nm[k]  # ground-reaction moment about the sole origin
             if contact_act[i]:
-                rate = (tau_act[i] - tau_ref) / p.rot_damping_gain - self.d_foot_rpy[i] / p.rot_time_const_s
+                rate = (tau_act[i] - tau_ref) / damping - self.d_foot_rpy[i] / p.rot_time_const_s
             else:
                 rate = -self.d_foot_rpy[i] / p.rot_time_const_s
             self.d_foot_rpy[i] = self.d_foot_rpy[i] + rate * dt

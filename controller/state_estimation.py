@@ -53,8 +53,14 @@ class ActualStateEstimator:
         else:
             ref_soles = self.reference_soles(ref)
         meas_soles = est.sensor_pos_from_base[list(FOOT_SENSORS)]
-        fz = np.clip(est.wrenches_ext_world[list(FOOT_SENSORS), 2], 0.0, None)
-        w = fz / fz.sum() if fz.sum() > 2 * CONTACT_FZ_N else np.array([0.5, 0.5])
+        if ref.gait is not None:
+            # hrpsys's actual foot-origin frame: the feet mid-point when both are meant to be down,
+            # otherwise the planned support foot (deterministic switches, no Fz chatter)
+            c = np.array(ref.gait.contact, dtype=float)
+            w = c / c.sum() if c.sum() > 0 else np.array([0.5, 0.5])
+        else:
+            fz = np.clip(est.wrenches_ext_world[list(FOOT_SENSORS), 2], 0.0, None)
+            w = fz / fz.sum() if fz.sum() > 2 * CONTACT_FZ_N else np.array([0.5, 0.5])
         offset = w @ (ref_soles - meas_soles)
         self.base_pos_world = offset
         cog = est.com_from_base + offset

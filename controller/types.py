@@ -27,6 +27,7 @@ class GaitState:
     cog_world: np.ndarray  # (3,) x_G^abc [m]
     cog_vel_world: np.ndarray  # (3,) [m/s]
     cog_pc_world: np.ndarray  # (3,) preview-control COG before the hand-force offset (Eq. 6) [m]
+    cog_acc_world: np.ndarray | None = None  # (3,) planned COG acceleration [m/s^2]
 
 
 @dataclass(frozen=True, slots=True)
