@@ -4,14 +4,14 @@ and orientation; when not walking it keeps the COG over the feet while the upper
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import math
+from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
 from controller.errors import InvalidState
+from controller.capture_point import HRP2_RIGHT_SOLE
 from controller.footsteps import StepParams
 from controller.fullbody_ik import FullbodyIK
 from controller.gait_generator import GaitGenerator, GaitParams
@@ -21,6 +21,7 @@ from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params
 from controller.preview_control import PreviewController, PreviewControlParams
 from controller.rotations import rpy_to_matrix
+from controller.toe_heel import ToeHeelParams
 from controller.types import GaitState, Reference, TickContext
 from robot.names import FORCE_SENSOR_NAMES
 
@@ -54,7 +55,9 @@ class AutoBalancer(Layer):
         self.total_mass = self.kin.total_mass
         self.kin.update_rpy(initial.base_pos_world, initial.base_rpy_rad, initial.q_rad)
         T_r, T_l = (_homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
-        self.gait = GaitGenerator(GaitParams(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l)
+        # toe and heel edges of HRP-2's sole (the model's sole box), not HRP2-JSKNT's 0.137 / -0.10
+        toe_heel = ToeHeelParams(toe_offset_x_m=HRP2_RIGHT_SOLE.front_m, heel_offset_x_m=-HRP2_RIGHT_SOLE.rear_m)
+        self.gait = GaitGenerator(GaitParams(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l, toe_heel=toe_heel)
         com = self.kin.com_world()
         ground_z = 0.5 * (T_r[2, 3] + T_l[2, 3])
         self.com_height_m = float(com[2] - ground_z)

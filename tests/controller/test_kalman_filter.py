@@ -4,6 +4,7 @@ import numpy as np
 
 from controller.kalman_filter import AttitudeKalmanFilter, G, KalmanFilter, KalmanFilterParams
 from controller.rotations import rpy_to_matrix
+from controller.types import Reference
 from tests.controller.fakes import make_ctx
 
 
@@ -49,6 +50,23 @@ def test_layer_writes_the_estimate_and_passes_the_reference_through():
     layer = KalmanFilter()
     ctx = make_ctx(accel=accel_for_tilt(0.0, np.deg2rad(5.0)))
     layer.reset(ctx, None)
-    ref = object()
+    ref = Reference.from_arrays(np.zeros(30))
     assert layer.tick(ctx, ref) is ref
     assert abs(np.rad2deg(ctx.estimate.base_rpy_rad[1]) - 5.0) < 0.05
+
+
+def test_the_planned_body_acceleration_is_not_read_as_tilt():
+    """Walking sway: a still-upright body accelerating sideways at 1 m/s^2, as the plan says."""
+    from controller.types import GaitState
+
+    a_world = np.array([0.0, 1.0, 0.0])
+    z3 = np.zeros(3)
+    gait = GaitState(False, "both", (True, True), z3, np.eye(3), z3, np.eye(3), z3, z3, z3, z3, cog_acc_world=a_world)
+    ref = Reference.from_arrays(np.zeros(30)).with_(gait=gait)
+    accel = a_world + np.array([0.0, 0.0, G])  # upright: the specific force is a - g
+    for use, expected_roll in ((True, 0.0), (False, np.rad2deg(np.arctan2(1.0, G)))):
+        layer = KalmanFilter(KalmanFilterParams(use_planned_acceleration=use))
+        for _ in range(4000):  # 20 s, long enough for the accelerometer to win
+            ctx = make_ctx(accel=accel)
+            layer.tick(ctx, ref)
+        assert abs(np.rad2deg(ctx.estimate.base_rpy_rad[0]) - expected_roll) < 0.1
