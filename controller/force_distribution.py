@@ -163,14 +163,8 @@ class ForceDistributionQP:
         d = p_world - cop_refs[foot_of_vertex]  # (n, 2) [m], vertex relative to its foot's reference COP
         n = len(p_world)
 
-        if n_feet == 2:
-            a = min(max(self.alpha, w.alpha_epsilon), 1.0 - w.alpha_epsilon)
-            # The paper writes w_l = 1/(alpha - 1), negative for alpha in (0, 1), which would make the QP
-            # non-convex and reward force on the left foot; 1/(1 - alpha) is the intended weight.
-            per_foot = np.array([1.0 / a, 1.0 / (1.0 - a)])
-        else:
-            per_foot = np.ones(1)
-        w_f = per_foot[foot_of_vertex]  # (n,)
+        self._n_feet = n_feet
+        self._foot_of_vertex = foot_of_vertex
 
         # Eq. 12-14 as matrices: fz = S f, n_x = Nx f, n_y = Ny f, each (n_feet, n)
         self._S = (foot_of_vertex[None, :] == np.arange(n_feet)[:, None]).astype(float)
@@ -179,10 +173,8 @@ class ForceDistributionQP:
         self._cop_refs = cop_refs
 
         # sum_i ||G_cop,i f||^2 = f^T (Nx^T Nx + Ny^T Ny) f since the feet's columns do not overlap
-        P = w.cop_weight * (self._Nx.T @ self._Nx + self._Ny.T @ self._Ny) + np.diag(w.norm_weight * w_f)
-        # rescale the cost: same minimiser, O(1) numbers for the solver
-        P = P / float(np.sort(np.diag(P))[n // 2])
-        self._P = 0.5 * (P + P.T)
+        self._P_cop = w.cop_weight * (self._Nx.T @ self._Nx + self._Ny.T @ self._Ny)
+        self.set_alpha(self.alpha)
         self._q = np.zeros(n)
         self._A = np.vstack([np.ones(n), p_world.T])  # (3, n)
         self._lb = np.zeros(n)
@@ -190,6 +182,25 @@ class ForceDistributionQP:
         self._hull = convex_hull_ccw(p_world)
         self._hull.flags.writeable = False
         self._polygon = _Polygon(self._hull)
+
+    def set_alpha(self, alpha: float) -> None:
+        """Change the right/left distribution ratio (only the W_f part of the cost is rebuilt)."""
+        if not np.isfinite(alpha) or not 0.0 <= alpha <= 1.0:
+            raise InvalidCommand(f"alpha is the right foot's share and must be in [0, 1]; got {alpha!r}")
+        self.alpha = float(alpha)
+        w = self.weights
+        if self._n_feet == 2:
+            a = min(max(self.alpha, w.alpha_epsilon), 1.0 - w.alpha_epsilon)
+            # The paper writes w_l = 1/(alpha - 1), negative for alpha in (0, 1), which would make the QP
+            # non-convex and reward force on the left foot; 1/(1 - alpha) is the intended weight.
+            per_foot = np.array([1.0 / a, 1.0 / (1.0 - a)])
+        else:
+            per_foot = np.ones(1)
+        w_f = per_foot[self._foot_of_vertex]  # (n,)
+        P = self._P_cop + np.diag(w.norm_weight * w_f)
+        # rescale the cost: same minimiser, O(1) numbers for the solver
+        P = P / float(np.sort(np.diag(P))[len(w_f) // 2])
+        self._P = 0.5 * (P + P.T)
 
     def __repr__(self) -> str:
         return (f"ForceDistributionQP(n_feet={len(self.feet)}, n_vertices={len(self._p_world)}, "

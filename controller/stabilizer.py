@@ -18,7 +18,7 @@ from controller.capture_point import (
     support_polygon,
 )
 from controller.errors import InvalidState
-from controller.force_distribution import FootPolygon, alpha_from_zmp, distribute_zmp_to_feet
+from controller.force_distribution import FootPolygon, ForceDistributionQP, alpha_from_zmp
 from controller.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params
@@ -115,6 +115,8 @@ class Stabilizer(Layer):
         self.flag_rise_time_s: float | None = None
         self.new_zmp = np.zeros(3)
         self.projected = False
+        self._qp: ForceDistributionQP | None = None
+        self._qp_key: tuple | None = None
         if active:
             self.start()
 
@@ -184,14 +186,11 @@ class Stabilizer(Layer):
         new_zmp = gait.zmp_world + w * (p.k1 * d_cog + p.k2 * d_vel + p.k3 * d_zmp)
         # QP distribution (Eq. 9-14) over the feet meant to be in contact
         soles_world = ((gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
-        polygons, idx = [], []
-        for i, (pos, R) in enumerate(soles_world):
-            if gait.contact[i]:
-                yaw = math.atan2(R[1, 0], R[0, 0])
-                polygons.append(FootPolygon(self.soles[i].corners_world((pos[0], pos[1], yaw)), pos[:2]))
-                idx.append(i)
-        a = alpha_from_zmp(new_zmp[:2], gait.p_rsole_world[:2], gait.p_lsole_world[:2]) if len(idx) == 2 else 0.5
-        forces = distribute_zmp_to_feet(new_zmp[:2], self.total_mass * G, polygons, a)
+        idx = [i for i in range(2) if gait.contact[i]]
+        qp = self._force_qp(idx, soles_world)
+        if len(idx) == 2:
+            qp.set_alpha(alpha_from_zmp(new_zmp[:2], gait.p_rsole_world[:2], gait.p_lsole_world[:2]))
+        forces = qp.solve(new_zmp[:2], self.total_mass * G)
         self.new_zmp = np.array([*forces.zmp_world_xy, gait.zmp_world[2]])
         self.projected = forces.projected
         # foot moment damping (Eq. 3, m = 0) and force-difference control
@@ -231,6 +230,19 @@ class Stabilizer(Layer):
             R_mod = _rot_xy(*(w * self.d_foot_rpy[i])) @ R
             q[LEG_INDICES[leg]], _ = leg_ik(geom, base, R_body, pos + np.array([0.0, 0.0, dz[i]]), R_mod)
         return ref.with_(q_rad=q)
+
+    def _force_qp(self, idx: list[int], soles_world) -> ForceDistributionQP:
+        """The QP for the feet in contact, rebuilt only when they move (a support switch or a new step)."""
+        key = tuple((i, *np.round(soles_world[i][0][:2], 6), round(float(soles_world[i][1][1, 0]), 6)) for i in idx)
+        if key != self._qp_key:
+            polygons = []
+            for i in idx:
+                pos, R = soles_world[i]
+                yaw = math.atan2(R[1, 0], R[0, 0])
+                polygons.append(FootPolygon(self.soles[i].corners_world((pos[0], pos[1], yaw)), pos[:2]))
+            self._qp = ForceDistributionQP(polygons)
+            self._qp_key = key
+        return self._qp
 
     def static_balance_point(self, cog: np.ndarray, est, zmp_z: float) -> np.ndarray:
         """COG (3,) moved to where the measured hand forces put the ZMP of a robot at rest [m]."""

@@ -186,3 +186,15 @@ def test_invalid_inputs_are_refused_with_what_would_have_worked():
     with pytest.raises(InvalidCommand, match=">= 0"):
         distribute_zmp_to_feet(np.zeros(2), -1.0, both_feet())
     assert "daqp" in QP_SOLVERS
+
+
+def test_changing_alpha_on_a_built_qp_gives_the_same_answer_as_a_new_qp():
+    from controller.force_distribution import ForceDistributionQP
+
+    qp = ForceDistributionQP(both_feet(), 0.5)
+    for alpha in (0.1, 0.5, 0.9):
+        qp.set_alpha(alpha)
+        reused = qp.solve(np.array([0.01, -0.02]), MG)
+        fresh = ForceDistributionQP(both_feet(), alpha).solve(np.array([0.01, -0.02]), MG)
+        assert np.allclose(reused.fz_n, fresh.fz_n, atol=1e-9)
+        assert np.allclose(reused.n_xy_nm, fresh.n_xy_nm, atol=1e-9)

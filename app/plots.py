@@ -1,0 +1,104 @@
+"""Plots of what was tuned (ZMP, COG, capture point while walking and when pushed): `python -m app.plots`."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from controller.system import ControllerSystem  # noqa: E402
+from robot.plant import MujocoPlant  # noqa: E402
+
+
+def record_walk(seconds: float = 12.0):
+    """Stand 2.5 s, goPos(0.6, 0.1, 0); per tick: time, reference/actual ZMP, COG, CP, true COM, flag."""
+    system = ControllerSystem(MujocoPlant())
+    loop = system.loop
+    loop.run_for(2.5)
+    abc = system.chain["abc"]
+    loop.call(lambda: abc.go_pos(0.6, 0.1, 0.0))
+    rows = []
+    for _ in range(int(seconds / loop.dt_control_s)):
+        s = loop.step()
+        g = abc.last_gait
+        st = s.layers["st"]
+        rows.append([s.time_s, *g.zmp_world[:2], *s.zmp_world[:2], *g.cog_world[:2], *s.cog_world[:2],
+                     *st["cp_ref"], *st["cp_act"], *s.truth.com_world[:2], st["cp_error_norm"]])
+    return np.array(rows)
+
+
+def record_push(impulse_ns: float = 20.0, seconds: float = 4.0):
+    system = ControllerSystem(MujocoPlant())
+    loop = system.loop
+    loop.run_for(3.0)
+    loop.call(lambda: loop.plant.push("BODY", np.array([impulse_ns / 0.1, 0.0, 0.0]), 0.1))
+    rows = []
+    for _ in range(int(seconds / loop.dt_control_s)):
+        s = loop.step()
+        st = s.layers["st"]
+        rows.append([s.time_s, *st["cp_error"], st["cp_error_norm"], st["threshold"], float(st["emergency"]),
+                     *s.zmp_world[:2], *s.cog_world[:2]])
+    return np.array(rows)
+
+
+def plot_walk(out: Path) -> None:
+    d = record_walk()
+    t = d[:, 0]
+    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True)
+    for ax, k, name in ((axes[0], 0, "x"), (axes[1], 1, "y")):
+        ax.plot(t, d[:, 1 + k] * 1e3, "k--", lw=1, label="ZMP ref (Eq. 4)")
+        ax.plot(t, d[:, 3 + k] * 1e3, color="tab:green", lw=0.8, label="ZMP act (F/T)")
+        ax.plot(t, d[:, 5 + k] * 1e3, color="tab:orange", label="COG ref (preview)")
+        ax.plot(t, d[:, 7 + k] * 1e3, color="tab:red", lw=0.8, label="COG act (estimated)")
+        ax.plot(t, d[:, 13 + k] * 1e3, color="tab:gray", lw=0.8, ls=":", label="COM (simulation)")
+        ax.set_ylabel(f"{name} [mm]")
+        ax.grid(alpha=0.3)
+    axes[0].legend(loc="upper left", fontsize=8)
+    axes[2].plot(t, d[:, 15] * 1e3, color="tab:purple", label="|CP ref - CP act|")
+    axes[2].set_ylabel("CP error [mm]")
+    axes[2].set_xlabel("time [s]")
+    axes[2].grid(alpha=0.3)
+    axes[2].legend(fontsize=8)
+    fig.suptitle("goPos(0.6, 0.1, 0) in MuJoCo, AutoBalancer + Stabilizer on")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def plot_push(out: Path) -> None:
+    d = record_push()
+    t = d[:, 0]
+    fig, axes = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    axes[0].plot(t, d[:, 3] * 1e3, color="tab:red", label="|CP error|")
+    axes[0].plot(t, d[:, 4] * 1e3, color="tab:blue", ls="--", label="threshold")
+    axes[0].fill_between(t, 0, d[:, 5] * d[:, 3].max() * 1e3, color="tab:pink", alpha=0.3, label="flag")
+    axes[0].set_ylabel("[mm]")
+    axes[0].legend(fontsize=8)
+    axes[0].grid(alpha=0.3)
+    axes[1].plot(t, d[:, 6] * 1e3, color="tab:green", label="ZMP x (F/T)")
+    axes[1].plot(t, d[:, 8] * 1e3, color="tab:red", label="COG x (estimated)")
+    axes[1].set_ylabel("x [mm]")
+    axes[1].set_xlabel("time [s]")
+    axes[1].legend(fontsize=8)
+    axes[1].grid(alpha=0.3)
+    fig.suptitle("20 N s forward push on BODY at t = 3 s, standing, Stabilizer on")
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--out-dir", type=Path, default=Path("docs/img"))
+    args = ap.parse_args(argv)
+    args.out_dir.mkdir(parents=True, exist_ok=True)
+    plot_walk(args.out_dir / "walk_zmp_cog_cp.png")
+    plot_push(args.out_dir / "push_cp_error.png")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
