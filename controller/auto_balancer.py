@@ -10,8 +10,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pinocchio as pin
 
-from controller.errors import InvalidState
 from controller.capture_point import HRP2_RIGHT_SOLE
+from controller.errors import InvalidState
 from controller.footsteps import StepParams
 from controller.fullbody_ik import FullbodyIK
 from controller.gait_generator import GaitGenerator, GaitParams
