@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse
 from fastapi.staticfiles import StaticFiles
 
 from app.errors import install_error_handlers
-from app.routers import chain, emergency, layers, sequence, sim, state
+from app.routers import chain, emergency, layers, sequence, sim, state, walk
 from app.runtime import Runtime
 from app.settings import Settings
 
@@ -44,7 +44,7 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
     app.state.settings = settings or Settings()
     app.state.runtime = runtime
     install_error_handlers(app)
-    for module in (state, emergency, sequence, sim, chain, layers):
+    for module in (state, emergency, sequence, sim, chain, layers, walk):
         app.include_router(module.router)
 
     @app.get("/", include_in_schema=False)

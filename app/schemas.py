@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -10,6 +10,12 @@ MAX_MOTION_TIME_S = 3600.0  # [s]
 MAX_PUSH_FORCE_N = 2000.0  # [N]
 MAX_PUSH_DURATION_S = 5.0  # [s]
 LIMBS = ("rarm", "larm", "rleg", "lleg")
+MAX_GO_POS_M = 5.0  # [m] |x|, |y| of goPos
+MAX_GO_POS_DEG = 360.0  # [deg] |theta| of goPos
+MAX_VELOCITY_M_S = 0.5  # [m/s] |vx|, |vy| of goVelocity (the planner clamps to its stride limits anyway)
+MAX_VELOCITY_DEG_S = 45.0  # [deg/s] |vtheta| of goVelocity
+MAX_FOOTSTEPS = 50
+MAX_FOOTSTEP_POS_M = 10.0  # [m] |pos| components of a setFootSteps entry
 
 
 class _Body(BaseModel):
@@ -45,6 +51,60 @@ class PushRequest(_Body):
                                min_length=3, max_length=3, examples=[[100.0, 0.0, 0.0]])
     duration: float = Field(description=f"push duration [s], in (0, {MAX_PUSH_DURATION_S:g}]",
                             gt=0.0, le=MAX_PUSH_DURATION_S)
+
+
+class GoPosRequest(_Body):
+    x: float = Field(description=f"forward [m], |x| <= {MAX_GO_POS_M:g}, relative to the feet's mid-coords",
+                     ge=-MAX_GO_POS_M, le=MAX_GO_POS_M, examples=[0.3])
+    y: float = Field(description=f"left [m], |y| <= {MAX_GO_POS_M:g}", ge=-MAX_GO_POS_M, le=MAX_GO_POS_M,
+                     examples=[0.0])
+    theta_deg: float = Field(description=f"turn [deg], |theta_deg| <= {MAX_GO_POS_DEG:g}",
+                             ge=-MAX_GO_POS_DEG, le=MAX_GO_POS_DEG, examples=[0.0])
+
+
+class GoVelocityRequest(_Body):
+    vx: float = Field(description=f"forward velocity [m/s], |vx| <= {MAX_VELOCITY_M_S:g}",
+                      ge=-MAX_VELOCITY_M_S, le=MAX_VELOCITY_M_S, examples=[0.1])
+    vy: float = Field(description=f"left velocity [m/s], |vy| <= {MAX_VELOCITY_M_S:g}",
+                      ge=-MAX_VELOCITY_M_S, le=MAX_VELOCITY_M_S, examples=[0.0])
+    vtheta_deg: float = Field(description=f"turning velocity [deg/s], |vtheta_deg| <= {MAX_VELOCITY_DEG_S:g}",
+                              ge=-MAX_VELOCITY_DEG_S, le=MAX_VELOCITY_DEG_S, examples=[0.0])
+
+
+FootstepCoord = Annotated[float, Field(ge=-MAX_FOOTSTEP_POS_M, le=MAX_FOOTSTEP_POS_M)]
+FootstepAngle = Annotated[float, Field(ge=-MAX_GO_POS_DEG, le=MAX_GO_POS_DEG)]
+
+
+class FootstepItem(_Body):
+    leg: Literal["rleg", "lleg"] = Field(description="the leg that lands here", examples=["rleg"])
+    pos: list[FootstepCoord] = Field(description=f"sole position [m] (x, y, z), each |v| <= {MAX_FOOTSTEP_POS_M:g}; "
+                                                 "relative to the first footstep, which is snapped onto the "
+                                                 "current pose of its leg", min_length=3, max_length=3)
+    rpy_deg: list[FootstepAngle] = Field(default_factory=lambda: [0.0, 0.0, 0.0],
+                                         description=f"sole roll, pitch, yaw [deg], each |v| <= {MAX_GO_POS_DEG:g}",
+                                         min_length=3, max_length=3)
+
+
+class StepRequest(_Body):
+    """Swing parameters; ranges are those of controller.footsteps.StepParams (checked against it)."""
+
+    step_height: float | None = Field(default=None, description="swing height [m] (default 0.05)")
+    step_time: float | None = Field(default=None, description="step duration [s] (default 1.0)")
+    toe_angle_deg: float | None = Field(default=None, description="toe-off angle [deg] (default 0)")
+    heel_angle_deg: float | None = Field(default=None, description="heel-contact angle [deg] (default 0)")
+
+
+class FootstepsRequest(_Body):
+    footsteps: list[FootstepItem] = Field(description=f"1..{MAX_FOOTSTEPS} footsteps; the first is the "
+                                                      "current support foot", min_length=1,
+                                          max_length=MAX_FOOTSTEPS)
+    step: StepRequest | None = Field(default=None, description="swing parameters for every footstep but the "
+                                                               "first (default: the planner's)")
+
+
+class WalkFootsteps(BaseModel):
+    walking: bool
+    footsteps: list[dict[str, Any]]
 
 
 class Ok(BaseModel):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Mapping, Sequence
 
@@ -9,7 +10,9 @@ import numpy as np
 
 from app.errors import BadRequest
 from app.runtime import Runtime
-from app.schemas import MAX_PUSH_FORCE_N
+from app.schemas import MAX_PUSH_FORCE_N, StepRequest
+from controller.errors import InvalidCommand
+from controller.footsteps import StepParams
 from robot.names import JOINT_NAMES, NUM_JOINTS
 
 
@@ -74,3 +77,37 @@ def push_force(force: Sequence[float]) -> np.ndarray:
     if magnitude > MAX_PUSH_FORCE_N:
         raise BadRequest("force", f"magnitude {magnitude:.1f} N is above the allowed {MAX_PUSH_FORCE_N:g} N")
     return f
+
+
+#: StepRequest field -> (StepParams field, unit shown, request value -> StepParams value)
+_STEP_FIELDS = {
+    "step_height": ("step_height_m", "m", float),
+    "step_time": ("step_time_s", "s", float),
+    "toe_angle_deg": ("toe_angle_rad", "deg", math.radians),
+    "heel_angle_deg": ("heel_angle_rad", "deg", math.radians),
+}
+
+
+def step_params(step: StepRequest | None) -> StepParams | None:
+    """The request's swing parameters as a StepParams, each field checked against StepParams' declared
+    range (shown in the request's units); None when not given."""
+    if step is None:
+        return None
+    meta = {f.name: f.metadata for f in dataclasses.fields(StepParams)}
+    changes = {}
+    for name, (param, unit, convert) in _STEP_FIELDS.items():
+        value = getattr(step, name)
+        if value is None:
+            continue
+        field = f"step.{name}"
+        require_finite(field, [value])
+        lo, hi = meta[param].get("min"), meta[param].get("max")
+        if unit == "deg":
+            lo, hi = (None if v is None else math.degrees(v) for v in (lo, hi))
+        if (lo is not None and value < lo) or (hi is not None and value > hi):
+            raise BadRequest(field, f"{value:g} {unit} is outside the allowed range [{lo:g}, {hi:g}] {unit}")
+        changes[param] = convert(value)
+    try:
+        return StepParams(**changes)
+    except InvalidCommand as exc:  # a range the table above does not know about
+        raise BadRequest("step", str(exc)) from exc

@@ -60,4 +60,17 @@ def test_an_unknown_speed_fails_naming_the_option_and_what_is_allowed():
 def test_an_unknown_bench_scenario_lists_the_valid_ones():
     r = run("bench", "--scenario", "moonwalk")
     assert r.returncode == 2
-    assert "--scenario" in r.stderr and "stand" in r.stderr and "arms" in r.stderr
+    assert "--scenario" in r.stderr and "stand" in r.stderr and "arms" in r.stderr and "walk" in r.stderr
+
+
+def test_bench_walk_scenario_reports_the_walking_part():
+    r = run("bench", "--scenario", "walk", "--duration", "2", timeout=120.0)
+    assert r.returncode == 0, r.stdout + r.stderr
+    report = json.loads(r.stdout)
+    assert report["scenario"] == "walk"
+    assert report["sim_time_s"] == pytest.approx(2.0)  # the warm-up is not timed
+    assert report["real_time_factor"] > 0
+    assert set(report) == {"scenario", "scene", "chain", "ticks", "sim_time_s", "wall_time_s", "real_time_factor",
+                           "tick_ms", "physics_ms", "layers", "fallen", "fault"}
+    assert report["fallen"] is False and report["fault"] is None
+    assert list(report["layers"]) == report["chain"].split(" -> ")

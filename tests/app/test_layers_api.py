@@ -62,7 +62,7 @@ PARAM_ERRORS = [
     ("stabilizer", {"cp_threshold_m": "wide"}, ["cp_threshold_m", "number"]),
     ("stabilizer", {"estop_while_walking": 1}, ["estop_while_walking", "true or false"]),
     ("stabilizer", {}, ["cp_threshold_m", "at least one"]),
-    ("auto-balancer", {"zmp_offset_y_m": 0.2}, ["zmp_offset_y_m", "-0.05", "0.05"]),
+    ("auto-balancer", {"transition_time_s": 20.0}, ["transition_time_s", "0.01", "10.0"]),
     ("auto-balancer", {"nope": 0}, ["nope", "transition_time_s", "preview_q"]),
 ]
 

@@ -1,0 +1,134 @@
+"""Walking endpoints: goPos, goVelocity / stop, emergency stop, footsteps, remaining footsteps, errors."""
+
+import pytest
+
+WARM_UP_S = 2.5  # the AutoBalancer blends in over 2 s; walking commands need it running
+
+
+def step(runtime, seconds):
+    return runtime.system.loop.run_for(seconds)
+
+
+@pytest.fixture
+def standing(client, runtime):
+    """The client, once the AutoBalancer and the Stabilizer have blended in."""
+    step(runtime, WARM_UP_S)
+    return client
+
+
+def test_go_pos_walks_and_lists_the_remaining_footsteps(standing, runtime):
+    before = standing.get("/api/walk/footsteps").json()
+    assert before == {"walking": False, "footsteps": []}
+    r = standing.post("/api/walk/go-pos", json={"x": 0.3, "y": 0.0, "theta_deg": 0.0})
+    assert r.status_code == 200, r.text
+    assert "footsteps" in r.json()["message"]
+    step(runtime, 3.0)
+    s = standing.get("/api/state").json()
+    assert s["walking"] is True and s["fallen"] is False
+    body = standing.get("/api/walk/footsteps").json()
+    assert body["walking"] is True
+    assert len(body["footsteps"]) >= 1
+    for f in body["footsteps"]:
+        assert f["leg"] in ("rleg", "lleg")
+        assert len(f["pos"]) == 3 and len(f["rpy"]) == 3 and len(f["rpy_deg"]) == 3
+    # a second goPos while walking is a conflict, said as such
+    r = standing.post("/api/walk/go-pos", json={"x": 0.1, "y": 0.0, "theta_deg": 0.0})
+    assert r.status_code == 409 and "walking" in r.json()["detail"]
+
+
+def test_go_velocity_then_stop_ends_the_walk(standing, runtime):
+    r = standing.post("/api/walk/go-velocity", json={"vx": 0.1, "vy": 0.0, "vtheta_deg": 5.0})
+    assert r.status_code == 200, r.text
+    step(runtime, 1.5)
+    assert standing.get("/api/state").json()["walking"] is True
+    assert standing.post("/api/walk/stop").status_code == 200
+    snap = runtime.loop.run_until(lambda s: not s.layers["abc"]["walking"], timeout_s=8.0)
+    assert not snap.fallen
+    assert standing.get("/api/walk/footsteps").json()["walking"] is False
+
+
+def test_emergency_walking_stop_is_accepted_while_walking(standing, runtime):
+    assert standing.post("/api/walk/go-velocity", json={"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0}).status_code == 200
+    step(runtime, 1.0)
+    r = standing.post("/api/walk/emergency-stop")
+    assert r.status_code == 200, r.text
+    snap = runtime.loop.run_until(lambda s: not s.layers["abc"]["walking"], timeout_s=8.0)
+    assert not snap.fallen
+
+
+def test_footsteps_with_toe_and_heel_are_walked(standing, runtime):
+    body = {"footsteps": [{"leg": "rleg", "pos": [0.0, -0.095, 0.0], "rpy_deg": [0, 0, 0]},
+                          {"leg": "lleg", "pos": [0.2, 0.095, 0.0], "rpy_deg": [0, 0, 0]},
+                          {"leg": "rleg", "pos": [0.2, -0.095, 0.0]}],
+            "step": {"step_height": 0.05, "step_time": 1.0, "toe_angle_deg": 20.0, "heel_angle_deg": 10.0}}
+    r = standing.post("/api/walk/footsteps", json=body)
+    assert r.status_code == 200, r.text
+    assert "3 footsteps" in r.json()["message"]
+    abc = runtime.loop.chain["abc"]
+    assert abc.gait.walking
+    step(runtime, 0.5)
+    remaining = standing.get("/api/walk/footsteps").json()
+    assert remaining["walking"] is True and remaining["footsteps"]
+    assert remaining["footsteps"][-1]["step_time_s"] == pytest.approx(1.0)
+
+
+BAD_INPUTS = [
+    ("/api/walk/go-pos", '{"x": NaN, "y": 0, "theta_deg": 0}', ["x", "finite"]),
+    ("/api/walk/go-pos", {"x": 6.0, "y": 0, "theta_deg": 0}, ["x", "5"]),
+    ("/api/walk/go-pos", {"x": 0.1, "y": -5.5, "theta_deg": 0}, ["y", "-5"]),
+    ("/api/walk/go-pos", {"x": 0.1, "y": 0, "theta_deg": 400}, ["theta_deg", "360"]),
+    ("/api/walk/go-pos", {"x": 0.1, "y": 0}, ["theta_deg", "required"]),
+    ("/api/walk/go-velocity", '{"vx": Infinity, "vy": 0, "vtheta_deg": 0}', ["vx", "finite"]),
+    ("/api/walk/go-velocity", {"vx": 0.8, "vy": 0, "vtheta_deg": 0}, ["vx", "0.5"]),
+    ("/api/walk/go-velocity", {"vx": 0.1, "vy": 0, "vtheta_deg": -90}, ["vtheta_deg", "-45"]),
+    ("/api/walk/footsteps", {"footsteps": [{"leg": "foot", "pos": [0, 0, 0]}]},
+     ["footsteps.0.leg", "rleg", "lleg"]),
+    ("/api/walk/footsteps", {"footsteps": [{"leg": "rleg", "pos": [0, 0]}]}, ["footsteps.0.pos", "3"]),
+    ("/api/walk/footsteps", {"footsteps": []}, ["footsteps", "at least 1"]),
+    ("/api/walk/footsteps", '{"footsteps": [{"leg": "rleg", "pos": [0, NaN, 0]}]}',
+     ["footsteps.0.pos.1", "finite"]),
+    ("/api/walk/footsteps", {"footsteps": [{"leg": "rleg", "pos": [0, -0.095, 0]},
+                                           {"leg": "lleg", "pos": [0.2, 0.095, 0]}], "step": {"step_time": 0}},
+     ["step.step_time", "0.05", "10"]),
+    ("/api/walk/footsteps", {"footsteps": [{"leg": "rleg", "pos": [0, -0.095, 0]}],
+                             "step": {"toe_angle_deg": 80}}, ["step.toe_angle_deg", "57.29"]),
+    ("/api/walk/footsteps", {"footsteps": [{"leg": "rleg", "pos": [0, -0.095, 0]}], "step": {"bogus": 1}},
+     ["step.bogus", "unknown field"]),
+]
+
+
+@pytest.mark.parametrize(("url", "body", "words"), BAD_INPUTS)
+def test_bad_walk_inputs_get_a_422_naming_the_field_and_nothing_moves(client, runtime, url, body, words):
+    # rejected before the loop: a 422 even where a valid command would be a 409 (AutoBalancer blending in)
+    if isinstance(body, str):
+        r = client.post(url, content=body, headers={"Content-Type": "application/json"})
+    else:
+        r = client.post(url, json=body)
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    for w in words:
+        assert w in detail, f"{w!r} not in {detail!r}"
+    assert not runtime.loop.chain["abc"].gait.walking
+
+
+def test_go_pos_with_the_auto_balancer_stopped_is_a_conflict(client, runtime):
+    step(runtime, WARM_UP_S)
+    assert client.post("/api/auto-balancer/stop").status_code == 200
+    step(runtime, WARM_UP_S)
+    r = client.post("/api/walk/go-pos", json={"x": 0.1, "y": 0.0, "theta_deg": 0.0})
+    assert r.status_code == 409, r.text
+    assert "AutoBalancer" in r.json()["detail"]
+    r = client.post("/api/walk/go-velocity", json={"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0})
+    assert r.status_code == 409
+
+
+def test_walking_before_the_auto_balancer_has_blended_in_is_a_conflict(client):
+    r = client.post("/api/walk/go-pos", json={"x": 0.1, "y": 0.0, "theta_deg": 0.0})
+    assert r.status_code == 409 and "AutoBalancer" in r.json()["detail"]
+
+
+def test_the_walk_endpoints_are_documented(client):
+    paths = client.get("/openapi.json").json()["paths"]
+    for name in ("go-pos", "go-velocity", "stop", "emergency-stop"):
+        assert "post" in paths[f"/api/walk/{name}"]
+    assert {"get", "post"} <= set(paths["/api/walk/footsteps"])
