@@ -46,6 +46,7 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
     install_error_handlers(app)
     for module in (state, emergency, sequence, sim, chain, layers, walk):
         app.include_router(module.router)
+    app.include_router(emergency.motion_router)
 
     @app.get("/", include_in_schema=False)
     def index() -> FileResponse:

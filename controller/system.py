@@ -9,6 +9,7 @@ import numpy as np
 from controller.auto_balancer import AutoBalancer
 from controller.chain import Chain
 from controller.collision_detector import CollisionDetector
+from controller.emergency_stopper import EmergencyStopper
 from controller.hard_emergency_stopper import HardEmergencyStopper
 from controller.kalman_filter import AttitudeKalmanFilter, KalmanFilter
 from controller.kinematics import RobotKinematics
@@ -59,12 +60,15 @@ class ControllerSystem:
             KalmanFilter(rpy0=(tilt[0], tilt[1], 0.0)),
             RemoveForceOffset(RobotKinematics()),
             SequencePlayer(ref0, dt_s, ik_solver=self._solve_limb_ik),
+            es := EmergencyStopper(dt_s),
             AutoBalancer(ref0, dt_s, active=self.start_auto_balancer),
-            Stabilizer(dt_s, active=self.start_stabilizer),
+            st := Stabilizer(dt_s, active=self.start_stabilizer),
             CollisionDetector(q0),
             HardEmergencyStopper(q0),
             SoftErrorLimiter(self.kin.q_lower, self.kin.q_upper, q0),
         ]
+        # the Stabilizer's capture-point flag reaches the EmergencyStopper one tick late (hrpsys port)
+        es.flag_source = lambda: st.emergency
         return Chain({layer.name: layer for layer in layers})
 
     def _solve_limb_ik(self, group, q_rad, base_pos_world, base_rpy_rad, target_pos, target_rpy_rad, frame):

@@ -29,3 +29,23 @@ def release(runtime: RuntimeDep) -> Ok:
 
     runtime.call(_release)
     return Ok(message="hard e-stop released")
+
+
+motion_router = APIRouter(prefix="/api/motion", tags=["emergency"])
+
+
+@motion_router.post("/stop", response_model=Ok,
+                    summary="Stop and revert the planned motion ([MLC] Eq. 15); balance keeps working")
+def stop_motion(runtime: RuntimeDep) -> Ok:
+    loop = runtime.loop
+    runtime.call(lambda: loop.chain["es"].stop_motion())
+    return Ok(message="planned motion stopped")
+
+
+@motion_router.post("/release", response_model=Ok,
+                    summary="Release the motion stop: blend back to the live plan over recover_time_s",
+                    responses={409: {"description": "the motion is not stopped"}})
+def release_motion(runtime: RuntimeDep) -> Ok:
+    loop = runtime.loop
+    runtime.call(lambda: loop.chain["es"].release_motion())
+    return Ok(message="motion stop released")

@@ -251,3 +251,23 @@ def test_docs_the_operator_page_and_config_are_served(client):
     assert page.status_code == 200 and "E-STOP" in page.text
     cfg = client.get("/api/config").json()
     assert cfg["viewer_port"] == 8080 and cfg["joints"] == list(JOINT_NAMES)
+
+
+def test_motion_stop_freezes_the_planned_stream_and_release_brings_it_back(client, runtime):
+    step(runtime, 2.5)
+    assert client.post("/api/motion/release").status_code == 409  # nothing to release
+    r = client.post("/api/sequence/joint-angles", json={"angles_deg": {"RARM_JOINT0": -60.0}, "time": 2.0})
+    assert r.status_code == 200
+    step(runtime, 0.5)
+    assert client.post("/api/motion/stop").status_code == 200
+    step(runtime, 1.0)
+    s = client.get("/api/state").json()
+    assert s["emergency"]["motion_stop"] is True and s["emergency"]["motion_stop_reason"] == "operator"
+    held = s["joints"]["RARM_JOINT0"]["cmd_deg"]
+    step(runtime, 1.0)
+    assert client.get("/api/state").json()["joints"]["RARM_JOINT0"]["cmd_deg"] == pytest.approx(held, abs=1e-6)
+    assert client.post("/api/motion/release").status_code == 200
+    step(runtime, 3.0)
+    s = client.get("/api/state").json()
+    assert s["emergency"]["motion_stop"] is False
+    assert s["joints"]["RARM_JOINT0"]["cmd_deg"] == pytest.approx(-60.0, abs=0.1)

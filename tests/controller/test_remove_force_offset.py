@@ -20,8 +20,10 @@ def test_gravity_wrench_of_a_part_hanging_below_a_level_sensor():
     assert np.allclose(w[3:], [0, 2.0 * G * 0.1, 0])  # r x F: lever +x, force -z -> +y moment
 
 
-def hand_reading(kin, extra_force_world=np.zeros(3), offset=np.zeros(6)):
+def hand_reading(kin, extra_force_world=None, offset=None):
     """What the right wrist sensor reads when the hand hangs still (and is pushed by extra_force)."""
+    extra_force_world = np.zeros(3) if extra_force_world is None else extra_force_world
+    offset = np.zeros(6) if offset is None else offset
     kin.update_rpy(np.zeros(3), np.zeros(3), HALF)
     m, c = kin.mass_below("rhsensor")
     p, R = kin.frame_pose("rhsensor")
