@@ -11,6 +11,7 @@ from controller.chain import Chain
 from controller.collision_detector import CollisionDetector
 from controller.emergency_stopper import EmergencyStopper
 from controller.hard_emergency_stopper import HardEmergencyStopper
+from controller.impedance_controller import ImpedanceController
 from controller.kalman_filter import AttitudeKalmanFilter, KalmanFilter
 from controller.kinematics import RobotKinematics
 from controller.loop import ControlLoop, Plant, Snapshot
@@ -61,6 +62,7 @@ class ControllerSystem:
             RemoveForceOffset(RobotKinematics()),
             SequencePlayer(ref0, dt_s, ik_solver=self._solve_limb_ik),
             es := EmergencyStopper(dt_s),
+            ImpedanceController(),
             AutoBalancer(ref0, dt_s, active=self.start_auto_balancer),
             st := Stabilizer(dt_s, active=self.start_stabilizer),
             CollisionDetector(q0),

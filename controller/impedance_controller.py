@@ -1,0 +1,159 @@
+"""ImpedanceController layer ([MLC] III-B, Eq. 3): per hand, m x'' + d x' + k x = f - f_seq from the wrist
+F/T sensor, the SequencePlayer's hand pose as the spring centre, the arm re-solved by IK."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from controller.errors import InvalidCommand, InvalidState
+from controller.kinematics import RobotKinematics
+from controller.layer import Layer, Params
+from controller.stabilizer import sigmoid_transition
+from controller.types import Reference, TickContext
+from robot.names import FORCE_SENSOR_NAMES, JOINT_GROUPS
+
+LIMBS = {"rarm": ("rhsensor", "rarm_end"), "larm": ("lhsensor", "larm_end")}
+
+
+@dataclass(frozen=True)
+class ImpedanceParams(Params):
+    """hrpsys ImpedanceController defaults (translation: M_p, D_p, K_p; rotation: M_r, D_r, K_r)."""
+
+    m_p: float = field(default=10.0, metadata={"unit": "kg", "min": 0.01, "max": 1e4})
+    d_p: float = field(default=200.0, metadata={"unit": "N s/m", "min": 0.0, "max": 1e6})
+    k_p: float = field(default=400.0, metadata={"unit": "N/m", "min": 1.0, "max": 1e6})
+    m_r: float = field(default=5.0, metadata={"unit": "kg m^2", "min": 0.01, "max": 1e4})
+    d_r: float = field(default=100.0, metadata={"unit": "N m s/rad", "min": 0.0, "max": 1e6})
+    k_r: float = field(default=200.0, metadata={"unit": "N m/rad", "min": 1.0, "max": 1e6})
+    transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
+    max_displacement_m: float = field(default=0.2, metadata={"unit": "m", "min": 0.0, "max": 1.0})
+    max_rotation_deg: float = field(default=45.0, metadata={"unit": "deg", "min": 0.0, "max": 180.0})
+
+
+class ImpedanceState:
+    """Second-order impedance of one end effector: deviation (position, rotation vector) and its rate."""
+
+    def __init__(self) -> None:
+        self.dp = np.zeros(3)
+        self.vp = np.zeros(3)
+        self.dr = np.zeros(3)
+        self.vr = np.zeros(3)
+
+    def step(self, p: ImpedanceParams, force_diff: np.ndarray, moment_diff: np.ndarray, dt: float) -> None:
+        """Semi-implicit Euler of M a + D v + K x = f (exact static deviation f / K)."""
+        self.vp += (force_diff - p.d_p * self.vp - p.k_p * self.dp) / p.m_p * dt
+        self.dp += self.vp * dt
+        self.vr += (moment_diff - p.d_r * self.vr - p.k_r * self.dr) / p.m_r * dt
+        self.dr += self.vr * dt
+        n = np.linalg.norm(self.dp)
+        if n > p.max_displacement_m:
+            self.dp *= p.max_displacement_m / n
+        a = np.linalg.norm(self.dr)
+        if a > math.radians(p.max_rotation_deg):
+            self.dr *= math.radians(p.max_rotation_deg) / a
+
+
+class _Limb:
+    def __init__(self, name: str) -> None:
+        self.name = name
+        self.sensor, self.frame = LIMBS[name]
+        self.sensor_index = FORCE_SENSOR_NAMES.index(self.sensor)
+        self.joints = np.array(JOINT_GROUPS[name])
+        self.active = False
+        self.weight = 0.0
+        self.transition: tuple[float, float, float] | None = None  # (from, to, elapsed)
+        self.imp = ImpedanceState()
+        self.q: np.ndarray | None = None  # last IK solution (arm joints)
+
+
+class ImpedanceController(Layer):
+    """Each started hand yields to the measured force around the planned pose; no force, no deviation."""
+
+    name = "ic"
+    description = "ImpedanceController: hand impedance from the wrist F/T sensors (Eq. 3)"
+
+    def __init__(self, params: ImpedanceParams | None = None, kinematics: RobotKinematics | None = None) -> None:
+        super().__init__()
+        self.params = {name: params or ImpedanceParams() for name in LIMBS}
+        self.kin = kinematics or RobotKinematics()
+        self.limbs = {name: _Limb(name) for name in LIMBS}
+
+    def _limb(self, name: str) -> _Limb:
+        if name not in self.limbs:
+            raise InvalidCommand(f"unknown limb {name!r}; valid: {sorted(self.limbs)}")
+        return self.limbs[name]
+
+    def set_params(self, limb: str, params: ImpedanceParams) -> None:
+        self._limb(limb)
+        self.params[limb] = params
+
+    def start(self, limb: str) -> None:
+        lb = self._limb(limb)
+        if lb.active:
+            raise InvalidState(f"impedance control of {limb} is already active")
+        lb.active = True
+        lb.imp = ImpedanceState()
+        lb.transition = (lb.weight, 1.0, 0.0)
+
+    def stop(self, limb: str) -> None:
+        lb = self._limb(limb)
+        if not lb.active:
+            raise InvalidState(f"impedance control of {limb} is not active")
+        lb.active = False
+        lb.transition = (lb.weight, 0.0, 0.0)
+
+    def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        if not any(lb.active or lb.weight > 0.0 for lb in self.limbs.values()):
+            return ref
+        q_out = np.array(ref.q_rad, dtype=float)
+        kin = self.kin
+        kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
+        est = ctx.estimate
+        for lb in self.limbs.values():
+            if not (lb.active or lb.weight > 0.0):
+                continue
+            p = self.params[lb.name]
+            if lb.transition is not None:
+                w0, w1, el = lb.transition
+                el += ctx.dt_s
+                s = min(1.0, el / p.transition_time_s)
+                lb.weight = w0 + (w1 - w0) * sigmoid_transition(s)
+                lb.transition = None if s >= 1.0 else (w0, w1, el)
+            # the planned hand pose (spring centre) and the measured-minus-planned wrench at the hand
+            p_ee, R_ee = kin.frame_pose(lb.frame)
+            p_s, _ = kin.frame_pose(lb.sensor)
+            f_act = est.wrenches_ext_world[lb.sensor_index, :3]
+            tau_act = est.wrenches_ext_world[lb.sensor_index, 3:] + np.cross(p_s - p_ee, f_act)
+            f_ref = ref.wrenches[lb.sensor_index, :3]
+            tau_ref = ref.wrenches[lb.sensor_index, 3:]
+            if lb.active:
+                lb.imp.step(p, f_act - f_ref, tau_act - tau_ref, ctx.dt_s)
+            target_p = p_ee + lb.imp.dp
+            target_R = pin.exp3(lb.imp.dr) @ R_ee
+            q_seed = q_out.copy()
+            if lb.q is not None:
+                q_seed[lb.joints] = lb.q
+            try:
+                q_ik = self.kin_ik(lb.name, q_seed, ref, target_p, target_R)
+            except InvalidCommand:
+                q_ik = q_seed  # out of reach: keep the last reachable arm posture
+            lb.q = q_ik[lb.joints]
+            q_out[lb.joints] = (1.0 - lb.weight) * ref.q_rad[lb.joints] + lb.weight * lb.q
+            if not lb.active and lb.weight <= 0.0:
+                lb.q = None
+            kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
+        return ref.with_(q_rad=q_out)
+
+    def kin_ik(self, limb: str, q_seed, ref: Reference, target_p, target_R) -> np.ndarray:
+        return self.kin.limb_ik(limb, q_seed, ref.base_pos_world, ref.base_rpy_rad, target_p, target_R,
+                                max_iter=8, pos_tol_m=2e-5, rot_tol_rad=2e-4)
+
+    def status(self) -> dict:
+        return {"enabled": self.enabled,
+                **{name: {"active": lb.active, "weight": round(lb.weight, 4),
+                          "displacement_m": lb.imp.dp.tolist(), "rotation_rad": lb.imp.dr.tolist()}
+                   for name, lb in self.limbs.items()}}
