@@ -191,10 +191,37 @@ def run(argv: Sequence[str]) -> int:
     return 1 if (fallen or faults) else 0
 
 
+def experiment(argv: Sequence[str]) -> int:
+    """`hrp2-console experiment NAME [--no-es] [--out DIR]`: one [MLC] IV-C experiment, verdict last."""
+    from pathlib import Path
+
+    from app.experiments import EXPERIMENTS, run_experiment
+
+    p = argparse.ArgumentParser(prog="hrp2-console experiment",
+                                description="Run an emergency-stop experiment of [MLC] IV-C in simulation.")
+    p.add_argument("name", choices=sorted(EXPERIMENTS), help="the experiment")
+    p.add_argument("--no-es", action="store_true", help="without the EmergencyStopper (the paper's case a)")
+    p.add_argument("--out", type=Path, default=Path("out/experiments"),
+                   help="where the CSV and the Fig. 10-like PNG go (default: out/experiments)")
+    args = p.parse_args(argv)
+    r = run_experiment(args.name, es=not args.no_es, out_dir=args.out)
+    print(f"experiment: {r.name} ({'with' if r.es else 'without'} EmergencyStopper), {r.duration_s:.2f} s simulated")
+    print(f"csv: {r.csv_path}\npng: {r.png_path}")
+    if r.cp_error_at_flag_m is not None:
+        print(f"CP error at the flag: {r.cp_error_at_flag_m * 1e3:.1f} mm, "
+              f"CP {r.edge_margin_at_flag_m * 1e3:.1f} mm inside the support polygon")
+    if r.below_threshold_after_revert_s is not None:
+        print(f"error below the threshold {r.below_threshold_after_revert_s:.2f} s after the revert ended")
+    print(r.verdict_line())
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "bench":
         code = bench(argv[1:])
+    elif argv and argv[0] == "experiment":
+        code = experiment(argv[1:])
     else:
         code = run(argv)
     return code

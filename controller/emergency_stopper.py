@@ -136,6 +136,8 @@ class EmergencyStopper(Layer):
             self.reason = None
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        if not self.enabled:
+            return ref
         x_seq = pack(ref)
         t = ctx.time_s
         self.reverter.push(t, x_seq)
