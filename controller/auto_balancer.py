@@ -20,7 +20,7 @@ from controller.hoff_arbib import hoff_arbib
 from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params
 from controller.preview_control import PreviewController, PreviewControlParams
-from controller.rotations import rpy_to_matrix
+from controller.rotations import rpy_to_rows
 from controller.toe_heel import ToeHeelParams
 from controller.types import GaitState, Reference, TickContext
 from robot.names import FORCE_SENSOR_NAMES
@@ -72,6 +72,7 @@ class AutoBalancer(Layer):
         self._blend = None  # (Segment, elapsed)
         self.has_ik_failed = False
         self.last_gait: GaitState | None = None
+        self._footsteps_cache: tuple[list, int, list[dict]] | None = None
         if active:
             self.start()
 
@@ -130,9 +131,10 @@ class AutoBalancer(Layer):
     def _hand_force_offset(self, ref: Reference, cog_pc_xy: np.ndarray, zmp_z: float) -> np.ndarray:
         if not self.params.use_hand_force_offset:
             return cog_pc_xy
-        f = ref.wrenches[list(HANDS), :3]
-        if not np.any(f):
+        rows = ref.wrenches.tolist()
+        if not any(v for i in HANDS for v in rows[i][:3]):
             return cog_pc_xy
+        f = ref.wrenches[list(HANDS), :3]
         return cog_offset_against_hand_forces(cog_pc_xy, self.total_mass, self._hand_pos, f, zmp_z, G)
 
     # ---- tick ------------------------------------------------------------------------------------
@@ -152,35 +154,53 @@ class AutoBalancer(Layer):
         cog_abc_xy = self._hand_force_offset(ref, cog_xy, zmp[2])
         # BODY yaw follows the feet (mean of the two sole yaws); roll and pitch from the plan
         yaw = math.atan2(g.R_rfoot_world[1, 0] + g.R_lfoot_world[1, 0], g.R_rfoot_world[0, 0] + g.R_lfoot_world[0, 0])
-        base_rpy = np.array([ref.base_rpy_rad[0], ref.base_rpy_rad[1], ref.base_rpy_rad[2] + yaw])
-        R_body = rpy_to_matrix(base_rpy)
+        rpy_in = ref.base_rpy_rad.tolist()
+        base_rpy = np.array((rpy_in[0], rpy_in[1], rpy_in[2] + yaw))
+        R_body = np.array(rpy_to_rows(*base_rpy.tolist()))
         rsole, lsole = (g.p_rfoot_world, g.R_rfoot_world), (g.p_lfoot_world, g.R_lfoot_world)
         res = self.ik.solve(ref.q_rad, float(ref.base_pos_world[2]), R_body, cog_abc_xy, rsole, lsole)
         self.has_ik_failed = not res.reachable
+        model, data = self.kin.model, self.kin.data
         for i, fid in enumerate(self._hand_frame_ids):
-            self._hand_pos[i] = pin.updateFramePlacement(self.kin.model, self.kin.data, fid).translation
+            self._hand_pos[i] = pin.updateFramePlacement(model, data, fid).translation
+        com_z = float(res.com_world[2])
+        cog_abc = cog_abc_xy.tolist() if isinstance(cog_abc_xy, np.ndarray) else cog_abc_xy
+        cog_pc = cog_xy.tolist() if isinstance(cog_xy, np.ndarray) else cog_xy
         gait = GaitState(
             walking=g.walking, support=g.support, contact=g.contact,
             p_rsole_world=g.p_rfoot_world, R_rsole_world=g.R_rfoot_world,
             p_lsole_world=g.p_lfoot_world, R_lsole_world=g.R_lfoot_world,
-            zmp_world=zmp, cog_world=np.array([cog_abc_xy[0], cog_abc_xy[1], res.com_world[2]]),
-            cog_vel_world=np.array([cog_vel_xy[0], cog_vel_xy[1], 0.0]),
-            cog_pc_world=np.array([cog_xy[0], cog_xy[1], res.com_world[2]]),
-            cog_acc_world=np.array([cog_acc_xy[0], cog_acc_xy[1], 0.0]),
+            zmp_world=zmp, cog_world=np.array((cog_abc[0], cog_abc[1], com_z)),
+            cog_vel_world=np.array((cog_vel_xy[0], cog_vel_xy[1], 0.0)),
+            cog_pc_world=np.array((cog_pc[0], cog_pc[1], com_z)),
+            cog_acc_world=np.array((cog_acc_xy[0], cog_acc_xy[1], 0.0)),
         )
         self.last_gait = gait
         w = self._weight
         q = res.q_rad if w >= 1.0 else (1.0 - w) * ref.q_rad + w * res.q_rad
         base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         zmp_base = R_body.T @ (zmp - base)
-        return ref.with_(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base, gait=gait)
+        # all fresh arrays of this tick: frozen in place rather than copied
+        return ref._with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base, gait=gait)
 
     def status(self) -> dict:
         g = self.last_gait
         return {"enabled": self.enabled, "active": self.active, "weight": round(self._weight, 4),
                 "walking": bool(g.walking) if g else False, "support": g.support if g else "both",
                 "has_ik_failed": self.has_ik_failed,
-                "footsteps": self.remaining_footsteps() if self.gait.walking else []}
+                "footsteps": self._status_footsteps() if self.gait.walking else []}
+
+    def _status_footsteps(self) -> list[dict]:
+        """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes
+        (the list is shared between snapshots: readers must not modify it)."""
+        remaining = self.gait.remaining_footsteps()
+        # the remaining steps are a tail of the plan list, which the gait generator replaces (never
+        # mutates) on a new plan or replan: that list and the tail length identify the content
+        plan = self.gait._footsteps
+        cache = self._footsteps_cache
+        if cache is None or cache[0] is not plan or cache[1] != len(remaining):
+            cache = self._footsteps_cache = (plan, len(remaining), self.remaining_footsteps())
+        return cache[2]
 
 
 def _homogeneous(p: np.ndarray, R: np.ndarray) -> np.ndarray:

@@ -2,10 +2,16 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
 import qpsolvers
+
+try:
+    from qpsolvers.solvers.daqp_ import daqp_solve_problem as _daqp_solve_problem
+except ImportError:  # daqp not installed: solve_qp reports it
+    _daqp_solve_problem = None
 
 from controller.errors import ControllerError, InvalidCommand
 from controller.layer import Params
@@ -77,13 +83,14 @@ def alpha_from_zmp(zmp_xy: np.ndarray, rfoot_xy: np.ndarray, lfoot_xy: np.ndarra
     The ZMP is projected on the segment from the left to the right foot position [m] and the ratio
     clamped to [0, 1]. Coincident feet give 0.5.
     """
-    r = np.asarray(rfoot_xy, dtype=float)
-    lf = np.asarray(lfoot_xy, dtype=float)
-    d = r - lf
-    dd = float(d @ d)
+    r0, r1 = (float(v) for v in rfoot_xy)
+    l0, l1 = (float(v) for v in lfoot_xy)
+    z0, z1 = (float(v) for v in zmp_xy)
+    d0, d1 = r0 - l0, r1 - l1
+    dd = d0 * d0 + d1 * d1
     if dd < 1e-18:
         return 0.5
-    return float(np.clip((np.asarray(zmp_xy, dtype=float) - lf) @ d / dd, 0.0, 1.0))
+    return min(1.0, max(0.0, ((z0 - l0) * d0 + (z1 - l1) * d1) / dd))
 
 
 def convex_hull_ccw(points_xy: np.ndarray) -> np.ndarray:
@@ -117,8 +124,16 @@ class _Polygon:
         self.e = np.concatenate((self.a[1:], self.a[:1])) - self.a  # (m, 2) [m], edge vectors
         self.ee = np.maximum(np.einsum("ij,ij->i", self.e, self.e), 1e-300)  # (m,) [m^2]
         self.tol = 1e-12 * max(float(np.max(np.abs(self.a))), 1.0) ** 2  # [m^2]
+        self._edges = tuple(zip(self.a.tolist(), self.e.tolist(), strict=True))  # ((ax, ay), (ex, ey)) floats
 
     def nearest(self, p: np.ndarray) -> tuple[np.ndarray, bool]:
+        px, py = p.tolist()
+        neg_tol = -self.tol
+        for (ax, ay), (ex, ey) in self._edges:  # inside (the usual case): no array maths
+            if ex * (py - ay) - ey * (px - ax) < neg_tol:
+                break
+        else:
+            return p.copy(), False
         rel = p - self.a
         e = self.e
         cross = e[:, 0] * rel[:, 1] - e[:, 1] * rel[:, 0]
@@ -174,6 +189,12 @@ class ForceDistributionQP:
 
         # sum_i ||G_cop,i f||^2 = f^T (Nx^T Nx + Ny^T Ny) f since the feet's columns do not overlap
         self._P_cop = w.cop_weight * (self._Nx.T @ self._Nx + self._Ny.T @ self._Ny)
+        self._P_cop_symmetric = bool(np.array_equal(self._P_cop, self._P_cop.T))
+        # per-vertex data as floats for the per-tick sums: foot, -d_y, d_x; and each foot's vertex range
+        self._vertex_rows = tuple(zip(foot_of_vertex.tolist(), (-d[:, 1]).tolist(), d[:, 0].tolist(), strict=True))
+        bounds = np.concatenate(([0], np.cumsum(sizes))).tolist()
+        self._bounds = tuple(zip(bounds[:-1], bounds[1:], strict=True))
+        self._cop_refs_list = cop_refs.tolist()
         self.set_alpha(self.alpha)
         self._q = np.zeros(n)
         self._A = np.vstack([np.ones(n), p_world.T])  # (3, n)
@@ -182,6 +203,7 @@ class ForceDistributionQP:
         self._hull = convex_hull_ccw(p_world)
         self._hull.flags.writeable = False
         self._polygon = _Polygon(self._hull)
+        self._problem: qpsolvers.Problem | None = None
 
     def set_alpha(self, alpha: float) -> None:
         """Change the right/left distribution ratio (only the W_f part of the cost is rebuilt)."""
@@ -197,10 +219,28 @@ class ForceDistributionQP:
         else:
             per_foot = np.ones(1)
         w_f = per_foot[self._foot_of_vertex]  # (n,)
-        P = self._P_cop + np.diag(w.norm_weight * w_f)
+        P = self._P_cop.copy()
+        n = len(w_f)
+        diag = P.reshape(-1)[::n + 1]  # view of P's diagonal
+        diag += w.norm_weight * w_f  # P_cop + diag(norm_weight w_f)
         # rescale the cost: same minimiser, O(1) numbers for the solver
-        P = P / float(np.sort(np.diag(P))[len(w_f) // 2])
-        self._P = 0.5 * (P + P.T)
+        P /= sorted(diag.tolist())[n // 2]
+        # symmetric part (P already is when P_cop is: a diagonal term does not change that)
+        self._P = P if self._P_cop_symmetric else 0.5 * (P + P.T)
+
+    def _solve_qp(self, b: np.ndarray) -> np.ndarray | None:
+        """qpsolvers.solve_qp(P, q, A=A, b=b, lb=lb, solver=...). For daqp the Problem is kept and only
+        P and b are swapped in (same solver call, without rebuilding and re-checking the fixed parts)."""
+        if self.weights.solver != "daqp" or _daqp_solve_problem is None:
+            return qpsolvers.solve_qp(self._P, self._q, A=self._A, b=b, lb=self._lb, solver=self.weights.solver)
+        problem = self._problem
+        if problem is None:
+            problem = self._problem = qpsolvers.Problem(self._P, self._q, A=self._A, b=b, lb=self._lb)
+            problem.check_constraints()
+        problem.P = self._P
+        problem.b = b
+        solution = _daqp_solve_problem(problem)
+        return solution.x if solution.found else None
 
     def __repr__(self) -> str:
         return (f"ForceDistributionQP(n_feet={len(self.feet)}, n_vertices={len(self._p_world)}, "
@@ -214,29 +254,39 @@ class ForceDistributionQP:
     def solve(self, zmp_xy: np.ndarray, total_fz_n: float) -> FootForces:
         """Distribute `total_fz_n` [N] so that the ZMP is `zmp_xy` [m], or the nearest feasible point."""
         zmp = np.asarray(zmp_xy, dtype=float)
-        if zmp.shape != (2,) or not np.isfinite(zmp).all():
+        if zmp.shape != (2,) or not (math.isfinite(zmp[0]) and math.isfinite(zmp[1])):
             raise InvalidCommand(f"zmp_xy must be a finite (2,) array [m]; got {zmp_xy!r}")
-        if not np.isfinite(total_fz_n) or total_fz_n < 0.0:
+        finite = math.isfinite(total_fz_n) if isinstance(total_fz_n, float) else np.isfinite(total_fz_n)
+        if not finite or total_fz_n < 0.0:
             raise InvalidCommand(f"total_fz_n must be a finite force >= 0 [N]; got {total_fz_n!r}")
         zmp, projected = self._polygon.nearest(zmp)
         b = np.array([1.0, zmp[0], zmp[1]])
-        s = qpsolvers.solve_qp(self._P, self._q, A=self._A, b=b, lb=self._lb, solver=self.weights.solver)
+        s = self._solve_qp(b)
         if s is None:
             raise ForceDistributionFailed(
                 f"{self.weights.solver} found no vertex forces for ZMP {zmp} in hull {self._hull.tolist()}; "
                 "try solver='quadprog' or 'clarabel'"
             )
         f = np.maximum(s, 0.0) * float(total_fz_n)  # clip solver round-off below zero  [N]
-        fz = self._S @ f  # Eq. 12
-        n_xy = np.column_stack((self._Nx @ f, self._Ny @ f))  # Eq. 13, 14
-        loaded = fz > 1e-9
-        safe_fz = np.where(loaded, fz, 1.0)
-        cop_offset = np.column_stack((n_xy[:, 1], -n_xy[:, 0])) / safe_fz[:, None]  # [m]
-        cop = self._cop_refs + np.where(loaded[:, None], cop_offset, 0.0)  # unloaded foot: its reference
+        # Eq. 12-14 (fz = S f, n_x = Nx f, n_y = Ny f) as per-foot sums over its vertices
+        n_feet = self._n_feet
+        fz_l, nx_l, ny_l = [0.0] * n_feet, [0.0] * n_feet, [0.0] * n_feet
+        for fj, (k, mdy, dx) in zip(f.tolist(), self._vertex_rows, strict=True):
+            fz_l[k] += fj
+            nx_l[k] += mdy * fj
+            ny_l[k] += dx * fj
+        cop_l = []
+        for k, (cx, cy) in enumerate(self._cop_refs_list):
+            if fz_l[k] > 1e-9:  # loaded: COP offset (n_y, -n_x) / fz; unloaded foot: its reference
+                cx, cy = cx + ny_l[k] / fz_l[k], cy + -nx_l[k] / fz_l[k]
+            cop_l.append((cx, cy))
+        fz = np.array(fz_l)
+        n_xy = np.array(tuple(zip(nx_l, ny_l, strict=True)))
+        cop = np.array(cop_l)
         f.flags.writeable = False
         for arr in (fz, n_xy, cop, zmp):
             arr.flags.writeable = False
-        return FootForces(fz, n_xy, cop, tuple(np.split(f, self._split)), zmp, projected)
+        return FootForces(fz, n_xy, cop, tuple(f[a:b] for a, b in self._bounds), zmp, projected)
 
 
 DEFAULT_WEIGHTS = ForceDistributionWeights()

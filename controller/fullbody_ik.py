@@ -3,6 +3,7 @@ upper body from the planned joint angles ([MLC] III-C 5), hrpsys SimpleFullbodyI
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -10,7 +11,20 @@ import pinocchio as pin
 
 from controller.kinematics import RobotKinematics
 from controller.layer import Params
-from controller.leg_ik import LEG_INDICES, LLEG, RLEG, leg_ik
+from controller.leg_ik import LEG_INDICES, LLEG, RLEG, _floats, _leg_ik_floats
+
+_RLEG = LEG_INDICES["rleg"]
+_LLEG = LEG_INDICES["lleg"]
+
+
+def _as_slice(idx: np.ndarray) -> slice | np.ndarray:
+    """Consecutive indices as a slice (cheaper to assign through), others unchanged."""
+    i = idx.tolist()
+    return slice(i[0], i[-1] + 1) if i == list(range(i[0], i[0] + len(i))) else idx
+
+
+_RLEG_SLICE = _as_slice(_RLEG)
+_LLEG_SLICE = _as_slice(_LLEG)
 
 
 @dataclass(frozen=True)
@@ -36,6 +50,7 @@ class FullbodyIK:
         self.kin = kinematics
         self.params = params or FullbodyIKParams()
         self._com_minus_base_xy = None  # warm start
+        self._leg_q_slices = None  # (kinematics, rleg, lleg) positions in pinocchio's configuration
 
     def com_of(self, base_pos_world, R_world_body, q_rad) -> np.ndarray:
         kin = self.kin
@@ -57,24 +72,49 @@ class FullbodyIK:
         reachable = True
         com = np.zeros(3)
         it = 0
+        kin = self.kin
+        model, data = kin.model, kin.data
+        # pinocchio configuration: orientation fixed for the whole solve, legs and BODY x-y updated in place
+        qp = kin.configuration((0.0, 0.0, base_z_m), R_world_body, q)
+        cache = self._leg_q_slices
+        if cache is None or cache[0] is not kin:
+            cache = self._leg_q_slices = (kin, _as_slice(kin.idx_q[_RLEG]), _as_slice(kin.idx_q[_LLEG]))
+        idx_r, idx_l = cache[1], cache[2]
+        R_rows = _floats(R_world_body)
+        rsole = (_floats(T_world_rsole[0]), _floats(T_world_rsole[1]))
+        lsole = (_floats(T_world_lsole[0]), _floats(T_world_lsole[1]))
+        tx, ty = (float(v) for v in np.asarray(com_xy_target)[:2])
+        tol = p.com_tolerance_m
+        gain = p.move_base_gain
+        bx, by = float(base_xy[0]), float(base_xy[1])
+        bz = float(base_z_m)
         for it in range(1, p.max_iterations + 1):  # noqa: B007 - reported after the loop
-            base = np.array([base_xy[0], base_xy[1], base_z_m])
-            qr, ok_r = leg_ik(RLEG, base, R_world_body, *T_world_rsole)
-            ql, ok_l = leg_ik(LLEG, base, R_world_body, *T_world_lsole)
-            q[LEG_INDICES["rleg"]] = qr
-            q[LEG_INDICES["lleg"]] = ql
+            base_l = [bx, by, bz]
+            qr, ok_r = _leg_ik_floats(RLEG, base_l, R_rows, *rsole)
+            ql, ok_l = _leg_ik_floats(LLEG, base_l, R_rows, *lsole)
             reachable = ok_r and ok_l
-            com = self.com_of(base, R_world_body, q)
-            err = np.asarray(com_xy_target) - com[:2]
-            if np.linalg.norm(err) < p.com_tolerance_m:
+            qp[0], qp[1], qp[2] = bx, by, bz
+            qp[idx_r] = qr
+            qp[idx_l] = ql
+            com = pin.centerOfMass(model, data, qp, False)
+            cx, cy = com[0], com[1]
+            ex, ey = tx - cx, ty - cy
+            if math.hypot(ex, ey) < tol:
                 break
-            base_xy = base_xy + p.move_base_gain * err
+            bx, by = bx + gain * ex, by + gain * ey
         else:
             # the last correction was not applied to the legs yet: finish with it
-            base = np.array([base_xy[0], base_xy[1], base_z_m])
-            q[LEG_INDICES["rleg"]], ok_r = leg_ik(RLEG, base, R_world_body, *T_world_rsole)
-            q[LEG_INDICES["lleg"]], ok_l = leg_ik(LLEG, base, R_world_body, *T_world_lsole)
+            base_l = [bx, by, bz]
+            qr, ok_r = _leg_ik_floats(RLEG, base_l, R_rows, *rsole)
+            ql, ok_l = _leg_ik_floats(LLEG, base_l, R_rows, *lsole)
             reachable = ok_r and ok_l
-            com = self.com_of(base, R_world_body, q)
+            qp[0], qp[1], qp[2] = bx, by, bz
+            qp[idx_r] = qr
+            qp[idx_l] = ql
+            com = pin.centerOfMass(model, data, qp, False)
+        com = np.array(com)
+        q[_RLEG_SLICE] = qr
+        q[_LLEG_SLICE] = ql
+        base = np.array((bx, by, bz))
         self._com_minus_base_xy = com[:2] - base[:2]
         return FullbodyIKResult(q_rad=q, base_pos_world=base, com_world=com, reachable=reachable, iterations=it)

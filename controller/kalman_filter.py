@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from controller.layer import Layer, Params
-from controller.rotations import rpy_to_matrix
+from controller.rotations import rpy_to_rows
 from controller.types import Reference, TickContext
 
 G = 9.80665  # [m/s^2]
@@ -22,6 +22,11 @@ class KalmanFilterParams(Params):
     # the accelerometer is trusted less when |a| differs from g by this much or more
     accel_trust_band: float = field(default=0.5 * G, metadata={"unit": "m/s^2", "min": 1e-3, "max": 100.0})
     use_planned_acceleration: bool = field(default=True, metadata={"unit": "-"})
+
+
+def _floats3(v) -> list[float]:
+    """A 3-vector (array or sequence) as Python floats."""
+    return v.tolist() if isinstance(v, np.ndarray) else [float(x) for x in v]
 
 
 class AttitudeKalmanFilter:
@@ -51,16 +56,17 @@ class AttitudeKalmanFilter:
     def update(self, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray, dt_s: float) -> np.ndarray:
         """One predict (gyro) + correct (accelerometer tilt) step; scalar maths, it runs every tick."""
         p = self.params
-        wx, wy, wz = (float(v) for v in gyro_rad_s)
-        wx -= self.bias[0]
-        wy -= self.bias[1]
-        r, pi, y = (float(v) for v in self.rpy)
+        wx, wy, wz = _floats3(gyro_rad_s)
+        bias = self.bias.tolist()
+        wx -= bias[0]
+        wy -= bias[1]
+        r, pi, y = self.rpy.tolist()
         # Euler-angle rates of R = Rz Ry Rx from the body rate
         cr, sr, cp, tp = math.cos(r), math.sin(r), math.cos(pi), math.tan(pi)
         r += (wx + sr * tp * wy + cr * tp * wz) * dt_s
         pi += (cr * wy - sr * wz) * dt_s
         y += (sr * wy + cr * wz) / cp * dt_s
-        ax, ay, az = (float(v) for v in accel_m_s2)
+        ax, ay, az = _floats3(accel_m_s2)
         z = (math.atan2(ay, az), math.atan2(-ax, math.hypot(ay, az)))
         excess = abs(math.sqrt(ax * ax + ay * ay + az * az) - G) / p.accel_trust_band
         r_meas = p.r_angle * (1.0 + 100.0 * excess * excess)
@@ -77,8 +83,9 @@ class AttitudeKalmanFilter:
             innov = z[i] - angles[i]
             innov = math.atan2(math.sin(innov), math.cos(innov))
             angles[i] += k0 * innov
-            self.bias[i] += k1 * innov
+            bias[i] += k1 * innov
             self._P[i] = [p00 - k0 * p00, p01 - k0 * p01, p11 - k1 * p01]
+        self.bias[:] = bias
         y = math.atan2(math.sin(y), math.cos(y))
         self.rpy = np.array((angles[0], angles[1], y))
         return self.rpy.copy()
@@ -106,7 +113,11 @@ class KalmanFilter(Layer):
         if self.params.use_planned_acceleration and gait is not None and gait.cog_acc_world is not None:
             # the accelerometer feels tilt AND the body's acceleration: remove the planned one (the COG's,
             # the body moves with it) so the walking sway is not read as roll
-            accel = accel - rpy_to_matrix(self.filter.rpy).T @ gait.cog_acc_world
+            (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rpy_to_rows(*self.filter.rpy.tolist())
+            a0, a1, a2 = _floats3(accel)
+            c0, c1, c2 = _floats3(gait.cog_acc_world)
+            accel = (a0 - (r00 * c0 + r10 * c1 + r20 * c2), a1 - (r01 * c0 + r11 * c1 + r21 * c2),
+                     a2 - (r02 * c0 + r12 * c1 + r22 * c2))  # accel - R^T cog_acc
         ctx.estimate.base_rpy_rad = self.filter.update(s.gyro_rad_s, accel, ctx.dt_s)
         ctx.estimate.base_angvel_rad_s = np.array(s.gyro_rad_s, dtype=float)
         return ref

@@ -40,10 +40,11 @@ class RobotKinematics:
         self._below_joint = {sensor: self.model.frames[self.model.getFrameId(link)].parentJoint
                              for sensor, link in FORCE_SENSORS.items()}
         self.q = pin.neutral(self.model)
+        self._neutral = pin.neutral(self.model)
 
     # ---- configuration ------------------------------------------------------------------------
     def configuration(self, base_pos_world, base_R_world, q_rad) -> np.ndarray:
-        q = pin.neutral(self.model)
+        q = self._neutral.copy()
         q[:3] = base_pos_world
         q[3:7] = pin.Quaternion(np.asarray(base_R_world)).coeffs()  # x, y, z, w
         q[self.idx_q] = q_rad
@@ -54,7 +55,8 @@ class RobotKinematics:
         self.q = self.configuration(base_pos_world, base_R_world, q_rad)
         pin.forwardKinematics(self.model, self.data, self.q)
         pin.updateFramePlacements(self.model, self.data)
-        pin.centerOfMass(self.model, self.data, self.q, True)  # True: subtree COMs too
+        # from the placements just computed (same result as passing q, without a second forward pass)
+        pin.centerOfMass(self.model, self.data, pin.KinematicLevel.POSITION, True)  # True: subtree COMs too
 
     def update_rpy(self, base_pos_world, base_rpy_rad, q_rad) -> None:
         self.update(base_pos_world, rpy_to_matrix(base_rpy_rad), q_rad)

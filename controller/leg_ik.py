@@ -29,14 +29,9 @@ LLEG = LegGeometry(hip_offset_y_m=0.06, shin_offset_y_m=0.035)
 LEG_INDICES = {"rleg": np.array(JOINT_GROUPS["rleg"]), "lleg": np.array(JOINT_GROUPS["lleg"])}
 
 
-def _rx(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array(((1.0, 0.0, 0.0), (0.0, c, -s), (0.0, s, c)))
-
-
-def _ry(a: float) -> np.ndarray:
-    c, s = math.cos(a), math.sin(a)
-    return np.array(((c, 0.0, s), (0.0, 1.0, 0.0), (-s, 0.0, c)))
+def _floats(a) -> list:
+    """An array (or sequence) as nested Python floats."""
+    return (a if isinstance(a, np.ndarray) else np.asarray(a, dtype=float)).tolist()
 
 
 def leg_ik(geom: LegGeometry, p_body_world: np.ndarray, R_world_body: np.ndarray,
@@ -47,10 +42,27 @@ def leg_ik(geom: LegGeometry, p_body_world: np.ndarray, R_world_body: np.ndarray
     closest pose with reachable = False, so a caller never gets NaN. Scalar maths on purpose:
     this runs several times per 5 ms tick.
     """
+    q, reachable = _leg_ik_floats(geom, _floats(p_body_world), _floats(R_world_body),
+                                  _floats(p_sole_world), _floats(R_world_sole))
+    return np.array(q), reachable
+
+
+def _leg_ik_floats(geom: LegGeometry, p_body_world, R_world_body, p_sole_world, R_world_sole
+                   ) -> tuple[tuple[float, ...], bool]:
+    """leg_ik on Python floats: positions as 3 floats, rotations as 3 rows of 3 floats."""
     L1, L2, dy = geom.thigh_m, geom.shin_m, geom.shin_offset_y_m
-    p_hip = p_body_world + geom.hip_offset_y_m * R_world_body[:, 1]
-    p_ankle = p_sole_world + geom.ankle_to_sole_m * R_world_sole[:, 2]
-    r0, r1, r2 = R_world_sole.T @ (p_hip - p_ankle)  # hip seen from the ankle, ankle frame
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = R_world_body
+    (s00, s01, s02), (s10, s11, s12), (s20, s21, s22) = R_world_sole
+    bx, by, bz = p_body_world
+    sx, sy, sz = p_sole_world
+    h, a = geom.hip_offset_y_m, geom.ankle_to_sole_m
+    # hip minus ankle, world frame (hip = body + h * body y axis, ankle = sole + a * sole z axis)
+    d0 = (bx + h * b01) - (sx + a * s02)
+    d1 = (by + h * b11) - (sy + a * s12)
+    d2 = (bz + h * b21) - (sz + a * s22)
+    r0 = s00 * d0 + s10 * d1 + s20 * d2  # hip seen from the ankle, ankle frame (R_sole^T d)
+    r1 = s01 * d0 + s11 * d1 + s21 * d2
+    r2 = s02 * d0 + s12 * d1 + s22 * d2
     reachable = True
     # ankle roll: (Rx(q5) r)_y = -dy
     rho = math.hypot(r1, r2)
@@ -68,9 +80,25 @@ def leg_ik(geom: LegGeometry, p_body_world: np.ndarray, R_world_body: np.ndarray
     q3 = math.acos(c3)
     psi = math.atan2(L1 * math.sin(q3), L1 * c3 + L2)
     q4 = math.atan2(-w0, w2) - psi
-    # hip: Rz(q0) Rx(q1) Ry(q2) = R_body^T R_sole Rx(q5)^T Ry(q3 + q4)^T
-    M = R_world_body.T @ R_world_sole @ _rx(-q5) @ _ry(-(q3 + q4))
-    q1 = math.asin(min(1.0, max(-1.0, M[2, 1])))
-    q0 = math.atan2(-M[0, 1], M[1, 1])
-    q2 = math.atan2(-M[2, 0], M[2, 2])
-    return np.array((q0, q1, q2, q3, q4, q5)), reachable
+    # hip: Rz(q0) Rx(q1) Ry(q2) = M = R_body^T R_sole Rx(q5)^T Ry(q3 + q4)^T
+    # A = R_body^T R_sole (the entries needed for M[0, 1], M[1, 1] and row 2 of M)
+    a01 = b00 * s01 + b10 * s11 + b20 * s21
+    a02 = b00 * s02 + b10 * s12 + b20 * s22
+    a11 = b01 * s01 + b11 * s11 + b21 * s21
+    a12 = b01 * s02 + b11 * s12 + b21 * s22
+    a20 = b02 * s00 + b12 * s10 + b22 * s20
+    a21 = b02 * s01 + b12 * s11 + b22 * s21
+    a22 = b02 * s02 + b12 * s12 + b22 * s22
+    # B = A Rx(-q5): Rx(-q5) = [[1, 0, 0], [0, c5, s5], [0, -s5, c5]]
+    e01 = a01 * c5 - a02 * s5
+    e11 = a11 * c5 - a12 * s5
+    e21, e22 = a21 * c5 - a22 * s5, a21 * s5 + a22 * c5
+    # M = B Ry(t), t = -(q3 + q4): Ry(t) = [[ct, 0, st], [0, 1, 0], [-st, 0, ct]]; the entries used below
+    t = -(q3 + q4)
+    ct, st = math.cos(t), math.sin(t)
+    m20 = a20 * ct - e22 * st
+    m22 = a20 * st + e22 * ct
+    q1 = math.asin(min(1.0, max(-1.0, e21)))
+    q0 = math.atan2(-e01, e11)
+    q2 = math.atan2(-m20, m22)
+    return (q0, q1, q2, q3, q4, q5), reachable

@@ -58,11 +58,21 @@ class Snapshot:
     extras: dict[str, Any] = field(default_factory=dict)
 
 
+_COS_45_DEG = float(np.cos(np.deg2rad(45.0)))
+
+
 def is_fallen(truth: GroundTruth) -> bool:
     """BODY lower than 0.35 m, or its z axis more than 45 deg from vertical."""
     w, x, y, z = truth.base_quat_wxyz
     up_z = 1.0 - 2.0 * (x * x + y * y)  # z component of BODY's z axis in world
-    return bool(truth.base_pos_world[2] < 0.35 or up_z < np.cos(np.deg2rad(45.0)))
+    return bool(truth.base_pos_world[2] < 0.35 or up_z < _COS_45_DEG)
+
+
+def _frozen(a) -> np.ndarray:
+    """frozen_array(a), without the copy when `a` already is a read-only float64 array owning its data."""
+    if type(a) is np.ndarray and not a.flags.writeable and a.base is None and a.dtype == np.float64:
+        return a
+    return frozen_array(a)
 
 
 StateEstimatorFn = Callable[[Sensors, Estimate, Reference], tuple[np.ndarray, np.ndarray]]
@@ -158,14 +168,14 @@ class ControlLoop:
         try:
             ref = self.chain.tick(ctx, ref_in)
             q_cmd = np.asarray(ref.q_rad, dtype=float)
-            if not np.all(np.isfinite(q_cmd)):
+            if not np.isfinite(q_cmd).all():
                 raise FloatingPointError("non-finite joint command")
         except Exception as exc:  # noqa: BLE001 - a fault ends in a safe stop, reported
             self._on_fault(exc)
             ref = ref_in.with_(q_rad=self._last_q_cmd)
             q_cmd = self._last_q_cmd
         self.plant.write(q_cmd)
-        self._last_q_cmd = np.array(q_cmd, dtype=float)
+        self._last_q_cmd = _frozen(q_cmd)  # read-only (a copy unless already immutable): the snapshot shares it
         self._last_ref = ref
         t_phys = time.perf_counter()
         self.plant.step(self.substeps)
@@ -202,18 +212,18 @@ class ControlLoop:
         else:
             cog, zmp = np.zeros(3), np.zeros(3)
         layers = {}
-        emergency: dict[str, Any] = {"hard_stop": False}
+        timers = self.chain.timers
         for name, layer in self.chain.layers.items():
             st = layer.status()
-            st["tick_ms"] = self.chain.timers[name].last_ms
+            st["tick_ms"] = timers[name].last_ms
             layers[name] = st
-        hes = self.chain.layers.get("hes")
-        if hes is not None:
-            emergency["hard_stop"] = bool(layers["hes"].get("engaged", False))
-        emergency["fault"] = self.fault
+        hes_status = layers.get("hes")
+        emergency: dict[str, Any] = {
+            "hard_stop": bool(hes_status.get("engaged", False)) if hes_status is not None else False,
+            "fault": self.fault}
         return Snapshot(
             tick=self.tick_count, time_s=float(sensors.time_s if self.tick_count == 0 else truth.time_s),
-            q_cmd_rad=frozen_array(self._last_q_cmd), q_seq_rad=frozen_array(seq_ref.q_rad),
+            q_cmd_rad=_frozen(self._last_q_cmd), q_seq_rad=_frozen(seq_ref.q_rad),
             q_meas_rad=sensors.q_rad, reference=ref,
             base_rpy_est_rad=frozen_array(est.base_rpy_rad), wrenches_ext=frozen_array(est.wrenches_ext),
             cog_world=frozen_array(cog), zmp_world=frozen_array(zmp), layers=layers,

@@ -23,10 +23,12 @@ class SoftErrorLimiterParams(Params):
 def limit_command(q_in: np.ndarray, q_prev: np.ndarray, q_meas: np.ndarray, lower: np.ndarray,
                   upper: np.ndarray, max_step: float, max_error: float) -> np.ndarray:
     """Clamp a joint command: position range, then per-tick step, then distance to the encoder."""
-    q = np.clip(q_in, lower, upper)
-    q = q_prev + np.clip(q - q_prev, -max_step, max_step)
-    q = np.clip(q, q_meas - max_error, q_meas + max_error)
-    return np.clip(q, lower, upper)
+    # np.clip(a, lo, hi) is minimum(maximum(a, lo), hi); the ufuncs directly skip clip's Python overhead
+    minimum, maximum = np.minimum, np.maximum
+    q = minimum(maximum(q_in, lower), upper)
+    q = q_prev + minimum(maximum(q - q_prev, -max_step), max_step)
+    q = minimum(maximum(q, q_meas - max_error), q_meas + max_error)
+    return minimum(maximum(q, lower), upper)
 
 
 class SoftErrorLimiter(Layer):
@@ -62,7 +64,7 @@ class SoftErrorLimiter(Layer):
         q_prev = self.q_prev
         q = limit_command(q_in, q_prev, q_meas, lo, hi, max_step, p.error_limit_rad)
         self.q_prev = q
-        if np.array_equal(q, q_in):
+        if q.shape == q_in.shape and (q == q_in).all():  # np.array_equal
             if self.limited_now:
                 self.limited = {"position": [], "velocity": [], "error": []}
                 self.limited_now = False

@@ -22,8 +22,8 @@ from controller.force_distribution import FootPolygon, ForceDistributionQP, alph
 from controller.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params
-from controller.leg_ik import LEG_INDICES, LLEG, RLEG, leg_ik
-from controller.rotations import rpy_to_matrix
+from controller.leg_ik import LEG_INDICES, LLEG, RLEG, _leg_ik_floats
+from controller.rotations import rpy_to_rows
 from controller.state_estimation import ActualStateEstimator
 from controller.types import Reference, TickContext
 from robot.names import FORCE_SENSOR_NAMES
@@ -33,6 +33,9 @@ FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor
 HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
 HAND_FORCE_DEADBAND_N = 2.0
 EMERGENCY_MODES = ("cp_error", "cp_support", "none")
+# consecutive joint indices of each leg as slices (assignment through a slice is cheaper)
+_LEG_SLICES = {leg: (slice(int(i[0]), int(i[-1]) + 1) if np.array_equal(i, np.arange(i[0], i[-1] + 1)) else i)
+               for leg, i in LEG_INDICES.items()}
 
 
 @dataclass(frozen=True)
@@ -78,8 +81,11 @@ def sigmoid_transition(s: float) -> float:
     return (raw(min(1.0, max(0.0, s))) - lo) / (hi - lo)
 
 
-def _rot_xy(roll: float, pitch: float) -> np.ndarray:
-    return rpy_to_matrix(np.array([roll, pitch, 0.0]))
+def _matmul3(A, B) -> tuple[tuple[float, float, float], ...]:
+    """A @ B for 3x3 matrices given as rows of floats."""
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = B
+    return tuple((a0 * b00 + a1 * b10 + a2 * b20, a0 * b01 + a1 * b11 + a2 * b21, a0 * b02 + a1 * b12 + a2 * b22)
+                 for a0, a1, a2 in A)
 
 
 class Stabilizer(Layer):
@@ -117,6 +123,7 @@ class Stabilizer(Layer):
         self.projected = False
         self._qp: ForceDistributionQP | None = None
         self._qp_key: tuple | None = None
+        self._qp_raw_key: tuple | None = None  # the unrounded key of the last call
         if active:
             self.start()
 
@@ -156,7 +163,13 @@ class Stabilizer(Layer):
         if self._prev_cog is None:
             self._prev_cog = cog
         alpha = 1.0 - math.exp(-2.0 * math.pi * p.cogvel_cutoff_hz * dt)
-        self.act_cogvel = self.act_cogvel + alpha * ((cog - self._prev_cog) / dt - self.act_cogvel)
+        cx, cy, cz = cog.tolist()
+        px, py, pz = self._prev_cog.tolist()
+        vx, vy, vz = self.act_cogvel.tolist()
+        vx = vx + alpha * ((cx - px) / dt - vx)
+        vy = vy + alpha * ((cy - py) / dt - vy)
+        vz = vz + alpha * ((cz - pz) / dt - vz)
+        self.act_cogvel = np.array((vx, vy, vz))
         self._prev_cog = cog
         est.cog_world, est.zmp_world, est.cog_vel_world = cog, zmp, self.act_cogvel
         gait = ref.gait
@@ -164,13 +177,20 @@ class Stabilizer(Layer):
             self.emergency = False
             return ref
         # capture points
-        height = max(0.1, cog[2] - gait.zmp_world[2])
+        zr = gait.zmp_world.tolist()
+        height = max(0.1, cz - zr[2])
         omega = math.sqrt(G / height)
-        self.cp_ref = gait.cog_world[:2] + gait.cog_vel_world[:2] / omega
-        self.cp_act = cog[:2] + self.act_cogvel[:2] / omega
-        self.cp_error = self.cp_ref - self.cp_act
-        fz = est.wrenches_ext_world[list(FEET), 2]
-        contact_act = fz > p.contact_threshold_n
+        gcx, gcy = gait.cog_world[:2].tolist()
+        gvx, gvy, gvz = gait.cog_vel_world.tolist()
+        cp_ref = (gcx + gvx / omega, gcy + gvy / omega)
+        cp_act = (cx + vx / omega, cy + vy / omega)
+        self.cp_ref = np.array(cp_ref)
+        self.cp_act = np.array(cp_act)
+        self.cp_error = np.array((cp_ref[0] - cp_act[0], cp_ref[1] - cp_act[1]))
+        wrenches = est.wrenches_ext_world.tolist()
+        w_r, w_l = wrenches[FEET[0]], wrenches[FEET[1]]
+        fz = (w_r[2], w_l[2])
+        contact_act = (fz[0] > p.contact_threshold_n, fz[1] > p.contact_threshold_n)
         self._update_emergency(ctx.time_s, gait, contact_act)
         if self.weight <= 0.0:
             return ref
@@ -179,61 +199,83 @@ class Stabilizer(Layer):
         # p_G^pc (preview COG, before the hand-force offset) and p_zmp^abc. The actual side is the
         # static balance point, the COG shifted by the measured hand forces (hrpsys does the same):
         # with hands loaded the LIP's "COG" is where the ZMP would sit at rest.
-        sbp = self.static_balance_point(cog, est, gait.zmp_world[2])
-        d_cog = gait.cog_pc_world - sbp
-        d_vel = gait.cog_vel_world - self.act_cogvel
-        d_zmp = gait.zmp_world - zmp
-        new_zmp = gait.zmp_world + w * (p.k1 * d_cog + p.k2 * d_vel + p.k3 * d_zmp)
+        sbp = self.static_balance_point(cog, est, zr[2]).tolist()
+        pc = gait.cog_pc_world.tolist()
+        zm = zmp.tolist()
+        act_vel = (vx, vy, vz)
+        gv = (gvx, gvy, gvz)
+        k1, k2, k3 = p.k1, p.k2, p.k3
+        nzx, nzy = (zr[j] + w * (k1 * (pc[j] - sbp[j]) + k2 * (gv[j] - act_vel[j]) + k3 * (zr[j] - zm[j]))
+                    for j in range(2))
         # QP distribution (Eq. 9-14) over the feet meant to be in contact
         soles_world = ((gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
         idx = [i for i in range(2) if gait.contact[i]]
         qp = self._force_qp(idx, soles_world)
+        p_r = gait.p_rsole_world.tolist()
+        p_l = gait.p_lsole_world.tolist()
         if len(idx) == 2:
-            qp.set_alpha(alpha_from_zmp(new_zmp[:2], gait.p_rsole_world[:2], gait.p_lsole_world[:2]))
-        forces = qp.solve(new_zmp[:2], self.total_mass * G)
-        self.new_zmp = np.array([*forces.zmp_world_xy, gait.zmp_world[2]])
+            qp.set_alpha(alpha_from_zmp((nzx, nzy), p_r[:2], p_l[:2]))
+        forces = qp.solve(np.array((nzx, nzy)), self.total_mass * G)
+        zx, zy = forces.zmp_world_xy.tolist()
+        self.new_zmp = np.array((zx, zy, zr[2]))
         self.projected = forces.projected
         # foot moment damping (Eq. 3, m = 0) and force-difference control
-        tau_act = est.wrenches_ext_world[list(FEET), 3:5]
+        tau_act = ((w_r[3], w_r[4]), (w_l[3], w_l[4]))
         damping = p.rot_damping_gain_walking if gait.walking else p.rot_damping_gain
+        T_rot = p.rot_time_const_s
+        d_foot = self.d_foot_rpy.tolist()
+        n_xy = forces.n_xy_nm.tolist()
         for k, i in enumerate(idx):
-            tau_ref = -forces.n_xy_nm[k]  # ground-reaction moment about the sole origin
+            d = d_foot[i]
             if contact_act[i]:
-                rate = (tau_act[i] - tau_ref) / damping - self.d_foot_rpy[i] / p.rot_time_const_s
+                ta = tau_act[i]
+                tau_ref = (-n_xy[k][0], -n_xy[k][1])  # ground-reaction moment about the sole origin
+                rate = [(ta[j] - tau_ref[j]) / damping - d[j] / T_rot for j in range(2)]
             else:
-                rate = -self.d_foot_rpy[i] / p.rot_time_const_s
-            self.d_foot_rpy[i] = self.d_foot_rpy[i] + rate * dt
+                rate = [-d[j] / T_rot for j in range(2)]
+            d_foot[i] = [d[j] + rate[j] * dt for j in range(2)]
         for i in range(2):
             if i not in idx:
-                self.d_foot_rpy[i] -= self.d_foot_rpy[i] * dt / 0.08  # swing foot: back to the plan quickly
+                d = d_foot[i]
+                d_foot[i] = [d[j] - d[j] * dt / 0.08 for j in range(2)]  # swing foot: back to the plan quickly
         lim = math.radians(p.rot_limit_deg)
-        np.clip(self.d_foot_rpy, -lim, lim, out=self.d_foot_rpy)
-        if len(idx) == 2 and contact_act.all():
-            df_ref = forces.fz_n[0] - forces.fz_n[1]
+        d_foot = [[min(max(v, -lim), lim) for v in d] for d in d_foot]  # np.clip on floats
+        self.d_foot_rpy[:] = d_foot
+        if len(idx) == 2 and contact_act[0] and contact_act[1]:
+            fz_ref = forces.fz_n.tolist()
+            df_ref = fz_ref[0] - fz_ref[1]
             df_act = fz[0] - fz[1]
             self.dz_diff += ((df_act - df_ref) / p.z_damping_gain - self.dz_diff / p.z_time_const_s) * dt
         else:
             self.dz_diff -= self.dz_diff / p.z_time_const_s * dt
-        self.dz_diff = float(np.clip(self.dz_diff, -2 * p.z_limit_m, 2 * p.z_limit_m))
+        self.dz_diff = float(min(max(self.dz_diff, -2 * p.z_limit_m), 2 * p.z_limit_m))
         # body attitude control
-        act_rp = est.base_rpy_rad[:2]
-        self.d_body_rp += (p.body_attitude_gain * (ref.base_rpy_rad[:2] - act_rp)
-                           - self.d_body_rp / p.body_attitude_time_const_s) * dt
-        np.clip(self.d_body_rp, -lim, lim, out=self.d_body_rp)
+        act_rp = est.base_rpy_rad[:2].tolist()
+        ref_rpy = ref.base_rpy_rad.tolist()
+        gain, T_body = p.body_attitude_gain, p.body_attitude_time_const_s
+        db = self.d_body_rp.tolist()
+        db = [min(max(db[j] + (gain * (ref_rpy[j] - act_rp[j]) - db[j] / T_body) * dt, -lim), lim) for j in range(2)]
+        self.d_body_rp[:] = db
         # legs re-solved for the modified sole targets and BODY attitude
-        R_body = rpy_to_matrix(ref.base_rpy_rad + w * np.array([*self.d_body_rp, 0.0]))
-        base = ref.base_pos_world
+        R_body = rpy_to_rows(ref_rpy[0] + w * db[0], ref_rpy[1] + w * db[1], ref_rpy[2] + w * 0.0)
+        base = ref.base_pos_world.tolist()
         q = np.array(ref.q_rad, dtype=float)
         dz = (0.5 * w * self.dz_diff, -0.5 * w * self.dz_diff)
         for i, (geom, leg) in enumerate(((RLEG, "rleg"), (LLEG, "lleg"))):
-            pos, R = soles_world[i]
-            R_mod = _rot_xy(*(w * self.d_foot_rpy[i])) @ R
-            q[LEG_INDICES[leg]], _ = leg_ik(geom, base, R_body, pos + np.array([0.0, 0.0, dz[i]]), R_mod)
-        return ref.with_(q_rad=q)
+            pos = p_r if i == 0 else p_l
+            R = soles_world[i][1].tolist()
+            R_mod = _matmul3(rpy_to_rows(w * d_foot[i][0], w * d_foot[i][1], 0.0), R)
+            q[_LEG_SLICES[leg]], _ = _leg_ik_floats(geom, base, R_body, (pos[0], pos[1], pos[2] + dz[i]), R_mod)
+        return ref._with_owned(q_rad=q)
 
     def _force_qp(self, idx: list[int], soles_world) -> ForceDistributionQP:
         """The QP for the feet in contact, rebuilt only when they move (a support switch or a new step)."""
-        key = tuple((i, *np.round(soles_world[i][0][:2], 6), round(float(soles_world[i][1][1, 0]), 6)) for i in idx)
+        raw = tuple((i, *soles_world[i][0][:2].tolist(), float(soles_world[i][1][1, 0])) for i in idx)
+        if raw == self._qp_raw_key:  # the same soles as last tick (a standing foot): the same QP
+            return self._qp
+        self._qp_raw_key = raw
+        # np.round(x, 6) on floats: rint(x * 1e6) / 1e6 (Python's round(float) rounds half to even as rint)
+        key = tuple((i, round(x * 1e6) / 1e6, round(y * 1e6) / 1e6, round(r10, 6)) for i, x, y, r10 in raw)
         if key != self._qp_key:
             polygons = []
             for i in idx:
@@ -246,9 +288,10 @@ class Stabilizer(Layer):
 
     def static_balance_point(self, cog: np.ndarray, est, zmp_z: float) -> np.ndarray:
         """COG (3,) moved to where the measured hand forces put the ZMP of a robot at rest [m]."""
-        f_on = est.wrenches_ext_world[list(HANDS), :3]
-        if not np.any(np.abs(f_on) > HAND_FORCE_DEADBAND_N):
+        rows = est.wrenches_ext_world.tolist()
+        if not any(abs(v) > HAND_FORCE_DEADBAND_N for i in HANDS for v in rows[i][:3]):  # np.any(abs(f) > band)
             return cog
+        f_on = est.wrenches_ext_world[list(HANDS), :3]
         hands = est.sensor_pos_from_base[list(HANDS)] + self.estimator.base_pos_world
         # Eq. 6 evaluated with the force on the robot is the static ZMP (see hand_force_cog_offset)
         xy = cog_offset_against_hand_forces(cog[:2], self.total_mass, hands, -f_on, zmp_z, G)
@@ -258,10 +301,11 @@ class Stabilizer(Layer):
         p = self.params
         settled = self.active and self._transition is None  # hrpsys: only in MODE_ST, transition done
         if (p.emergency_mode == "none" or not settled or (gait.walking and not p.estop_while_walking)
-                or not contact_act.any()):
+                or not any(contact_act)):
             flag = False
         elif p.emergency_mode == "cp_error":
-            flag = bool(np.hypot(*self.cp_error) > p.cp_threshold_m)
+            ex, ey = self.cp_error.tolist()
+            flag = bool(math.hypot(ex, ey) > p.cp_threshold_m)
         else:
             feet = []
             for i, (pos, R) in enumerate(((gait.p_rsole_world, gait.R_rsole_world),
@@ -277,7 +321,8 @@ class Stabilizer(Layer):
     def status(self) -> dict:
         return {"enabled": self.enabled, "active": self.active, "weight": round(self.weight, 4),
                 "cp_ref": self.cp_ref.tolist(), "cp_act": self.cp_act.tolist(), "cp_error": self.cp_error.tolist(),
-                "cp_error_norm": float(np.hypot(*self.cp_error)), "threshold": self.params.cp_threshold_m,
+                "cp_error_norm": math.hypot(*self.cp_error.tolist()), "threshold": self.params.cp_threshold_m,
                 "emergency": self.emergency, "flag_rise_time": self.flag_rise_time_s,
-                "d_foot_rpy_deg": np.rad2deg(self.d_foot_rpy).tolist(), "dz_diff_m": self.dz_diff,
+                "d_foot_rpy_deg": [[math.degrees(v) for v in row] for row in self.d_foot_rpy.tolist()],
+                "dz_diff_m": self.dz_diff,
                 "new_zmp": self.new_zmp.tolist()}

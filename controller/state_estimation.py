@@ -20,14 +20,16 @@ def zmp_from_foot_wrenches(pos_world: np.ndarray, wrench_world: np.ndarray, z0: 
     Returns None when no foot carries load.
     """
     num_x = num_y = fz_sum = 0.0
-    for p, w in zip(pos_world, wrench_world, strict=True):
-        f, tau = w[:3], w[3:]
-        if f[2] < min_fz:
+    pos = pos_world.tolist() if isinstance(pos_world, np.ndarray) else pos_world
+    wrenches = wrench_world.tolist() if isinstance(wrench_world, np.ndarray) else wrench_world
+    for p, w in zip(pos, wrenches, strict=True):
+        f0, f1, f2, tau0, tau1 = w[0], w[1], w[2], w[3], w[4]
+        if f2 < min_fz:
             continue
         dz = p[2] - z0
-        num_x += p[0] * f[2] - tau[1] - dz * f[0]
-        num_y += p[1] * f[2] + tau[0] - dz * f[1]
-        fz_sum += f[2]
+        num_x += p[0] * f2 - tau1 - dz * f0
+        num_y += p[1] * f2 + tau0 - dz * f1
+        fz_sum += f2
     if fz_sum <= 0.0:
         return None
     return np.array([num_x / fz_sum, num_y / fz_sum, z0])
@@ -49,23 +51,39 @@ class ActualStateEstimator:
 
     def __call__(self, sensors, est: Estimate, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
         if ref.gait is not None:  # the AutoBalancer says where the soles are meant to be
-            ref_soles = np.array([ref.gait.p_rsole_world, ref.gait.p_lsole_world])
-        else:
-            ref_soles = self.reference_soles(ref)
-        meas_soles = est.sensor_pos_from_base[list(FOOT_SENSORS)]
-        if ref.gait is not None:
             # hrpsys's actual foot-origin frame: the feet mid-point when both are meant to be down,
             # otherwise the planned support foot (deterministic switches, no Fz chatter)
-            c = np.array(ref.gait.contact, dtype=float)
-            w = c / c.sum() if c.sum() > 0 else np.array([0.5, 0.5])
-        else:
-            fz = np.clip(est.wrenches_ext_world[list(FOOT_SENSORS), 2], 0.0, None)
-            w = fz / fz.sum() if fz.sum() > 2 * CONTACT_FZ_N else np.array([0.5, 0.5])
+            return self._with_gait(est, ref.gait)
+        ref_soles = self.reference_soles(ref)
+        meas_soles = est.sensor_pos_from_base[list(FOOT_SENSORS)]
+        fz = np.clip(est.wrenches_ext_world[list(FOOT_SENSORS), 2], 0.0, None)
+        w = fz / fz.sum() if fz.sum() > 2 * CONTACT_FZ_N else np.array([0.5, 0.5])
         offset = w @ (ref_soles - meas_soles)
         self.base_pos_world = offset
         cog = est.com_from_base + offset
         soles = meas_soles + offset
         zmp = zmp_from_foot_wrenches(soles, est.wrenches_ext_world[list(FOOT_SENSORS)], float(w @ soles[:, 2]))
+        if zmp is not None:
+            self.last_zmp = zmp
+        return cog, self.last_zmp.copy()
+
+    def _with_gait(self, est: Estimate, gait) -> tuple[np.ndarray, np.ndarray]:
+        """__call__ with a gait reference, on Python floats (same maths)."""
+        ref_soles = (gait.p_rsole_world.tolist(), gait.p_lsole_world.tolist())
+        pos = est.sensor_pos_from_base.tolist()
+        meas_soles = [pos[i] for i in FOOT_SENSORS]
+        c0, c1 = (1.0 if c else 0.0 for c in gait.contact)
+        csum = c0 + c1
+        w0, w1 = (c0 / csum, c1 / csum) if csum > 0 else (0.5, 0.5)
+        offset = [w0 * (ref_soles[0][j] - meas_soles[0][j]) + w1 * (ref_soles[1][j] - meas_soles[1][j])
+                  for j in range(3)]
+        self.base_pos_world = np.array(offset)
+        com = est.com_from_base.tolist()
+        cog = np.array([com[j] + offset[j] for j in range(3)])
+        soles = [[m[j] + offset[j] for j in range(3)] for m in meas_soles]
+        wrenches = est.wrenches_ext_world.tolist()
+        zmp = zmp_from_foot_wrenches(soles, [wrenches[i] for i in FOOT_SENSORS],
+                                     w0 * soles[0][2] + w1 * soles[1][2])
         if zmp is not None:
             self.last_zmp = zmp
         return cog, self.last_zmp.copy()

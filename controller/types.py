@@ -59,9 +59,39 @@ class Reference:
 
     def with_(self, **changes) -> Reference:
         """A copy with some fields replaced (arrays are copied and frozen)."""
-        shapes = {"q_rad": (NUM_JOINTS,), "base_pos_world": (3,), "base_rpy_rad": (3,),
-                  "zmp_base": (3,), "wrenches": (len(FORCE_SENSOR_NAMES), 6)}
-        return replace(self, **{k: (frozen_array(v, shapes[k]) if k in shapes else v) for k, v in changes.items()})
+        shapes = _REFERENCE_SHAPES
+        return self._replace({k: (frozen_array(v, shapes[k]) if k in shapes else v) for k, v in changes.items()})
+
+    def _with_owned(self, **changes) -> Reference:
+        """with_ for arrays the caller has just built and hands over: a float64 array of the right shape
+        is frozen in place instead of copied (anything else is copied as in with_)."""
+        shapes = _REFERENCE_SHAPES
+        out = {}
+        for k, v in changes.items():
+            shape = shapes.get(k)
+            if shape is not None:
+                if type(v) is np.ndarray and v.dtype == np.float64 and v.shape == shape:
+                    v.flags.writeable = False
+                else:
+                    v = frozen_array(v, shape)
+            out[k] = v
+        return self._replace(out)
+
+    def _replace(self, changes: dict) -> Reference:
+        if not changes.keys() <= _REFERENCE_FIELDS:
+            return replace(self, **changes)  # raises the usual TypeError for unknown fields
+        get = changes.get
+        return Reference(get("q_rad", self.q_rad), get("base_pos_world", self.base_pos_world),
+                         get("base_rpy_rad", self.base_rpy_rad), get("zmp_base", self.zmp_base),
+                         get("wrenches", self.wrenches), get("gait", self.gait))
+
+
+_REFERENCE_SHAPES = {"q_rad": (NUM_JOINTS,), "base_pos_world": (3,), "base_rpy_rad": (3,),
+                     "zmp_base": (3,), "wrenches": (len(FORCE_SENSOR_NAMES), 6)}
+_REFERENCE_FIELDS = frozenset((*_REFERENCE_SHAPES, "gait"))
+
+
+_EYE_PER_SENSOR = np.tile(np.eye(3), (len(FORCE_SENSOR_NAMES), 1, 1))
 
 
 @dataclass(slots=True)
@@ -76,7 +106,7 @@ class Estimate:
     wrenches_ext_world: np.ndarray = field(default_factory=lambda: np.zeros((len(FORCE_SENSOR_NAMES), 6)))
     # Measured kinematics (encoders + KF attitude), world-aligned axes with the origin at BODY [m]:
     sensor_pos_from_base: np.ndarray = field(default_factory=lambda: np.zeros((len(FORCE_SENSOR_NAMES), 3)))
-    sensor_R_world: np.ndarray = field(default_factory=lambda: np.tile(np.eye(3), (len(FORCE_SENSOR_NAMES), 1, 1)))
+    sensor_R_world: np.ndarray = field(default_factory=lambda: _EYE_PER_SENSOR.copy())
     com_from_base: np.ndarray = field(default_factory=lambda: np.zeros(3))
     # Stabilizer: actual COG, its velocity and the ZMP in the world frame (None when it did not run)
     cog_world: np.ndarray | None = None
