@@ -201,17 +201,27 @@ def experiment(argv: Sequence[str]) -> int:
                                 description="Run an emergency-stop experiment of [MLC] IV-C in simulation.")
     p.add_argument("name", choices=sorted(EXPERIMENTS), help="the experiment")
     p.add_argument("--no-es", action="store_true", help="without the EmergencyStopper (the paper's case a)")
+    p.add_argument("--variant", default=None,
+                   help="the experiment's variant (e.g. the disturbance); default: its first: "
+                        + "; ".join(f"{n}: {', '.join(e.variants)}" for n, e in sorted(EXPERIMENTS.items())))
     p.add_argument("--out", type=Path, default=Path("out/experiments"),
                    help="where the CSV and the Fig. 10-like PNG go (default: out/experiments)")
     args = p.parse_args(argv)
-    r = run_experiment(args.name, es=not args.no_es, out_dir=args.out)
-    print(f"experiment: {r.name} ({'with' if r.es else 'without'} EmergencyStopper), {r.duration_s:.2f} s simulated")
+    variants = EXPERIMENTS[args.name].variants
+    if args.variant is not None and args.variant not in variants:
+        p.error(f"argument --variant: {args.variant!r} is not a variant of {args.name}; "
+                f"choose from {', '.join(variants)}")
+    r = run_experiment(args.name, es=not args.no_es, out_dir=args.out, variant=args.variant)
+    print(f"experiment: {r.name} [{r.variant}] ({'with' if r.es else 'without'} EmergencyStopper), "
+          f"{r.duration_s:.2f} s simulated")
     print(f"csv: {r.csv_path}\npng: {r.png_path}")
     if r.cp_error_at_flag_m is not None:
         print(f"CP error at the flag: {r.cp_error_at_flag_m * 1e3:.1f} mm, "
               f"CP {r.edge_margin_at_flag_m * 1e3:.1f} mm inside the support polygon")
     if r.below_threshold_after_revert_s is not None:
         print(f"error below the threshold {r.below_threshold_after_revert_s:.2f} s after the revert ended")
+    for key, value in r.outcome.items():
+        print(f"{key}: {value:.4g}")
     print(r.verdict_line())
     return 0
 

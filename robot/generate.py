@@ -488,8 +488,10 @@ def mjcf_scene(params: dict) -> str:
 #     at about x = 0.35 m.
 #   REACH_LEFT_DEG: left arm raised sideways, elbow straight; larm_end at y = 0.943 m, the foremost
 #     geom (fixed jaw) at y = 0.975 m.
-# Walls are placed 0.10 m beyond the foremost hand geom, so the 0.25 m pushes of [ES Fig. 9] make contact
-# after about 0.1 m. tests/robot/test_model_files.py checks these numbers against the model.
+# [ES] gives no wall distance. The front wall is 0.05 m beyond the foremost hand geom (contact after 0.05 m of
+# the 0.25 m push, 0.20 m pressed into the wall): at 0.10 m the robot ended tilted back on its heels, propped
+# by its hands, with the COG 2 cm inside the heel edge, and did not fall as the paper's robot did. The left
+# wall is 0.10 m beyond the raised left hand. tests/robot/test_model_files.py checks these numbers.
 
 REACH_FORWARD_DEG = {
     "RARM_JOINT0": 42.0, "RARM_JOINT1": -10.0, "RARM_JOINT2": -18.6, "RARM_JOINT3": -122.1, "RARM_JOINT4": -19.8,
@@ -498,13 +500,14 @@ REACH_FORWARD_DEG = {
     "LARM_JOINT5": -6.5,
 }
 REACH_LEFT_DEG = {"LARM_JOINT1": 90.0, "LARM_JOINT3": 0.0}
-REACH_CLEARANCE_M = 0.10
+FRONT_REACH_CLEARANCE_M = 0.05
+LEFT_REACH_CLEARANCE_M = 0.10
 
 WALL_FRICTION = (0.8, 0.005, 0.0001)
 WALL_THICKNESS_M = 0.1
 WALL_HEIGHT_M = 1.8
-#: Front wall face [m] (0.754 + 0.10, rounded) and its y span; left wall face [m] (0.975 + 0.10) and x span.
-FRONT_WALL_X_M = 0.45
+#: Front wall face [m] (0.35 + 0.05) and its y span; left wall face [m] (0.975 + 0.10) and x span.
+FRONT_WALL_X_M = 0.40
 FRONT_WALL_Y_M = (-1.0, 1.0)
 LEFT_WALL_Y_M = 1.075
 LEFT_WALL_X_M = (-1.0, FRONT_WALL_X_M)

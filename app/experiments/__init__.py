@@ -1,0 +1,109 @@
+"""The emergency-stop experiments of [MLC] IV-C, each one command: `hrp2-console experiment NAME [--no-es]`.
+
+Each runs in a fresh simulation as fast as possible, writes a CSV and a PNG shaped like Fig. 10 (CP
+error, threshold, distance to the support-polygon edge, flag) and ends with a verdict line. The motion
+scripts are one module per scene (`wall.py`, ...); this module runs them and measures the outcome.
+"""
+
+from __future__ import annotations
+
+import csv
+import math
+from pathlib import Path
+
+import numpy as np
+
+from app.experiments import wall
+from app.experiments.common import Experiment, ExperimentResult
+from app.experiments.fig10 import plot_fig10
+from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, distance_to_polygon_edge, support_polygon
+from controller.system import ControllerSystem
+from robot.plant import MujocoPlant
+
+__all__ = ["EXPERIMENTS", "Experiment", "ExperimentResult", "run_experiment"]
+
+#: Experiments by name (the CLI and the HTTP API list these).
+EXPERIMENTS: dict[str, Experiment] = {**wall.EXPERIMENTS}
+
+CSV_COLUMNS = ("time_s", "cp_error_x_m", "cp_error_y_m", "cp_error_m", "threshold_m", "cp_to_support_edge_m",
+               "flag", "motion_stopped", "fallen")
+
+
+def _edge_distance(snap) -> float:
+    """Signed distance [m] of the actual capture point to the edge of the planned support polygon."""
+    gait = snap.reference.gait
+    feet = [((p[0], p[1], math.atan2(R[1, 0], R[0, 0])), rect) for (p, R, rect) in (
+        (gait.p_rsole_world, gait.R_rsole_world, HRP2_RIGHT_SOLE),
+        (gait.p_lsole_world, gait.R_lsole_world, HRP2_LEFT_SOLE))]
+    return float(distance_to_polygon_edge(np.asarray(snap.layers["st"]["cp_act"]), support_polygon(feet)))
+
+
+def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, settle_s: float = 2.5,
+                   plot: bool = True, variant: str | None = None) -> ExperimentResult:
+    """Run experiment `name` (variant `variant`, default its first) with or without the EmergencyStopper."""
+    if name not in EXPERIMENTS:
+        raise ValueError(f"unknown experiment {name!r}; available: {', '.join(EXPERIMENTS)}")
+    exp = EXPERIMENTS[name]
+    variant = exp.variants[0] if variant is None else variant
+    if variant not in exp.variants:
+        raise ValueError(f"unknown variant {variant!r} of {name}; available: {', '.join(exp.variants)}")
+    system = ControllerSystem(MujocoPlant(exp.scene))
+    loop = system.loop
+    if not es:
+        loop.chain["es"].enabled = False
+    loop.run_for(settle_s)  # AutoBalancer and Stabilizer blended in
+    for limb in exp.impedance:
+        loop.call(lambda limb=limb: loop.chain["ic"].start(limb))
+    t0 = loop.snapshot.time_s
+    events = sorted(exp.script(system, variant), key=lambda e: e[0])
+    rows = []
+    flag_time = None
+    fell_at = None
+    t2 = loop.chain["es"].params.t2_s
+    while loop.snapshot.time_s - t0 < exp.duration_s:
+        t_rel = loop.snapshot.time_s - t0
+        while events and events[0][0] <= t_rel + 1e-9:
+            loop.call(events.pop(0)[1])
+        snap = loop.step()
+        st = snap.layers["st"]
+        es_st = snap.layers["es"]
+        if es_st.get("stopped") and flag_time is None and es_st.get("flag_time") is not None:
+            flag_time = es_st["flag_time"] - t0
+        if not es and st["emergency"] and flag_time is None:
+            flag_time = snap.time_s - t0
+        rows.append([snap.time_s - t0, *st["cp_error"], st["cp_error_norm"], st["threshold"], _edge_distance(snap),
+                     float(st["emergency"]), float(bool(es_st.get("stopped"))), float(snap.fallen)])
+        if snap.fallen:
+            fell_at = snap.time_s - t0
+            break
+    outcome = exp.outcome(system) if exp.outcome is not None else {}
+    data = np.array(rows)
+    t = data[:, 0]
+    err = data[:, 3]
+    threshold = float(data[0, 4])
+    at_flag = edge_at_flag = recovered = None
+    if flag_time is not None:
+        k = min(int(np.searchsorted(t, flag_time)), len(t) - 1)
+        at_flag, edge_at_flag = float(err[k]), float(data[k, 5])
+        after = np.flatnonzero((t >= flag_time + t2) & (err < threshold))
+        if after.size:
+            recovered = float(t[after[0]] - (flag_time + t2))
+    label = name if variant == exp.variants[0] else f"{name}-{variant}"
+    result_name = f"{label}{'' if es else '-no-es'}"
+    csv_path = png_path = None
+    if out_dir is not None:
+        out_dir.mkdir(parents=True, exist_ok=True)
+        csv_path = out_dir / f"{result_name}.csv"
+        with open(csv_path, "w", newline="") as fh:
+            w = csv.writer(fh, lineterminator="\n")
+            w.writerow(CSV_COLUMNS)
+            w.writerows([[f"{v:.6g}" for v in r] for r in rows])
+        if plot:
+            png_path = out_dir / f"{result_name}.png"
+            plot_fig10(data, flag_time, f"{label} ({'with' if es else 'without'} EmergencyStopper)", png_path)
+    return ExperimentResult(
+        name=name, variant=variant, es=es, verdict="fell" if fell_at is not None else "stood",
+        flag_time_s=flag_time, peak_cp_error_m=float(err.max()), cp_error_at_flag_m=at_flag,
+        edge_margin_at_flag_m=edge_at_flag, min_edge_margin_m=float(data[:, 5].min()),
+        below_threshold_after_revert_s=recovered, duration_s=float(t[-1]), outcome=outcome,
+        csv_path=None if csv_path is None else str(csv_path), png_path=None if png_path is None else str(png_path))
