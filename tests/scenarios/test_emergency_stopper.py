@@ -26,6 +26,29 @@ def test_stop_motion_during_a_10s_motion_holds_the_command_then_release_reaches_
     assert not snap.fallen
 
 
+def test_stop_motion_during_a_10s_wrench_command_holds_the_wrenches_then_release_reaches_them():
+    # hrpsys-notes 3.1 demoEmergencyStopWrench: setWrenches([1]*24, 10), stopMotion, 3 s frozen, release
+    system = make_system(auto_balancer=False)
+    loop = system.loop
+    es = system.chain["es"]
+    target = np.ones(24)
+    seq_call(system, "set_wrenches", target, 10.0)
+    loop.run_for(4.0)
+    moving = loop.snapshot.reference.wrenches.ravel().copy()
+    assert 0.05 < moving.min() and moving.max() < 0.95  # on its way
+    loop.call(lambda: es.stop_motion())
+    loop.run_for(es.params.t2_s + 0.1)  # the revert is over
+    held = loop.snapshot.reference.wrenches.ravel().copy()
+    assert np.all(held < moving)  # reverted towards the plan of T1 earlier
+    wrenches = np.array([loop.step().reference.wrenches.ravel() for _ in range(600)])  # 3 s
+    assert np.max(np.abs(wrenches - held)) < 1e-9
+    loop.call(lambda: es.release_motion())
+    loop.run_until(lambda s: not s.layers["es"]["recovering"] and not s.layers["seq"]["interpolating"], 10.0)
+    snap = loop.run_for(1.0)
+    assert np.allclose(snap.reference.wrenches.ravel(), target, atol=1e-7)
+    assert not snap.fallen
+
+
 def test_with_the_planned_motion_stopped_a_push_is_still_absorbed_by_the_stabilizer():
     system = make_system()
     loop = system.loop
