@@ -9,7 +9,9 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -39,8 +41,12 @@ def _edge_distance(snap) -> float:
 
 
 def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, settle_s: float = 2.5,
-                   plot: bool = True, variant: str | None = None) -> ExperimentResult:
-    """Run experiment `name` (variant `variant`, default its first) with or without the EmergencyStopper."""
+                   plot: bool = True, variant: str | None = None,
+                   params: Mapping[str, Mapping[str, Any]] | None = None) -> ExperimentResult:
+    """Run experiment `name` (variant `variant`, default its first) with or without the EmergencyStopper.
+
+    `params` changes layer parameters before the start, e.g. {"es": {"t1_s": 0.5}, "st": {"cp_threshold_m": 0.03}}.
+    """
     if name not in EXPERIMENTS:
         raise ValueError(f"unknown experiment {name!r}; available: {', '.join(EXPERIMENTS)}")
     exp = EXPERIMENTS[name]
@@ -49,6 +55,9 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         raise ValueError(f"unknown variant {variant!r} of {name}; available: {', '.join(exp.variants)}")
     system = ControllerSystem(MujocoPlant(exp.scene))
     loop = system.loop
+    for layer_name, changes in (params or {}).items():
+        layer = loop.chain[layer_name]
+        layer.set_params(layer.params.replaced(**changes))
     if not es:
         loop.chain["es"].enabled = False
     loop.run_for(settle_s)  # AutoBalancer and Stabilizer blended in
