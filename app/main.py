@@ -10,7 +10,7 @@ from fastapi.responses import FileResponse
 from fastapi.staticfiles import StaticFiles
 
 from app.errors import install_error_handlers
-from app.routers import chain, emergency, layers, sequence, sim, state, walk
+from app.routers import chain, emergency, experiments, impedance, layers, sequence, sim, state, walk
 from app.runtime import Runtime
 from app.settings import Settings
 
@@ -39,14 +39,16 @@ def create_app(settings: Settings | None = None, runtime: Runtime | None = None)
             app.state.runtime = None
 
     app = FastAPI(title="HRP-2 operator console", version="0.1.0", lifespan=lifespan,
-                  description="Operator API of the simulated HRP-2 No.10: state, e-stop, sequence "
-                              "player, simulation controls. Units: m, s, deg, N.")
+                  description="Operator API of the simulated HRP-2 No.10: state, e-stop, motion stop, "
+                              "sequence player, walking, layer parameters, impedance, experiments, "
+                              "simulation controls. Units: m, s, deg, N.")
     app.state.settings = settings or Settings()
     app.state.runtime = runtime
     install_error_handlers(app)
-    for module in (state, emergency, sequence, sim, chain, layers, walk):
+    for module in (state, emergency, sequence, sim, chain, layers, walk, impedance, experiments):
         app.include_router(module.router)
     app.include_router(emergency.motion_router)
+    app.include_router(emergency.params_router)
 
     @app.get("/", include_in_schema=False)
     def index() -> FileResponse:

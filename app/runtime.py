@@ -53,6 +53,24 @@ def capture_point_state(st: dict[str, Any]) -> dict[str, Any]:
             "threshold": float(st.get("threshold", 0.0))}
 
 
+def emergency_state(loop_emergency: dict[str, Any], fault: str | None, es: dict[str, Any], abc: dict[str, Any],
+                    st: dict[str, Any]) -> dict[str, Any]:
+    """The `emergency` block of /api/state from the layers' status: the hard e-stop and the fault; the
+    Stabilizer's capture-point flag and when it last rose (simulated time [s]); the EmergencyStopper's
+    motion stop (why, since when); the AutoBalancer's emergency walking stop; the Stabilizer stopped by the
+    operator. A layer that is absent counts as not stopped."""
+    flag_rose_at = _opt_float(st.get("flag_rise_time"))
+    return {"hard_stop": bool(loop_emergency.get("hard_stop", False)), "fault": fault,
+            "flag": bool(st.get("emergency", False)),
+            "flag_rise_time": flag_rose_at,  # older name of flag_rose_at
+            "flag_rose_at": flag_rose_at,
+            "motion_stop": bool(es.get("stopped", False)),
+            "motion_stop_reason": es.get("reason"),
+            "motion_stop_time": _opt_float(es.get("flag_time")),
+            "walking_stop": bool(abc.get("walking_stop", False)),
+            "stabilizer_stop": bool(st) and not st.get("active", True)}
+
+
 def _deg(a) -> list[float]:
     return [round(float(v), 4) for v in np.rad2deg(np.asarray(a, dtype=float))]
 
@@ -156,6 +174,7 @@ class Runtime:
                   for i, n in enumerate(JOINT_NAMES)}
         abc = snap.layers.get("abc") or {}
         st = snap.layers.get("st") or {}
+        es = snap.layers.get("es") or {}
         return jsonable({
             "time": round(float(snap.time_s), 6),
             "tick": int(snap.tick),
@@ -169,12 +188,7 @@ class Runtime:
             "walking": bool(abc.get("walking", False)),
             "support": str(abc.get("support", "both")),
             "capture_point": capture_point_state(st),
-            "emergency": {"hard_stop": bool(snap.emergency.get("hard_stop", False)), "fault": snap.fault,
-                          "flag": bool(st.get("emergency", False)),
-                          "flag_rise_time": _opt_float(st.get("flag_rise_time")),
-                          "motion_stop": bool(snap.layers.get("es", {}).get("stopped", False)),
-                          "motion_stop_reason": snap.layers.get("es", {}).get("reason"),
-                          "motion_stop_time": _opt_float(snap.layers.get("es", {}).get("flag_time"))},
+            "emergency": emergency_state(snap.emergency, snap.fault, es, abc, st),
             "layers": snap.layers,
             "chain": self.loop.chain.describe(),
             "speed": self.speed,

@@ -133,3 +133,46 @@ class ConsoleConfig(BaseModel):
 
 
 StateDict = dict[str, Any]
+
+
+class ExperimentRequest(_Body):
+    es: bool = Field(default=True, description="run with the EmergencyStopper (false: without, as in [MLC] Fig. 8a)")
+    variant: str | None = Field(default=None, description="variant of the experiment (GET /api/experiments); "
+                                                          "default: its first")
+    save: bool = Field(default=False, description="also write the CSV and the Fig. 10-style PNG into a new "
+                                                  "temporary directory (paths in the response)")
+
+
+class ExperimentInfo(BaseModel):
+    name: str
+    description: str
+    scene: str
+    duration_s: float = Field(description="simulated duration of the scripted part [s] (after settling)")
+    variants: list[str] = Field(description="the first is the default")
+    impedance: list[str] = Field(description="hands whose ImpedanceController runs during the experiment")
+
+
+class ExperimentList(BaseModel):
+    experiments: list[ExperimentInfo]
+
+
+class ExperimentResponse(BaseModel):
+    name: str
+    variant: str
+    es: bool = Field(description="whether the EmergencyStopper was enabled")
+    verdict: Literal["stood", "fell"]
+    flag_time_s: float | None = Field(description="when the capture-point flag stopped the motion [s] after the "
+                                                  "start of the script; null: never")
+    peak_cp_error_m: float = Field(description="largest |CP_ref - CP_act| [m]")
+    cp_error_at_flag_m: float | None = Field(description="|CP error| [m] when the flag rose")
+    edge_margin_at_flag_m: float | None = Field(description="distance [m] of the actual CP to the support "
+                                                            "polygon edge when the flag rose")
+    min_edge_margin_m: float | None = Field(description="smallest distance [m] of the actual CP to the support "
+                                                        "edge (negative: outside)")
+    below_threshold_after_revert_s: float | None = Field(
+        description="time [s] from the end of the revert (flag + T2) until the CP error is below the threshold")
+    duration_s: float = Field(description="simulated time run [s] (shorter than planned when the robot fell)")
+    outcome: dict[str, float | None] = Field(description="task measures of the experiment (valve angle, ...)")
+    csv_path: str | None = None
+    png_path: str | None = None
+    wall_time_s: float = Field(description="wall-clock time the run took [s]")

@@ -73,6 +73,7 @@ class AutoBalancer(Layer):
         self.has_ik_failed = False
         self.last_gait: GaitState | None = None
         self._footsteps_cache: tuple[list, int, list[dict]] | None = None
+        self.walking_stop = False  # emergency walking stop requested and the robot still stepping
         if active:
             self.start()
 
@@ -113,6 +114,7 @@ class AutoBalancer(Layer):
     def emergency_stop_walking(self) -> None:
         """Remaining footsteps replaced so the robot stops in place (manipulation is left alone)."""
         self.gait.emergency_stop()
+        self.walking_stop = self.gait.walking
 
     def set_footsteps(self, footsteps: list[tuple], step_params: list[StepParams | None] | None = None) -> int:
         """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
@@ -185,8 +187,11 @@ class AutoBalancer(Layer):
 
     def status(self) -> dict:
         g = self.last_gait
+        if self.walking_stop and not self.gait.walking:
+            self.walking_stop = False  # stopped in place: the emergency walking stop is over
         return {"enabled": self.enabled, "active": self.active, "weight": round(self._weight, 4),
                 "walking": bool(g.walking) if g else False, "support": g.support if g else "both",
+                "walking_stop": self.walking_stop,
                 "has_ik_failed": self.has_ik_failed,
                 "footsteps": self._status_footsteps() if self.gait.walking else []}
 

@@ -1,0 +1,110 @@
+"""The experiments over HTTP: the list, errors for unknown names and variants, one real run in a fresh
+simulation while the live control loop keeps running."""
+
+import math
+import time
+from pathlib import Path
+
+import pytest
+
+from app import experiments
+from app.routers import experiments as experiments_router
+
+RESULT_FIELDS = {"verdict", "flag_time_s", "peak_cp_error_m", "cp_error_at_flag_m", "edge_margin_at_flag_m",
+                 "min_edge_margin_m", "below_threshold_after_revert_s", "duration_s", "outcome"}
+
+
+def test_the_list_gives_every_registered_experiment_with_description_and_variants(client):
+    r = client.get("/api/experiments")
+    assert r.status_code == 200, r.text
+    listed = {e["name"]: e for e in r.json()["experiments"]}
+    assert list(listed) == list(experiments.EXPERIMENTS)
+    for name, exp in experiments.EXPERIMENTS.items():
+        e = listed[name]
+        assert e["variants"] == list(exp.variants) and e["scene"] == exp.scene
+        assert e["description"] and e["duration_s"] == exp.duration_s
+
+
+def test_the_list_follows_the_registry(client, monkeypatch):
+    name, exp = next(iter(experiments.EXPERIMENTS.items()))
+    monkeypatch.setitem(experiments.EXPERIMENTS, "api-test-extra", exp)
+    names = [e["name"] for e in client.get("/api/experiments").json()["experiments"]]
+    assert "api-test-extra" in names and name in names
+
+
+def test_an_unknown_experiment_is_a_404_listing_the_valid_names(client):
+    r = client.post("/api/experiments/no-such-experiment")
+    assert r.status_code == 404
+    detail = r.json()["detail"]
+    assert "no-such-experiment" in detail and all(n in detail for n in experiments.EXPERIMENTS)
+
+
+def test_an_unknown_variant_is_a_422_listing_the_valid_ones(client):
+    name, exp = next(iter(experiments.EXPERIMENTS.items()))
+    r = client.post(f"/api/experiments/{name}", json={"variant": "no-such-variant"})
+    assert r.status_code == 422
+    body = r.json()
+    assert body["field"] == "variant"
+    assert "no-such-variant" in body["detail"] and all(v in body["detail"] for v in exp.variants)
+
+
+@pytest.mark.parametrize(("body", "word"), [({"es": "maybe"}, "es"), ({"bogus": 1}, "bogus"),
+                                            ({"variant": 3}, "variant")])
+def test_a_bad_body_is_a_422_naming_the_field(client, body, word):
+    name = next(iter(experiments.EXPERIMENTS))
+    r = client.post(f"/api/experiments/{name}", json=body)
+    assert r.status_code == 422 and word in r.json()["detail"], r.text
+
+
+def test_a_second_run_while_one_runs_is_a_conflict(client):
+    name = next(iter(experiments.EXPERIMENTS))
+    assert experiments_router._running.acquire(blocking=False)
+    try:
+        r = client.post(f"/api/experiments/{name}")
+        assert r.status_code == 409 and "running" in r.json()["detail"]
+    finally:
+        experiments_router._running.release()
+
+
+def test_the_experiment_endpoints_are_documented(client):
+    paths = client.get("/openapi.json").json()["paths"]
+    assert "get" in paths["/api/experiments"] and "post" in paths["/api/experiments/{name}"]
+
+
+@pytest.mark.slow
+def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(client, runtime, tmp_path):
+    # the shortest registered experiment, whichever that is now
+    name, exp = min(experiments.EXPERIMENTS.items(), key=lambda kv: kv[1].duration_s)
+    runtime.loop.start(1.0)  # the live simulation, in real time
+    time.sleep(0.3)
+    scene, tick0, wall0 = runtime.scene, runtime.loop.snapshot.tick, time.perf_counter()
+    r = client.post(f"/api/experiments/{name}", json={"save": True})
+    wall = time.perf_counter() - wall0
+    assert r.status_code == 200, r.text
+    body = r.json()
+    assert RESULT_FIELDS <= set(body)
+    assert body["name"] == name and body["variant"] == exp.variants[0] and body["es"] is True
+    assert body["verdict"] in ("stood", "fell")
+    assert 0.0 < body["duration_s"] <= exp.duration_s + 0.01
+    if body["verdict"] == "stood":
+        assert body["duration_s"] == pytest.approx(exp.duration_s, abs=0.02)
+    assert body["peak_cp_error_m"] > 0.0 and math.isfinite(body["min_edge_margin_m"])
+    if body["flag_time_s"] is not None:
+        assert 0.0 <= body["flag_time_s"] <= body["duration_s"]
+        assert body["cp_error_at_flag_m"] > 0.0 and isinstance(body["edge_margin_at_flag_m"], float)
+    else:
+        assert body["cp_error_at_flag_m"] is None and body["edge_margin_at_flag_m"] is None
+    assert isinstance(body["outcome"], dict)
+    for key in ("csv_path", "png_path"):
+        path = Path(body[key])
+        assert path.is_file() and path.stat().st_size > 0
+    # the live simulation was neither used nor stalled: same scene, still ticking, still standing
+    ticks = runtime.loop.snapshot.tick - tick0
+    assert runtime.scene == scene and runtime.running
+    assert ticks > 0.2 * wall / runtime.loop.dt_control_s, f"{ticks} live ticks in {wall:.1f} s"
+    assert not runtime.loop.snapshot.fallen
+    print(f"\n{name}: {body['verdict']}, {body['wall_time_s']:.1f} s for the run; "
+          f"live loop {ticks} ticks in {wall:.1f} s ({ticks * runtime.loop.dt_control_s / wall:.2f} x real time)")
+    for key in ("csv_path", "png_path"):
+        Path(body[key]).unlink()
+    Path(body["csv_path"]).parent.rmdir()
