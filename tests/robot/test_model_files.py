@@ -96,7 +96,7 @@ def test_wall_faces_are_where_documented():
     assert front.pos[0] - front.size[0] == pytest.approx(gen.FRONT_WALL_X_M) == pytest.approx(0.40)
     assert front.pos[1] - front.size[1] == pytest.approx(-1.0) and front.pos[1] + front.size[1] == pytest.approx(1.0)
     assert front.pos[2] - front.size[2] == pytest.approx(0.0) and front.pos[2] + front.size[2] == pytest.approx(1.8)
-    assert left.pos[1] - left.size[1] == pytest.approx(gen.LEFT_WALL_Y_M) == pytest.approx(1.075)
+    assert left.pos[1] - left.size[1] == pytest.approx(gen.LEFT_WALL_Y_M) == pytest.approx(0.825)
     assert front.friction[0] == pytest.approx(0.8) and left.friction[0] == pytest.approx(0.8)
     assert m.body_jntnum[front.bodyid[0]] == 0 and m.body_jntnum[left.bodyid[0]] == 0  # static
 

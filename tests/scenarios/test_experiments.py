@@ -1,4 +1,4 @@
-"""[MLC] IV-C wall-push-forward (Fig. 8-10): the capture-point flag stops and reverts the push."""
+"""[MLC] IV-C wall-push-forward and wall-push-left (Fig. 8-10): the capture-point flag stops and reverts the push."""
 
 import pytest
 
@@ -24,7 +24,24 @@ def test_wall_push_forward_without_it_drives_the_capture_point_out_of_the_suppor
     assert r.verdict == "fell"
 
 
+@pytest.mark.slow
+def test_wall_push_left_with_the_emergency_stopper_flags_inside_the_support_and_recovers(tmp_path):
+    r = run_experiment("wall-push-left", es=True, out_dir=tmp_path, plot=False)
+    assert r.verdict == "stood"
+    assert r.flag_time_s is not None and 3.0 < r.flag_time_s < 5.0  # during the 2 s push that starts at 3 s
+    assert r.edge_margin_at_flag_m > 0.0  # the actual CP was still inside the support polygon
+    assert r.below_threshold_after_revert_s is not None and r.below_threshold_after_revert_s < 2.0
+
+
+@pytest.mark.slow
+def test_wall_push_left_without_it_leaves_the_robot_leaning_on_the_wall(tmp_path):
+    r = run_experiment("wall-push-left", es=False, out_dir=tmp_path, plot=False)
+    # the stretched arm keeps pushing: the capture point is pushed away from the wall and stays there
+    assert r.peak_cp_error_m > 0.06
+    assert r.below_threshold_after_revert_s is None  # never back below the threshold
+
+
 def test_unknown_experiment_lists_the_available_ones():
     with pytest.raises(ValueError, match="wall-push-forward"):
         run_experiment("moon-walk")
-    assert "wall-push-forward" in EXPERIMENTS
+    assert "wall-push-forward" in EXPERIMENTS and "wall-push-left" in EXPERIMENTS
