@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from app.runtime import Runtime
+from controller.chain import CHAIN_ORDER
 from controller.loop import ControlLoop
 from robot.names import JOINT_NAMES
 
@@ -28,6 +29,7 @@ class Scenario:
     description: str
     setup: Callable[[ControlLoop], None]
     warmup_s: float = 0.0
+    needs: tuple[str, ...] = ()  # layers the scenario commands
 
 
 def _stand(loop: ControlLoop) -> None:
@@ -51,9 +53,33 @@ def _walk(loop: ControlLoop) -> None:
 #: Benchmark scenarios by name.
 SCENARIOS: dict[str, Scenario] = {
     "stand": Scenario("hold half-sitting", _stand),
-    "arms": Scenario("arms forward and back with setJointAngles (SequencePlayer interpolating)", _arms),
-    "walk": Scenario("goVelocity(0.1 m/s, 0, 0) after 2.5 s of standing (not timed)", _walk, warmup_s=2.5),
+    "arms": Scenario("arms forward and back with setJointAngles (SequencePlayer interpolating)", _arms,
+                     needs=("seq",)),
+    "walk": Scenario("goVelocity(0.1 m/s, 0, 0) after 2.5 s of standing (not timed)", _walk, warmup_s=2.5,
+                     needs=("abc",)),
 }
+
+
+#: Named layer selections for `run_bench(layers=...)`: the foundation chain of issue 2 (estimation, the
+#: planned stream and the safety layers; es, ic, abc and st pass their input through).
+CHAINS: dict[str, tuple[str, ...]] = {
+    "full": CHAIN_ORDER,
+    "foundation": ("kf", "rmfo", "seq", "co", "hes", "el"),
+}
+
+
+def layer_selection(layers: str | Sequence[str]) -> tuple[str, ...]:
+    """A chain name of CHAINS or layer names (a sequence or "kf,rmfo,..."), checked against CHAIN_ORDER."""
+    if isinstance(layers, str):
+        if layers in CHAINS:
+            return CHAINS[layers]
+        layers = [name.strip() for name in layers.split(",") if name.strip()]
+    names = tuple(layers)
+    unknown = [name for name in names if name not in CHAIN_ORDER]
+    if unknown or not names:
+        raise ValueError(f"unknown layer(s) {unknown}; valid layers: {', '.join(CHAIN_ORDER)} "
+                         f"(or a chain: {', '.join(CHAINS)})")
+    return names
 
 
 def _clear_timers(loop: ControlLoop) -> None:
@@ -68,42 +94,83 @@ def _percentiles(samples: np.ndarray) -> dict[str, float]:
             "p99_ms": round(float(np.percentile(samples, 99)), 5)}
 
 
-def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "default") -> dict[str, Any]:
-    """Run `scenario` for `duration_s` of simulated time, synchronously, and return the timing report."""
+def _summed(samples: dict[str, np.ndarray], names: Sequence[str], n: int) -> np.ndarray:
+    total = np.zeros(n)
+    for name in names:
+        total += samples[name]
+    return total
+
+
+def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "default",
+              layers: str | Sequence[str] | None = None) -> dict[str, Any]:
+    """Run `scenario` for `duration_s` of simulated time, synchronously, and return the timing report.
+
+    `layers` (a chain name of CHAINS or layer names) keeps only those layers working: the others are
+    disabled (`enabled = False`, they pass their input through). The report then also gives the whole
+    step's wall time less physics (`step_ms`: chain, snapshot, state estimation, logging), the loop's
+    own share of it (`loop_overhead_ms`: step minus the sum of all layer timers), and the pass-through
+    layers' timers."""
     if scenario not in SCENARIOS:
         raise ValueError(f"unknown scenario {scenario!r}; valid scenarios: {', '.join(SCENARIOS)}")
+    spec = SCENARIOS[scenario]
+    selected = None if layers is None else layer_selection(layers)
+    if selected is not None and not set(spec.needs) <= set(selected):
+        raise ValueError(f"scenario {scenario!r} needs the layer(s) {', '.join(spec.needs)}")
     runtime = Runtime(scene=scene, speed=None)
     loop = runtime.loop
-    spec = SCENARIOS[scenario]
+    passthrough = []
+    if selected is not None:
+        passthrough = [name for name in loop.chain.order() if name not in selected]
+        for name in passthrough:
+            loop.chain[name].enabled = False
     if spec.warmup_s > 0.0:
         loop.run_for(spec.warmup_s)  # not part of the report
-        _clear_timers(loop)
     spec.setup(loop)
     n = max(1, int(round(duration_s / loop.dt_control_s)))
+    names = loop.chain.order()
+    step_ms = np.empty(n)
     tick_ms = np.empty(n)
     physics_ms = np.empty(n)
-    layer_ms = {name: np.empty(n) for name in loop.chain.order()}
-    t0 = time.perf_counter()
-    for i in range(n):
-        loop.step()
-        tick_ms[i] = loop.tick_timer.last_ms - loop.physics_timer.last_ms  # the controller's share
-        physics_ms[i] = loop.physics_timer.last_ms
-        for name, timer in loop.chain.timers.items():
-            layer_ms[name][i] = timer.last_ms
-    wall_s = time.perf_counter() - t0
+    layer_ms = {name: np.empty(n) for name in names}
+    timers = [loop.tick_timer, loop.physics_timer, *(loop.chain.timers[name] for name in names)]
+    outputs = [tick_ms, physics_ms, *(layer_ms[name] for name in names)]
+    chunk = min(t.capacity for t in timers)  # ticks the timers' ring buffers hold
+    clock = time.perf_counter
+    step = loop.step
+    wall_s = 0.0
+    for first in range(0, n, chunk):  # the timers keep the samples: nothing copied between ticks
+        last = min(n, first + chunk)
+        _clear_timers(loop)
+        t0 = clock()
+        for i in range(first, last):
+            t_step = clock()
+            step()
+            step_ms[i] = (clock() - t_step) * 1e3
+        wall_s += clock() - t0
+        for timer, out in zip(timers, outputs, strict=True):
+            out[first:last] = timer.samples()
+    tick_ms -= physics_ms  # the controller's share
+    step_ms -= physics_ms
     snap = loop.snapshot
     sim_s = n * loop.dt_control_s  # the timed part only (no warm-up)
-    return {
+    working = [name for name in names if name not in passthrough]
+    report = {
         "scenario": scenario,
         "scene": scene,
-        "chain": loop.chain.describe(),
+        "chain": " -> ".join(working),
         "ticks": n,
         "sim_time_s": round(sim_s, 6),
         "wall_time_s": round(wall_s, 4),
         "real_time_factor": round(sim_s / wall_s, 3) if wall_s > 0 else float("inf"),
         "tick_ms": _percentiles(tick_ms),
         "physics_ms": _percentiles(physics_ms),
-        "layers": {name: _percentiles(v) for name, v in layer_ms.items()},
+        "layers": {name: _percentiles(layer_ms[name]) for name in working},
         "fallen": bool(snap.fallen),
         "fault": snap.fault,
     }
+    if selected is not None:
+        report["passthrough"] = {name: _percentiles(layer_ms[name]) for name in passthrough}
+        report["step_ms"] = _percentiles(step_ms)
+        report["layers_sum_ms"] = _percentiles(_summed(layer_ms, working, n))
+        report["loop_overhead_ms"] = _percentiles(step_ms - _summed(layer_ms, names, n))
+    return report

@@ -78,7 +78,7 @@ def run_parser() -> argparse.ArgumentParser:
 
 
 def bench_parser() -> argparse.ArgumentParser:
-    from app.bench import SCENARIOS
+    from app.bench import CHAINS, SCENARIOS
 
     p = argparse.ArgumentParser(prog="hrp2-console bench",
                                 description="Run the chain synchronously as fast as possible (no servers) "
@@ -87,15 +87,35 @@ def bench_parser() -> argparse.ArgumentParser:
                    help="; ".join(f"{k}: {v.description}" for k, v in SCENARIOS.items()))
     p.add_argument("--duration", type=_positive_seconds, default=5.0, help="simulated seconds (default 5)")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
+    which = p.add_mutually_exclusive_group()
+    which.add_argument("--layers", type=_layers, default=None,
+                       help="only these layers work, comma-separated (e.g. kf,rmfo,seq,co,hes,el); the others "
+                            "pass their input through. The report adds step_ms, loop_overhead_ms, passthrough")
+    which.add_argument("--chain", choices=tuple(CHAINS), default=None,
+                       help="a named layer selection: " + "; ".join(f"{k}: {','.join(v)}" for k, v in CHAINS.items()))
     return p
+
+
+def _layers(text: str) -> tuple[str, ...]:
+    from app.bench import layer_selection
+
+    try:
+        return layer_selection(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 # ---- commands -------------------------------------------------------------------------------------
 def bench(argv: Sequence[str]) -> int:
     from app.bench import run_bench
 
-    args = bench_parser().parse_args(argv)
-    report = run_bench(args.scenario, args.duration, args.scene)
+    p = bench_parser()
+    args = p.parse_args(argv)
+    layers = args.layers if args.layers is not None else args.chain
+    try:
+        report = run_bench(args.scenario, args.duration, args.scene, layers=layers)
+    except ValueError as exc:  # a scenario that needs a layer left out
+        p.error(str(exc))
     print(json.dumps(report, indent=2))
     return 0
 

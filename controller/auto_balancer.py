@@ -141,6 +141,9 @@ class AutoBalancer(Layer):
 
     # ---- tick ------------------------------------------------------------------------------------
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        if not self.enabled:  # pass-through
+            self.last_gait = None
+            return ref
         if self._blend is not None:
             seg, elapsed = self._blend
             elapsed = min(elapsed + ctx.dt_s, seg.duration_s)

@@ -30,6 +30,11 @@ class TickTimer:
         self._n = 0
         self.last_ms = 0.0
 
+    @property
+    def capacity(self) -> int:
+        """How many of the last durations are kept."""
+        return self._buf.size
+
     def add(self, ms: float) -> None:
         self._buf[self._n % self._buf.size] = ms
         self._n += 1

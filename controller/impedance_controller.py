@@ -107,6 +107,8 @@ class ImpedanceController(Layer):
         lb.transition = (lb.weight, 0.0, 0.0)
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        if not self.enabled:
+            return ref
         if not any(lb.active or lb.weight > 0.0 for lb in self.limbs.values()):
             return ref
         q_out = np.array(ref.q_rad, dtype=float)

@@ -154,6 +154,9 @@ class Stabilizer(Layer):
         self._transition = None if s >= 1.0 else (w0, w1, elapsed)
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        if not self.enabled:  # pass-through (no estimate either: the loop's state estimator runs)
+            self.emergency = False
+            return ref
         p = self.params
         dt = ctx.dt_s
         est = ctx.estimate

@@ -74,3 +74,34 @@ def test_bench_walk_scenario_reports_the_walking_part():
                            "tick_ms", "physics_ms", "layers", "fallen", "fault"}
     assert report["fallen"] is False and report["fault"] is None
     assert list(report["layers"]) == report["chain"].split(" -> ")
+
+
+def test_bench_foundation_chain_reports_its_layers_and_the_loop_overhead():
+    r = run("bench", "--chain", "foundation", "--duration", "1")
+    assert r.returncode == 0, r.stdout + r.stderr
+    report = json.loads(r.stdout)
+    assert report["chain"] == "kf -> rmfo -> seq -> co -> hes -> el"
+    assert list(report["layers"]) == report["chain"].split(" -> ")
+    assert list(report["passthrough"]) == ["es", "ic", "abc", "st"]  # disabled: their input passes through
+    for key in ("tick_ms", "physics_ms", "step_ms", "layers_sum_ms", "loop_overhead_ms"):
+        assert set(report[key]) == {"p50_ms", "p99_ms"}
+        assert report[key]["p99_ms"] >= report[key]["p50_ms"]
+    assert report["step_ms"]["p50_ms"] > 0 and report["real_time_factor"] > 0
+    assert report["fallen"] is False and report["fault"] is None
+
+
+def test_bench_layers_option_takes_a_list_and_rejects_unknown_names():
+    r = run("bench", "--layers", "kf,rmfo,seq", "--duration", "0.2")
+    assert r.returncode == 0, r.stdout + r.stderr
+    report = json.loads(r.stdout)
+    assert report["chain"] == "kf -> rmfo -> seq"
+    assert "st" in report["passthrough"] and "el" in report["passthrough"]
+    r = run("bench", "--layers", "kf,warp")
+    assert r.returncode == 2
+    assert "--layers" in r.stderr and "warp" in r.stderr and "rmfo" in r.stderr
+
+
+def test_bench_scenario_needing_a_left_out_layer_fails_naming_it():
+    r = run("bench", "--scenario", "walk", "--chain", "foundation")
+    assert r.returncode == 2
+    assert "abc" in r.stderr

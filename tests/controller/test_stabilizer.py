@@ -55,6 +55,14 @@ def test_without_a_gait_reference_the_stabilizer_passes_the_reference_through():
     assert run_ticks(st, ref, 3) is ref
 
 
+def test_a_disabled_stabilizer_passes_a_gait_reference_through_and_raises_no_flag():
+    st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+    st.enabled = False
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_xy=(0.2, 0.0)))
+    assert run_ticks(st, ref, 3) is ref
+    assert st.emergency is False
+
+
 def test_a_reference_cog_behind_the_actual_one_moves_the_feedback_zmp_backward():
     # actual COG ~ above the ankles; reference 3 cm behind: u = zmp_ref + k1 (cog_ref - cog) with k1 < 0
     st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
