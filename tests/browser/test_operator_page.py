@@ -190,6 +190,49 @@ def test_the_joint_form_moves_the_commanded_angle(page, hrp2_console):
     wait_until(reached, 8.0, f"{JOINT} cmd_deg -> {TARGET_DEG}")
 
 
+def post_json(url: str, body: dict | None = None, timeout: float = 5.0) -> dict:
+    data = None if body is None else json.dumps(body).encode()
+    req = urllib.request.Request(url, data=data, method="POST", headers={"Content-Type": "application/json"})
+    with urllib.request.urlopen(req, timeout=timeout) as r:
+        return json.loads(r.read())
+
+
+def test_stop_motion_and_release_motion_next_to_the_estop(page, hrp2_console):
+    stop = page.get_by_role("button", name="Stop motion", exact=True)
+    release = page.get_by_role("button", name="Release motion", exact=True)
+    playwright_api.expect(stop).to_be_visible()
+    playwright_api.expect(release).to_be_visible()
+    estop_box, stop_box = page.locator("#estop").bounding_box(), stop.bounding_box()
+    assert stop_box["y"] - (estop_box["y"] + estop_box["height"]) < 100, "Stop motion is not next to the E-STOP"
+    playwright_api.expect(page.locator("#s-motion")).to_have_text("off")
+    playwright_api.expect(page.locator("#s-walkstop")).to_have_text("off")
+    playwright_api.expect(page.locator("#s-ststop")).to_have_text("running")
+    try:
+        stop.click()
+        wait_until(lambda: hrp2_console.state()["emergency"]["motion_stop"], 5.0, "motion_stop == true")
+        playwright_api.expect(page.locator("#s-motion")).to_contain_text("STOPPED (operator")
+        playwright_api.expect(page.locator("#s-motion")).to_have_class(re.compile(r"\balarm\b"))
+        assert not hrp2_console.state()["emergency"]["hard_stop"]  # balance keeps working
+        release.click()
+        wait_until(lambda: not hrp2_console.state()["emergency"]["motion_stop"], 5.0, "motion_stop == false")
+        playwright_api.expect(page.locator("#s-motion")).to_have_text("off")
+    finally:
+        if hrp2_console.state()["emergency"]["motion_stop"]:
+            post_json(f"{hrp2_console.base}/api/motion/release")
+
+
+def test_a_stopped_stabilizer_is_shown(page, hrp2_console):
+    post_json(f"{hrp2_console.base}/api/stabilizer/stop")
+    try:
+        wait_until(lambda: hrp2_console.state()["emergency"]["stabilizer_stop"], 5.0, "stabilizer_stop == true")
+        playwright_api.expect(page.locator("#s-ststop")).to_have_text("STOPPED")
+        playwright_api.expect(page.locator("#s-ststop")).to_have_class(re.compile(r"\balarm\b"))
+    finally:
+        post_json(f"{hrp2_console.base}/api/stabilizer/start")
+    wait_until(lambda: not hrp2_console.state()["emergency"]["stabilizer_stop"], 5.0, "stabilizer_stop == false")
+    playwright_api.expect(page.locator("#s-ststop")).to_have_text("running")
+
+
 def test_the_viser_view_loads_with_a_canvas(page, hrp2_console):
     iframe = page.locator("#view iframe")
     playwright_api.expect(iframe).to_have_attribute("src", re.compile(rf":{hrp2_console.viewer_port}/$"))
