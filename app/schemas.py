@@ -172,7 +172,7 @@ class ExperimentResponse(BaseModel):
     below_threshold_after_revert_s: float | None = Field(
         description="time [s] from the end of the revert (flag + T2) until the CP error is below the threshold")
     duration_s: float = Field(description="simulated time run [s] (shorter than planned when the robot fell)")
-    outcome: dict[str, float | None] = Field(description="task measures of the experiment (valve angle, ...)")
+    outcome: dict[str, Any] = Field(description="task measures of the experiment (valve angle, ...)")
     csv_path: str | None = None
     png_path: str | None = None
     wall_time_s: float = Field(description="wall-clock time the run took [s]")

@@ -151,9 +151,11 @@ def test_stabilizer_stop_shows_in_the_state_and_start_clears_it(client, runtime)
     assert emergency(client)["stabilizer_stop"] is False
 
 
-def test_emergency_walking_stop_shows_while_stopping_and_clears_when_stood_still(client, runtime):
+@pytest.mark.parametrize(("url", "body"), [("/api/walk/go-velocity", {"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0}),
+                                         ("/api/walk/go-pos", {"x": 0.6, "y": 0.0, "theta_deg": 0.0})])
+def test_emergency_walking_stop_shows_while_stopping_and_clears_when_stood_still(client, runtime, url, body):
     step(runtime, WARM_UP_S)
-    assert client.post("/api/walk/go-velocity", json={"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0}).status_code == 200
+    assert client.post(url, json=body).status_code == 200
     step(runtime, 1.0)
     assert emergency(client)["walking_stop"] is False  # walking, not stopping
     assert client.post("/api/walk/emergency-stop").status_code == 200
