@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import ctypes
 import math
 from dataclasses import dataclass, field
 
@@ -9,9 +10,9 @@ import numpy as np
 import qpsolvers
 
 try:
-    from qpsolvers.solvers.daqp_ import daqp_solve_problem as _daqp_solve_problem
+    import daqp as _daqp
 except ImportError:  # daqp not installed: solve_qp reports it
-    _daqp_solve_problem = None
+    _daqp = None
 
 from controller.errors import ControllerError, InvalidCommand
 from controller.layer import Params
@@ -203,7 +204,14 @@ class ForceDistributionQP:
         self._hull = convex_hull_ccw(p_world)
         self._hull.flags.writeable = False
         self._polygon = _Polygon(self._hull)
-        self._problem: qpsolvers.Problem | None = None
+        # daqp's form of the constraints (what qpsolvers' daqp interface builds from lb and A = b):
+        # rows 0..n-1 are the bounds 0 <= s_j (< 1e30), rows n.. the equalities (sense 5), A s = b
+        self._daqp_upper = np.empty(n + 3)
+        self._daqp_upper[:n] = 1e30
+        self._daqp_lower = np.full(n + 3, -1e30)
+        self._daqp_lower[:n] = self._lb
+        self._daqp_sense = np.zeros(n + 3, dtype=ctypes.c_int)
+        self._daqp_sense[n:] = 5
 
     def set_alpha(self, alpha: float) -> None:
         """Change the right/left distribution ratio (only the W_f part of the cost is rebuilt)."""
@@ -229,18 +237,15 @@ class ForceDistributionQP:
         self._P = P if self._P_cop_symmetric else 0.5 * (P + P.T)
 
     def _solve_qp(self, b: np.ndarray) -> np.ndarray | None:
-        """qpsolvers.solve_qp(P, q, A=A, b=b, lb=lb, solver=...). For daqp the Problem is kept and only
-        P and b are swapped in (same solver call, without rebuilding and re-checking the fixed parts)."""
-        if self.weights.solver != "daqp" or _daqp_solve_problem is None:
+        """qpsolvers.solve_qp(P, q, A=A, b=b, lb=lb, solver=...). For daqp, the call qpsolvers makes
+        (daqp.solve on the bounds and equalities stacked as below), with the fixed parts built once."""
+        if self.weights.solver != "daqp" or _daqp is None:
             return qpsolvers.solve_qp(self._P, self._q, A=self._A, b=b, lb=self._lb, solver=self.weights.solver)
-        problem = self._problem
-        if problem is None:
-            problem = self._problem = qpsolvers.Problem(self._P, self._q, A=self._A, b=b, lb=self._lb)
-            problem.check_constraints()
-        problem.P = self._P
-        problem.b = b
-        solution = _daqp_solve_problem(problem)
-        return solution.x if solution.found else None
+        upper = self._daqp_upper
+        upper[-3:] = b  # the equalities' right side; daqp reads, never writes, its arguments
+        x, _, exitflag, _ = _daqp.solve(self._P, self._q, self._A, upper, self._daqp_lower, self._daqp_sense,
+                                        primal_start=None)
+        return x if exitflag > 0 else None
 
     def __repr__(self) -> str:
         return (f"ForceDistributionQP(n_feet={len(self.feet)}, n_vertices={len(self._p_world)}, "
