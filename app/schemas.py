@@ -141,6 +141,10 @@ class ExperimentRequest(_Body):
                                                           "default: its first")
     save: bool = Field(default=False, description="also write the CSV and the Fig. 10-style PNG into a new "
                                                   "temporary directory (paths in the response)")
+    params: dict[str, Any] | None = Field(
+        default=None, description="EmergencyStopper parameters for this run only, named and bounded as in "
+                                  "PUT /api/emergency-stopper/params (t1, t2, recover_time [s], threshold [m], "
+                                  "mode); the others keep their defaults", examples=[{"threshold": 0.03}])
 
 
 class ExperimentInfo(BaseModel):
@@ -173,6 +177,7 @@ class ExperimentResponse(BaseModel):
         description="time [s] from the end of the revert (flag + T2) until the CP error is below the threshold")
     duration_s: float = Field(description="simulated time run [s] (shorter than planned when the robot fell)")
     outcome: dict[str, Any] = Field(description="task measures of the experiment (valve angle, ...)")
+    params: dict[str, Any] = Field(default_factory=dict, description="the EmergencyStopper parameters of the run")
     csv_path: str | None = None
     png_path: str | None = None
     wall_time_s: float = Field(description="wall-clock time the run took [s]")

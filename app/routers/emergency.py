@@ -122,15 +122,19 @@ def _range_text(meta: dict[str, Any]) -> str:
     return f"[{'-inf' if lo is None else f'{lo:g}'}, {'inf' if hi is None else f'{hi:g}'}] {unit}".rstrip()
 
 
-def composite_changes(chain, table: dict[str, tuple[str, str]], changes: dict[str, Any]) -> dict[str, dict[str, Any]]:
+def composite_changes(owners: dict[str, Any], table: dict[str, tuple[str, str]], changes: dict[str, Any],
+                      prefix: str = "") -> dict[str, dict[str, Any]]:
     """{layer: {param: value}} from {presented name: value}: names, types, ranges and choices checked
-    against the owning Params declarations, each rejection naming the presented field (-> 422)."""
-    owners = _owners(chain, table)
+    against the owning Params (`owners`: {layer: Params}), each rejection naming the presented field,
+    after `prefix` (-> 422)."""
     unknown = sorted(set(changes) - set(table))
     if unknown:
-        raise BadRequest(unknown[0], f"unknown parameter(s) {unknown}; valid: {list(table)}")
+        raise BadRequest(prefix + unknown[0], f"unknown parameter(s) {unknown}; valid: {list(table)}")
     current = {name: getattr(owners[layer], param) for name, (layer, param) in table.items()}
-    typed = check_types(_View(current), changes)
+    try:
+        typed = check_types(_View(current), changes)
+    except BadRequest as exc:
+        raise BadRequest(prefix + exc.field, exc.message) from None
     grouped: dict[str, dict[str, Any]] = {}
     for name, value in typed.items():
         layer, param = table[name]
@@ -145,7 +149,7 @@ def composite_changes(chain, table: dict[str, tuple[str, str]], changes: dict[st
                 msg = f"{value:g} {meta.get('unit', '')} is outside the allowed range {_range_text(meta)} ({owner})"
             else:
                 msg = f"{exc}"
-            raise BadRequest(name, msg) from exc
+            raise BadRequest(prefix + name, msg) from exc
         grouped.setdefault(layer, {})[param] = value
     return grouped
 
@@ -173,7 +177,7 @@ def get_es_params(runtime: RuntimeDep) -> dict[str, Any]:
                            "replaced whole at a tick boundary)")
 def put_es_params(runtime: RuntimeDep, changes: EsChangesBody) -> dict[str, Any]:
     loop = runtime.loop
-    grouped = composite_changes(loop.chain, ES_PARAMS, changes)
+    grouped = composite_changes(_owners(loop.chain, ES_PARAMS), ES_PARAMS, changes)
 
     def _apply():
         _apply_grouped(loop, grouped)

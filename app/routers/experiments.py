@@ -17,12 +17,24 @@ from fastapi import APIRouter, Body, HTTPException, Path
 
 from app import experiments
 from app.errors import BadRequest
+from app.routers.emergency import ES_PARAMS, composite_changes
 from app.runtime import jsonable
 from app.schemas import ExperimentInfo, ExperimentList, ExperimentRequest, ExperimentResponse
+from controller.emergency_stopper import EmergencyStopperParams
+from controller.stabilizer import StabilizerParams
 
 router = APIRouter(prefix="/api/experiments", tags=["experiments"])
 
 _running = threading.Lock()
+
+#: the params a fresh simulation starts from (ControllerSystem builds its layers with the defaults)
+_FRESH_PARAMS = {"es": EmergencyStopperParams(), "st": StabilizerParams()}
+
+
+def _run_params(grouped: dict[str, dict]) -> dict:
+    """The presented EmergencyStopper view of a run started from the defaults with `grouped` changes."""
+    owners = {layer: p.replaced(**grouped.get(layer, {})) for layer, p in _FRESH_PARAMS.items()}
+    return {name: getattr(owners[layer], param) for name, (layer, param) in ES_PARAMS.items()}
 
 
 def _info(name: str, exp) -> ExperimentInfo:
@@ -50,13 +62,16 @@ def run(name: Annotated[str, Path(description="experiment name (GET /api/experim
     variants = table[name].variants
     if req.variant is not None and req.variant not in variants:
         raise BadRequest("variant", f"unknown variant {req.variant!r} of {name}; available: {', '.join(variants)}")
+    grouped = composite_changes(_FRESH_PARAMS, ES_PARAMS, req.params, prefix="params.") if req.params else {}
     if not _running.acquire(blocking=False):
         raise HTTPException(status_code=409, detail="another experiment is running; try again when it has finished")
     try:
         out_dir = FsPath(tempfile.mkdtemp(prefix=f"hrp2-{name}-")) if req.save else None
         t0 = time.perf_counter()
-        result = experiments.run_experiment(name, es=req.es, out_dir=out_dir, plot=req.save, variant=req.variant)
+        result = experiments.run_experiment(name, es=req.es, out_dir=out_dir, plot=req.save, variant=req.variant,
+                                            params=grouped or None)
         wall = time.perf_counter() - t0
     finally:
         _running.release()
-    return ExperimentResponse(**jsonable(dataclasses.asdict(result)), wall_time_s=round(wall, 3))
+    return ExperimentResponse(**jsonable(dataclasses.asdict(result)), params=jsonable(_run_params(grouped)),
+                              wall_time_s=round(wall, 3))

@@ -1,6 +1,7 @@
 """The experiments over HTTP: the list, errors for unknown names and variants, one real run in a fresh
 simulation while the live control loop keeps running."""
 
+import csv
 import math
 import time
 from pathlib import Path
@@ -56,6 +57,22 @@ def test_a_bad_body_is_a_422_naming_the_field(client, body, word):
     assert r.status_code == 422 and word in r.json()["detail"], r.text
 
 
+@pytest.mark.parametrize(("params", "words"), [
+    ({"threshold": 0.9}, ["params.threshold", "[0.001, 0.5] m"]),
+    ({"t1": -1}, ["params.t1", "[0, 10] s"]),
+    ({"mode": "panic"}, ["params.mode", "cp_error", "cp_support", "none"]),
+    ({"t1_s": 1.0}, ["params.t1_s", "t1", "t2", "recover_time", "threshold", "mode"]),
+    ({"t2": "later"}, ["params.t2", "number"]),
+])
+def test_bad_run_params_are_a_422_naming_the_field_and_range(client, params, words):
+    name = next(iter(experiments.EXPERIMENTS))
+    r = client.post(f"/api/experiments/{name}", json={"params": params})
+    assert r.status_code == 422, r.text
+    detail = r.json()["detail"]
+    for w in words:
+        assert w in detail, f"{w!r} not in {detail!r}"
+
+
 def test_a_second_run_while_one_runs_is_a_conflict(client):
     name = next(iter(experiments.EXPERIMENTS))
     assert experiments_router._running.acquire(blocking=False)
@@ -78,7 +95,8 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     runtime.loop.start(1.0)  # the live simulation, in real time
     time.sleep(0.3)
     scene, tick0, wall0 = runtime.scene, runtime.loop.snapshot.tick, time.perf_counter()
-    r = client.post(f"/api/experiments/{name}", json={"save": True})
+    live_params = client.get("/api/emergency-stopper/params").json()["params"]
+    r = client.post(f"/api/experiments/{name}", json={"save": True, "params": {"threshold": 0.05}})
     wall = time.perf_counter() - wall0
     assert r.status_code == 200, r.text
     body = r.json()
@@ -98,6 +116,12 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     for key in ("csv_path", "png_path"):
         path = Path(body[key])
         assert path.is_file() and path.stat().st_size > 0
+    # the run used the threshold asked for; the live robot kept its parameters
+    assert body["params"] == {**live_params, "threshold": 0.05}
+    with open(body["csv_path"], newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert rows and {float(row["threshold_m"]) for row in rows} == {0.05}
+    assert client.get("/api/emergency-stopper/params").json()["params"] == live_params
     # the live simulation was neither used nor stalled: same scene, still ticking, still standing
     ticks = runtime.loop.snapshot.tick - tick0
     assert runtime.scene == scene and runtime.running
