@@ -73,5 +73,5 @@ def run(name: Annotated[str, Path(description="experiment name (GET /api/experim
         wall = time.perf_counter() - t0
     finally:
         _running.release()
-    return ExperimentResponse(**jsonable(dataclasses.asdict(result)), params=jsonable(_run_params(grouped)),
-                              wall_time_s=round(wall, 3))
+    return ExperimentResponse(**{**jsonable(dataclasses.asdict(result)), "params": jsonable(_run_params(grouped)),
+                                 "wall_time_s": round(wall, 3)})
