@@ -63,7 +63,7 @@ _COS_45_DEG = float(np.cos(np.deg2rad(45.0)))
 
 def is_fallen(truth: GroundTruth) -> bool:
     """BODY lower than 0.35 m, or its z axis more than 45 deg from vertical."""
-    w, x, y, z = truth.base_quat_wxyz
+    w, x, y, z = truth.base_quat_wxyz.tolist()
     up_z = 1.0 - 2.0 * (x * x + y * y)  # z component of BODY's z axis in world
     return bool(truth.base_pos_world[2] < 0.35 or up_z < _COS_45_DEG)
 

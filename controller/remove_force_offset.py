@@ -70,59 +70,57 @@ class RemoveForceOffset(Layer):
         est = ctx.estimate
         kin = self.kin
         kin.update_rpy(_ZERO3, est.base_rpy_rad, ctx.sensors.q_rad)
-        raw = ctx.sensors.wrenches
         data = kin.data
         oMf = data.oMf
         H = np.array([oMf[fid].homogeneous for fid in self._sensor_frame_ids()])  # (n, 4, 4) world <- sensor
-        est.sensor_pos_from_base[:] = H[:, :3, 3]  # sensor origins, world axes from BODY [m]
-        est.sensor_R_world[:] = H[:, :3, :3]
-        H_rows = H.tolist()
-        Rs = [h[:3] for h in H_rows]  # rows of [R | p] (the 4th column is ignored below)
+        est.sensor_pos_from_base = H[:, :3, 3]  # sensor origins, world axes from BODY [m]
+        est.sensor_R_world = H[:, :3, :3]
+        H_rows = H.tolist()  # per sensor, rows of [R | p] as floats
         if self.enabled:
-            g = self.params.gravity_m_s2
-            com = data.com
-            ext_rows = []
-            for i, raw_i in enumerate(raw.tolist()):
-                j = self._below_joints[i]
-                # weight of the part, about the sensor origin, in the sensor frame (gravity_wrench_in_sensor)
-                fz = -self._masses[i] * g
-                c0, c1, c2 = com[j].tolist()
-                p0, p1, p2 = H_rows[i][0][3], H_rows[i][1][3], H_rows[i][2][3]
-                r0, r1, r2 = c0 - p0, c1 - p1, c2 - p2
-                t0, t1, t2 = r1 * fz - r2 * 0.0, r2 * 0.0 - r0 * fz, r0 * 0.0 - r1 * 0.0  # cross3(r, (0, 0, fz))
-                (a00, a01, a02, _), (a10, a11, a12, _), (a20, a21, a22, _) = Rs[i]
-                ext_rows.append((
-                    raw_i[0] - (a00 * 0.0 + a10 * 0.0 + a20 * fz),
-                    raw_i[1] - (a01 * 0.0 + a11 * 0.0 + a21 * fz),
-                    raw_i[2] - (a02 * 0.0 + a12 * 0.0 + a22 * fz),
-                    raw_i[3] - (a00 * t0 + a10 * t1 + a20 * t2),
-                    raw_i[4] - (a01 * t0 + a11 * t1 + a21 * t2),
-                    raw_i[5] - (a02 * t0 + a12 * t1 + a22 * t2),
-                ))
-            ext = np.array(ext_rows)
+            ext_rows = self._external_wrenches(H_rows, ctx.sensors.wrenches.tolist(), data.com)
             if self._calibrating:
-                for i, s in enumerate(FORCE_SENSOR_NAMES):
-                    cal = self._calibrating.get(s)
-                    if cal is not None:
-                        cal[0] += 1
-                        cal[1] += ext[i]
-                        if cal[0] * ctx.dt_s >= self.params.calibration_time_s:
-                            self.offsets[i] = cal[1] / cal[0]
-                            del self._calibrating[s]
-            ext -= self.offsets
+                self._calibrate_step(ext_rows, ctx.dt_s)
+            ext_rows = [[e - o for e, o in zip(row, off, strict=True)]
+                        for row, off in zip(ext_rows, self.offsets.tolist(), strict=True)]  # ext - offsets
         else:
-            ext = np.array(raw, dtype=float)
+            ext_rows = ctx.sensors.wrenches.tolist()
         ext_w = []
-        for R, w in zip(Rs, ext.tolist(), strict=True):  # world-aligned: R f, R tau
-            (a00, a01, a02, _), (a10, a11, a12, _), (a20, a21, a22, _) = R
+        for h, w in zip(H_rows, ext_rows, strict=True):  # world-aligned: R f, R tau
+            (a00, a01, a02, _), (a10, a11, a12, _), (a20, a21, a22, _), _ = h
             f0, f1, f2, t0, t1, t2 = w
             ext_w.append((a00 * f0 + a01 * f1 + a02 * f2, a10 * f0 + a11 * f1 + a12 * f2,
                           a20 * f0 + a21 * f1 + a22 * f2, a00 * t0 + a01 * t1 + a02 * t2,
                           a10 * t0 + a11 * t1 + a12 * t2, a20 * t0 + a21 * t1 + a22 * t2))
-        est.wrenches_ext = ext
+        est.wrenches_ext = np.array(ext_rows)
         est.wrenches_ext_world = np.array(ext_w)
         est.com_from_base = kin.com_world()
         return ref
+
+    def _external_wrenches(self, H_rows: list, raw_rows: list, com) -> list[tuple[float, ...]]:
+        """Each raw wrench minus the weight of the part below its sensor (gravity_wrench_in_sensor on floats:
+        f = R^T (0, 0, -m g), tau = R^T ((c - p) x f_world), the products with zero left out)."""
+        g = self.params.gravity_m_s2
+        out = []
+        for h, raw_i, j, mass in zip(H_rows, raw_rows, self._below_joints, self._masses, strict=True):
+            (a00, a01, a02, p0), (a10, a11, a12, p1), (a20, a21, a22, _), _ = h
+            fz = -mass * g
+            c0, c1, _ = com[j].tolist()
+            t0, t1 = (c1 - p1) * fz, -((c0 - p0) * fz)  # (c - p) x (0, 0, fz), world; its z is 0
+            out.append((raw_i[0] - a20 * fz, raw_i[1] - a21 * fz, raw_i[2] - a22 * fz,
+                        raw_i[3] - (a00 * t0 + a10 * t1), raw_i[4] - (a01 * t0 + a11 * t1),
+                        raw_i[5] - (a02 * t0 + a12 * t1)))
+        return out
+
+    def _calibrate_step(self, ext_rows: list, dt_s: float) -> None:
+        """Accumulate the offset-free residuals of the sensors being calibrated; store finished offsets."""
+        for i, s in enumerate(FORCE_SENSOR_NAMES):
+            cal = self._calibrating.get(s)
+            if cal is not None:
+                cal[0] += 1
+                cal[1] += ext_rows[i]
+                if cal[0] * dt_s >= self.params.calibration_time_s:
+                    self.offsets[i] = cal[1] / cal[0]
+                    del self._calibrating[s]
 
     def _sensor_frame_ids(self) -> list[int]:
         ids = self._frame_ids

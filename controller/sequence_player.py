@@ -321,12 +321,13 @@ class SequencePlayer(Layer):
         return self._q.moving(self._group("is_interpolating_group", group))
 
     def status(self) -> dict[str, Any]:
+        moving = [ch for ch in self._channels if ch.motions]  # a channel at rest has 0 s remaining
         active = [g for g, idx in self.groups.items() if self._q.moving(idx)] if self._q.motions else []
         return {
             "enabled": self.enabled,
-            "interpolating": self.is_interpolating(),
+            "interpolating": bool(moving),  # is_interpolating()
             "active_groups": active,
-            "remaining_s": max(ch.remaining_s() for ch in self._channels),
+            "remaining_s": max((ch.remaining_s() for ch in moving), default=0.0),
         }
 
     def _group(self, op: str, group: str) -> np.ndarray:

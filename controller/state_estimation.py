@@ -10,6 +10,11 @@ from robot.names import FORCE_SENSOR_NAMES
 
 FOOT_SENSORS = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
 CONTACT_FZ_N = 20.0  # a foot carrying less than this is not in contact
+# the foot rows of the per-sensor arrays (a slice when they are adjacent: a view, no copy)
+_FEET = (slice(FOOT_SENSORS[0], FOOT_SENSORS[1] + 1) if FOOT_SENSORS[1] == FOOT_SENSORS[0] + 1
+         else list(FOOT_SENSORS))
+_EQUAL_WEIGHTS = np.array([0.5, 0.5])
+_EQUAL_WEIGHTS.flags.writeable = False
 
 
 def zmp_from_foot_wrenches(pos_world: np.ndarray, wrench_world: np.ndarray, z0: float,
@@ -43,26 +48,40 @@ class ActualStateEstimator:
         self.kin = kinematics
         self.last_zmp = np.zeros(3)
         self.base_pos_world = np.zeros(3)  # where the anchoring put BODY [m]
+        self._soles_key: tuple[bytes, bytes, bytes] | None = None  # the reference posture of _soles
+        self._soles: np.ndarray | None = None
 
     def reference_soles(self, ref: Reference) -> np.ndarray:
-        """World positions of the two sole sensors in the reference posture, (2, 3)."""
-        self.kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
-        return np.array([self.kin.frame_pose(FORCE_SENSOR_NAMES[i])[0] for i in FOOT_SENSORS])
+        """World positions of the two sole sensors in the reference posture, (2, 3), read-only.
+
+        Forward kinematics only when the reference posture changed (a standing reference does not)."""
+        key = (ref.base_pos_world.tobytes(), ref.base_rpy_rad.tobytes(), ref.q_rad.tobytes())
+        if key != self._soles_key:
+            self.kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
+            soles = np.array([self.kin.frame_pose(FORCE_SENSOR_NAMES[i])[0] for i in FOOT_SENSORS])
+            soles.flags.writeable = False
+            self._soles, self._soles_key = soles, key
+        return self._soles
 
     def __call__(self, sensors, est: Estimate, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
         if ref.gait is not None:  # the AutoBalancer says where the soles are meant to be
             # hrpsys's actual foot-origin frame: the feet mid-point when both are meant to be down,
             # otherwise the planned support foot (deterministic switches, no Fz chatter)
             return self._with_gait(est, ref.gait)
+        # the soles weighted by their measured load (equal weights when hardly loaded). The two weighted
+        # sums stay numpy dot products: the same roundings as ever (numpy fuses the multiply-add)
         ref_soles = self.reference_soles(ref)
-        meas_soles = est.sensor_pos_from_base[list(FOOT_SENSORS)]
-        fz = np.clip(est.wrenches_ext_world[list(FOOT_SENSORS), 2], 0.0, None)
-        w = fz / fz.sum() if fz.sum() > 2 * CONTACT_FZ_N else np.array([0.5, 0.5])
+        meas_soles = est.sensor_pos_from_base[_FEET]
+        rows = est.wrenches_ext_world.tolist()
+        foot_wrenches = [rows[i] for i in FOOT_SENSORS]
+        fz0, fz1 = (max(wrench[2], 0.0) for wrench in foot_wrenches)  # np.clip(fz, 0.0, None)
+        fz_sum = fz0 + fz1
+        w = np.array((fz0 / fz_sum, fz1 / fz_sum)) if fz_sum > 2 * CONTACT_FZ_N else _EQUAL_WEIGHTS
         offset = w @ (ref_soles - meas_soles)
         self.base_pos_world = offset
         cog = est.com_from_base + offset
         soles = meas_soles + offset
-        zmp = zmp_from_foot_wrenches(soles, est.wrenches_ext_world[list(FOOT_SENSORS)], float(w @ soles[:, 2]))
+        zmp = zmp_from_foot_wrenches(soles, foot_wrenches, float(w @ soles[:, 2]))
         if zmp is not None:
             self.last_zmp = zmp
         return cog, self.last_zmp.copy()
