@@ -532,7 +532,7 @@ VALVE_DAMPING = 1.0  # N m s/rad
 VALVE_FRICTIONLOSS = 2.0  # N m
 
 #: Pull door [ES Fig. 12]: panel on a vertical hinge at its right edge (y = -0.45), opening toward the robot.
-DOOR_FACE_X_M = 0.70
+DOOR_FACE_X_M = 0.50  # was 0.70: the left hand reached that knob only stretched (robot/hrp2/README.md)
 DOOR_HINGE_Y_M = -0.45
 DOOR_SIZE_M = (0.04, 0.8, 1.8)  # thickness (x), width (y), height (z)
 DOOR_BOTTOM_GAP_M = 0.005
@@ -540,7 +540,7 @@ DOOR_MASS_KG = 15.0
 DOOR_RANGE_DEG = (-90.0, 0.0)  # 0 closed, negative = open toward the robot; the 0 limit is the door stop
 DOOR_DAMPING = 5.0  # N m s/rad
 DOOR_FRICTIONLOSS = 1.0  # N m
-DOOR_KNOB_M = (0.62, 0.2, 0.9)
+DOOR_KNOB_M = (0.42, 0.2, 0.9)
 DOOR_KNOB_RADIUS_M = 0.03
 DOOR_KNOB_HALF_LENGTH_M = 0.015
 DOOR_WALL_EXTENT_M = (-1.5, 1.5)

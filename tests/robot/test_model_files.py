@@ -173,13 +173,13 @@ def test_door_is_a_pull_door_with_a_stop():
     plant = MujocoPlant("door")
     m, d = _pose(plant, {})
     hinge = m.joint("door_hinge")
-    np.testing.assert_allclose(d.xanchor[hinge.id], [0.7, -0.45, 0.0])
+    np.testing.assert_allclose(d.xanchor[hinge.id], [0.5, -0.45, 0.0])
     np.testing.assert_allclose(hinge.range, [-math.pi / 2, 0.0])
     assert hinge.damping[0] > 0 and 0 < hinge.frictionloss[0] <= 2.0
     panel = m.geom("door_panel")
     np.testing.assert_allclose(2 * panel.size, [0.04, 0.8, 1.8])
-    np.testing.assert_allclose(d.geom_xpos[panel.id][:2], [0.72, -0.05])
-    np.testing.assert_allclose(d.geom_xpos[m.geom("door_knob").id], [0.62, 0.2, 0.9])
+    np.testing.assert_allclose(d.geom_xpos[panel.id][:2], [0.52, -0.05])
+    np.testing.assert_allclose(d.geom_xpos[m.geom("door_knob").id], [0.42, 0.2, 0.9])
     assert m.sensor("door_angle").objid[0] == hinge.id
     adr = m.sensor("door_angle").adr[0]
     plant.reset()
