@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from app.experiments import valve, wall
+from app.experiments import door, valve, wall
 from app.experiments.common import Experiment, ExperimentResult
 from app.experiments.fig10 import plot_fig10
 from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, distance_to_polygon_edge, support_polygon
@@ -25,7 +25,7 @@ from robot.plant import MujocoPlant
 __all__ = ["EXPERIMENTS", "Experiment", "ExperimentResult", "run_experiment"]
 
 #: Experiments by name (the CLI and the HTTP API list these).
-EXPERIMENTS: dict[str, Experiment] = {**wall.EXPERIMENTS, **valve.EXPERIMENTS}
+EXPERIMENTS: dict[str, Experiment] = {**wall.EXPERIMENTS, **door.EXPERIMENTS, **valve.EXPERIMENTS}
 
 CSV_COLUMNS = ("time_s", "cp_error_x_m", "cp_error_y_m", "cp_error_m", "threshold_m", "cp_to_support_edge_m",
                "flag", "motion_stopped", "fallen")
