@@ -32,6 +32,8 @@ class SelfCollisionChecker:
         self.qpos_adr = np.array([self.model.joint(n).qposadr[0] for n in JOINT_NAMES])
         self._free_geom_margin = self.model.geom_margin.copy()
         self._body_names = [self.model.body(i).name for i in range(self.model.nbody)]
+        self._last_key: tuple[bytes, float] | None = None  # (posture, margin) of _last_pairs
+        self._last_pairs: list[tuple[str, str]] = []
         self.set_margin(margin_m)
 
     def set_margin(self, margin_m: float) -> None:
@@ -39,6 +41,15 @@ class SelfCollisionChecker:
         self.model.geom_margin[:] = self._free_geom_margin + self.margin_m
 
     def colliding_pairs(self, q_rad: np.ndarray) -> list[tuple[str, str]]:
+        """The body pairs closer than the margin in posture `q_rad`; the last answer is kept for an
+        unchanged posture and margin (a pure function of both: a standing command is checked once)."""
+        key = (np.asarray(q_rad, dtype=float).tobytes(), self.margin_m)
+        if key != self._last_key:
+            self._last_pairs = self._colliding_pairs(q_rad)
+            self._last_key = key
+        return list(self._last_pairs)
+
+    def _colliding_pairs(self, q_rad: np.ndarray) -> list[tuple[str, str]]:
         d = self.data
         d.qpos[self.qpos_adr] = q_rad
         mujoco.mj_kinematics(self.model, d)

@@ -9,7 +9,7 @@ import numpy as np
 
 from controller.layer import Layer, Params
 from controller.rotations import rpy_to_rows
-from controller.types import Reference, TickContext
+from controller.types import Reference, TickContext, read_only
 
 G = 9.80665  # [m/s^2]
 
@@ -118,7 +118,7 @@ class KalmanFilter(Layer):
             c0, c1, c2 = _floats3(gait.cog_acc_world)
             accel = (a0 - (r00 * c0 + r10 * c1 + r20 * c2), a1 - (r01 * c0 + r11 * c1 + r21 * c2),
                      a2 - (r02 * c0 + r12 * c1 + r22 * c2))  # accel - R^T cog_acc
-        ctx.estimate.base_rpy_rad = self.filter.update(s.gyro_rad_s, accel, ctx.dt_s)
+        ctx.estimate.base_rpy_rad = read_only(self.filter.update(s.gyro_rad_s, accel, ctx.dt_s))  # a copy
         ctx.estimate.base_angvel_rad_s = np.array(s.gyro_rad_s, dtype=float)
         return ref
 

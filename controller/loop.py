@@ -161,7 +161,7 @@ class ControlLoop:
         t_start = time.perf_counter()
         self._drain()
         sensors = self.plant.read()
-        est = Estimate()
+        est = Estimate.for_tick()
         ctx = TickContext(tick=self.tick_count, time_s=sensors.time_s, dt_s=self.dt_control_s,
                           sensors=sensors, estimate=est)
         ref_in = self._last_ref
@@ -225,8 +225,8 @@ class ControlLoop:
             tick=self.tick_count, time_s=float(sensors.time_s if self.tick_count == 0 else truth.time_s),
             q_cmd_rad=_frozen(self._last_q_cmd), q_seq_rad=_frozen(seq_ref.q_rad),
             q_meas_rad=sensors.q_rad, reference=ref,
-            base_rpy_est_rad=frozen_array(est.base_rpy_rad), wrenches_ext=frozen_array(est.wrenches_ext),
-            cog_world=frozen_array(cog), zmp_world=frozen_array(zmp), layers=layers,
+            base_rpy_est_rad=_frozen(est.base_rpy_rad), wrenches_ext=_frozen(est.wrenches_ext),
+            cog_world=_frozen(cog), zmp_world=_frozen(zmp), layers=layers,
             emergency=emergency, fault=self.fault, truth=truth, fallen=is_fallen(truth), loop_ms=loop_ms,
         )
 

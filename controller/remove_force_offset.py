@@ -10,7 +10,7 @@ from controller.errors import InvalidCommand
 from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params
 from controller.rotations import cross3
-from controller.types import Reference, TickContext
+from controller.types import Reference, TickContext, read_only
 from robot.names import FORCE_SENSOR_NAMES
 
 G = 9.80665  # [m/s^2]
@@ -91,7 +91,7 @@ class RemoveForceOffset(Layer):
             ext_w.append((a00 * f0 + a01 * f1 + a02 * f2, a10 * f0 + a11 * f1 + a12 * f2,
                           a20 * f0 + a21 * f1 + a22 * f2, a00 * t0 + a01 * t1 + a02 * t2,
                           a10 * t0 + a11 * t1 + a12 * t2, a20 * t0 + a21 * t1 + a22 * t2))
-        est.wrenches_ext = np.array(ext_rows)
+        est.wrenches_ext = read_only(np.array(ext_rows))  # published in the snapshot as it is
         est.wrenches_ext_world = np.array(ext_w)
         est.com_from_base = kin.com_world()
         return ref

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from controller.kinematics import RobotKinematics
-from controller.types import Estimate, Reference
+from controller.types import Estimate, Reference, read_only
 from robot.names import FORCE_SENSOR_NAMES
 
 FOOT_SENSORS = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
@@ -84,7 +84,7 @@ class ActualStateEstimator:
         zmp = zmp_from_foot_wrenches(soles, foot_wrenches, float(w @ soles[:, 2]))
         if zmp is not None:
             self.last_zmp = zmp
-        return cog, self.last_zmp.copy()
+        return read_only(cog), read_only(self.last_zmp.copy())  # published in the snapshot as they are
 
     def _with_gait(self, est: Estimate, gait) -> tuple[np.ndarray, np.ndarray]:
         """__call__ with a gait reference, on Python floats (same maths)."""
@@ -105,4 +105,4 @@ class ActualStateEstimator:
                                      w0 * soles[0][2] + w1 * soles[1][2])
         if zmp is not None:
             self.last_zmp = zmp
-        return cog, self.last_zmp.copy()
+        return read_only(cog), read_only(self.last_zmp.copy())  # published in the snapshot as they are

@@ -9,7 +9,7 @@ import numpy as np
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
-__all__ = ["Estimate", "GaitState", "Reference", "TickContext", "frozen_array"]
+__all__ = ["Estimate", "GaitState", "Reference", "TickContext", "frozen_array", "read_only"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -112,6 +112,23 @@ class Estimate:
     cog_world: np.ndarray | None = None
     cog_vel_world: np.ndarray | None = None
     zmp_world: np.ndarray | None = None
+
+    @staticmethod
+    def for_tick() -> Estimate:
+        """The loop's fresh Estimate: the same zero defaults, shared and read-only instead of allocated
+        every tick (the estimators assign their results; nothing writes into an Estimate's arrays)."""
+        z = _READ_ONLY_DEFAULTS
+        return Estimate(z[0], z[0], z[1], z[1], z[2], z[3], z[0])
+
+
+def read_only(a: np.ndarray) -> np.ndarray:
+    """`a` itself, made read-only: for an array just built and handed over (frozen_array copies)."""
+    a.flags.writeable = False
+    return a
+
+
+_READ_ONLY_DEFAULTS = (read_only(np.zeros(3)), read_only(np.zeros((len(FORCE_SENSOR_NAMES), 6))),
+                       read_only(np.zeros((len(FORCE_SENSOR_NAMES), 3))), read_only(_EYE_PER_SENSOR.copy()))
 
 
 @dataclass(slots=True)
