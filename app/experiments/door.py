@@ -73,9 +73,11 @@ def grasp_ik(kin: RobotKinematics, q_rad: np.ndarray, base_pos_world: np.ndarray
         x_hand = M.rotation[:, 0]
         A = np.vstack([J[:3] - _skew(offset) @ J[3:], (np.cross(x_hand, axis_world) @ J[3:])[None]])
         err = np.concatenate([knob_world_m - M.translation - offset, [-x_hand @ axis_world]])
-        dq = A.T @ np.linalg.solve(A @ A.T + 1e-4 * np.eye(4), err)
-        dq += (np.eye(6) - np.linalg.pinv(A) @ A) @ (0.02 * (posture - q[idx]))
+        A_inv = A.T @ np.linalg.inv(A @ A.T + 1e-4 * np.eye(4))
+        dq = A_inv @ err + (np.eye(6) - A_inv @ A) @ (0.02 * (posture - q[idx]))
         q[idx] = np.clip(q[idx] + np.clip(dq, -0.05, 0.05), kin.q_lower[idx], kin.q_upper[idx])
+        if np.abs(dq).max() < 1e-5:
+            break
     kin.update_rpy(base_pos_world, np.zeros(3), q)
     M = kin.data.oMf[fid]
     miss_m = np.linalg.norm(knob_world_m - M.translation - M.rotation @ KNOB_IN_END_M)
