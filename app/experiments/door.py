@@ -161,6 +161,6 @@ def door_angle(system: ControllerSystem) -> dict[str, float]:
 
 
 EXPERIMENTS: dict[str, Experiment] = {
-    "door": Experiment("door", door_script, 11.0, door_script.__doc__, variants=("push-plan", "pull"),
+    "door": Experiment("door", door_script, 10.0, door_script.__doc__, variants=("push-plan", "pull"),
                        outcome=door_angle),
 }
