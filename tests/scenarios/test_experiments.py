@@ -1,5 +1,7 @@
 """[MLC] IV-C wall-push-forward and wall-push-left (Fig. 8-10): the capture-point flag stops and reverts the push."""
 
+import logging
+
 import pytest
 
 from app.experiments import EXPERIMENTS, run_experiment
@@ -25,12 +27,14 @@ def test_wall_push_forward_without_it_drives_the_capture_point_out_of_the_suppor
 
 
 @pytest.mark.slow
-def test_wall_push_left_with_the_emergency_stopper_flags_inside_the_support_and_recovers(tmp_path):
+def test_wall_push_left_with_the_emergency_stopper_flags_inside_the_support_and_recovers(tmp_path, caplog):
+    caplog.set_level(logging.ERROR)
     r = run_experiment("wall-push-left", es=True, out_dir=tmp_path, plot=False)
     assert r.verdict == "stood"
     assert r.flag_time_s is not None and 3.0 < r.flag_time_s < 5.0  # during the 2 s push that starts at 3 s
     assert r.edge_margin_at_flag_m > 0.0  # the actual CP was still inside the support polygon
     assert r.below_threshold_after_revert_s is not None and r.below_threshold_after_revert_s < 2.0
+    assert not [rec for rec in caplog.records if "controller fault" in rec.getMessage()]
 
 
 @pytest.mark.slow
