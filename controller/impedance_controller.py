@@ -62,7 +62,9 @@ class _Limb:
         self.name = name
         self.sensor, self.frame = LIMBS[name]
         self.sensor_index = FORCE_SENSOR_NAMES.index(self.sensor)
-        self.joints = np.array(JOINT_GROUPS[name])
+        # the six arm joints: *ARM_JOINT6 (the gripper, the group's last joint) moves no hand frame and
+        # passes through from the plan, so open/close commands work while the impedance runs
+        self.joints = np.array(JOINT_GROUPS[name][:-1])
         self.active = False
         self.weight = 0.0
         self.transition: tuple[float, float, float] | None = None  # (from, to, elapsed)

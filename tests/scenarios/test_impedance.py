@@ -70,3 +70,20 @@ def test_no_force_no_deviation_and_wrong_start_stop_are_invalid_states():
         loop.call(lambda: ic.start("larm"))
     with pytest.raises(InvalidState, match="not active"):
         loop.call(lambda: ic.stop("rarm"))
+
+
+def test_the_gripper_follows_its_commands_while_the_impedance_controller_runs():
+    from robot.names import joint_index
+
+    system = make_system()
+    loop = system.loop
+    seq_call(system, "set_joint_angles", REACH, 1.5)
+    loop.run_for(3.0)
+    loop.call(lambda: system.chain["ic"].start("rarm"))
+    loop.run_for(1.5)
+    gripper = joint_index("RARM_JOINT6")
+    target_rad = REACH[gripper] - np.deg2rad(20.0)  # close by 20 deg
+    seq_call(system, "set_joint_angle", "RARM_JOINT6", target_rad, 1.0)
+    snap = loop.run_for(1.5)
+    assert abs(snap.q_cmd_rad[gripper] - target_rad) < 1e-6
+    assert abs(loop.plant.data.qpos[loop.plant.model.joint("RARM_JOINT6").qposadr[0]] - target_rad) < np.deg2rad(1.0)
