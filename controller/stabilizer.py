@@ -295,6 +295,10 @@ class Stabilizer(Layer):
         if not any(abs(v) > HAND_FORCE_DEADBAND_N for i in HANDS for v in rows[i][:3]):  # np.any(abs(f) > band)
             return cog
         f_on = est.wrenches_ext_world[list(HANDS), :3]
+        if not abs(sum(rows[i][2] for i in HANDS)) < self.total_mass * G:
+            # hands carrying the robot's whole weight (or a sensor spike saying so): no balance point on
+            # the feet exists, so this tick balances the plain COG rather than faulting the loop
+            return cog
         hands = est.sensor_pos_from_base[list(HANDS)] + self.estimator.base_pos_world
         # Eq. 6 evaluated with the force on the robot is the static ZMP (see hand_force_cog_offset)
         xy = cog_offset_against_hand_forces(cog[:2], self.total_mass, hands, -f_on, zmp_z, G)

@@ -111,3 +111,22 @@ def test_no_flag_while_the_stabilizer_is_still_blending_in():
     assert not st.emergency and st.flag_rise_time_s is None
     run_ticks(st, fast, 120)
     assert st.emergency
+
+
+def test_hand_forces_reading_more_than_the_robot_weight_fall_back_to_the_plain_cog_instead_of_raising():
+    from types import SimpleNamespace
+
+    st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
+    run_ticks(st, ref, 3)
+    cog = np.array([0.01, 0.0, 0.81])
+    wrenches = np.zeros((4, 6))
+    est = SimpleNamespace(wrenches_ext_world=wrenches,
+                          sensor_pos_from_base=np.array([[0, -0.1, -0.65], [0, 0.1, -0.65], [0.3, -0.3, 0.2],
+                                                         [0.3, 0.3, 0.2]]))
+    wrenches[2, 2] = -50.0  # a 50 N pull down at the right hand moves the balance point toward it
+    assert st.static_balance_point(cog, est, 0.0)[0] > cog[0] + 0.01
+    wrenches[2, 2] = 700.0  # a spike: more upward force than the robot weighs (58 kg * g = 569 N)
+    assert np.array_equal(st.static_balance_point(cog, est, 0.0), cog)
+    wrenches[2, 2] = -700.0
+    assert np.array_equal(st.static_balance_point(cog, est, 0.0), cog)
