@@ -1,10 +1,14 @@
 """[MLC] IV-C 2, Fig. 11 and Fig. 13 (alpha, beta): valve turning planned from a disturbed recognition
 (scene `valve`), ImpedanceController on the turning hand, AutoBalancer and Stabilizer on.
 
-The ImpedanceController starts on the left hand once the gripper has closed on the rim, not at the start:
-it re-solves the whole `larm` group, gripper joint included, and keeps the gripper at the angle it had
-when it started (the IK leaves a joint that does not move the hand frame at its seed), so a hand under
-impedance cannot open or close. The reach and approach therefore run without it.
+The ImpedanceController starts on the left hand once the gripper has closed on the rim (Experiment.impedance
+is empty on purpose): it re-solves the whole `larm` group, gripper joint included, and keeps the gripper at
+the angle it had when it started (the IK leaves a joint that does not move the hand frame at its seed), so
+a hand under impedance cannot open or close. The reach and approach therefore play position-controlled.
+(Tried and dropped: impedance from the start with the gripper opened in the first tick and the controller
+blended out for the closing. Then the forward disturbance saturates the impedance deviation at 0.2 m, the
+ImpedanceController's IK fails and it holds the last arm posture, and the EmergencyStopper's revert does
+not reach the arm for ~1.1 s.)
 
 The script plays the planner of [MLC] IV-B 2. It "recognises" the valve (the only place that reads the
 valve's true pose, standing in for the point-cloud torus fit), walks to a standing position planned from
@@ -73,8 +77,9 @@ PLANNED_TURN_DEG = ARC_PSI_DEG[0] - ARC_PSI_DEG[-1]
 #: reach ends at the ready pose, clear of the valve.
 PRE_GRASP_BACKOFF_M = 0.08
 READY_BACKOFF_M = 0.18
-#: Durations of the manipulation phases [s].
-REACH_S, PRE_GRASP_S, APPROACH_S, CLOSE_S, HOLD_S, ARC_STEP_S, END_HOLD_S = 1.5, 0.7, 0.8, 0.5, 0.3, 0.5, 1.5
+#: Durations of the manipulation phases [s]. The reach (half-sitting arm to the ready pose) is slow: at 1.5 s
+#: the hand met the forward-disturbed valve at ~0.7 m/s and the CP came within 5 mm of the support edge.
+REACH_S, PRE_GRASP_S, APPROACH_S, CLOSE_S, HOLD_S, ARC_STEP_S, END_HOLD_S = 3.0, 0.7, 0.8, 0.5, 0.3, 0.5, 1.0
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,7 @@ def test_the_disturbances_are_the_papers_and_only_move_the_recognition():
         np.testing.assert_allclose(seen.centre_world - true.centre_world, d, atol=1e-12)
     np.testing.assert_allclose(true.centre_world, system.loop.plant.data.body("valve").xpos)
     assert EXPERIMENTS["valve"].variants[0] == "disturbed-forward"  # Fig. 11 (a-1), the headline case
-    assert EXPERIMENTS["valve"].duration_s <= 16.5
+    assert EXPERIMENTS["valve"].duration_s <= 17.5  # an 8 s walk to the stance, 9.3 s of manipulation
 
 
 def test_the_planned_grasp_puts_the_rim_between_the_jaws_on_the_recognised_circle():
