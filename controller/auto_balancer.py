@@ -65,6 +65,7 @@ class AutoBalancer(Layer):
             dt_s=dt_s, com_height_m=self.com_height_m, q=self.params.preview_q, r=self.params.preview_r))
         self.preview.reset(self.gait.tick().zmp_world[:2])
         self._hand_pos = np.zeros((2, 3))
+        self._hand_pos_stale = False  # True once a solve has moved the hands
         self._hand_frame_ids = [self.kin.model.getFrameId(n) for n in ("rarm_end", "larm_end")]
         # blend between the plain plan (0) and the balanced posture (1)
         self.active = False
@@ -137,7 +138,18 @@ class AutoBalancer(Layer):
         if not any(v for i in HANDS for v in rows[i][:3]):
             return cog_pc_xy
         f = ref.wrenches[list(HANDS), :3]
-        return cog_offset_against_hand_forces(cog_pc_xy, self.total_mass, self._hand_pos, f, zmp_z, G)
+        return cog_offset_against_hand_forces(cog_pc_xy, self.total_mass, self._hand_positions(), f, zmp_z, G)
+
+    def _hand_positions(self) -> np.ndarray:
+        """World hand positions (2, 3) [m] in the last whole-body IK solution (zeros before the first).
+
+        Read when needed, before this tick's solve: until then the kinematic data is the last solve's."""
+        if self._hand_pos_stale:
+            model, data = self.kin.model, self.kin.data
+            for i, fid in enumerate(self._hand_frame_ids):
+                self._hand_pos[i] = pin.updateFramePlacement(model, data, fid).translation
+            self._hand_pos_stale = False
+        return self._hand_pos
 
     # ---- tick ------------------------------------------------------------------------------------
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
@@ -158,16 +170,16 @@ class AutoBalancer(Layer):
         zmp = g.zmp_world
         cog_abc_xy = self._hand_force_offset(ref, cog_xy, zmp[2])
         # BODY yaw follows the feet (mean of the two sole yaws); roll and pitch from the plan
-        yaw = math.atan2(g.R_rfoot_world[1, 0] + g.R_lfoot_world[1, 0], g.R_rfoot_world[0, 0] + g.R_lfoot_world[0, 0])
-        rpy_in = ref.base_rpy_rad.tolist()
-        base_rpy = np.array((rpy_in[0], rpy_in[1], rpy_in[2] + yaw))
-        R_body = np.array(rpy_to_rows(*base_rpy.tolist()))
+        (r00, _, _), (r10, _, _), _ = g.R_rfoot_world.tolist()
+        (l00, _, _), (l10, _, _), _ = g.R_lfoot_world.tolist()
+        yaw = math.atan2(r10 + l10, r00 + l00)
+        roll, pitch, yaw_in = ref.base_rpy_rad.tolist()
+        base_rpy = np.array((roll, pitch, yaw_in + yaw))
+        R_body = np.array(rpy_to_rows(roll, pitch, yaw_in + yaw))
         rsole, lsole = (g.p_rfoot_world, g.R_rfoot_world), (g.p_lfoot_world, g.R_lfoot_world)
         res = self.ik.solve(ref.q_rad, float(ref.base_pos_world[2]), R_body, cog_abc_xy, rsole, lsole)
         self.has_ik_failed = not res.reachable
-        model, data = self.kin.model, self.kin.data
-        for i, fid in enumerate(self._hand_frame_ids):
-            self._hand_pos[i] = pin.updateFramePlacement(model, data, fid).translation
+        self._hand_pos_stale = True  # the hands moved with the solve: _hand_positions() reads them if needed
         com_z = float(res.com_world[2])
         cog_abc = cog_abc_xy.tolist() if isinstance(cog_abc_xy, np.ndarray) else cog_abc_xy
         cog_pc = cog_xy.tolist() if isinstance(cog_xy, np.ndarray) else cog_xy

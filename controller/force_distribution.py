@@ -191,6 +191,8 @@ class ForceDistributionQP:
         # sum_i ||G_cop,i f||^2 = f^T (Nx^T Nx + Ny^T Ny) f since the feet's columns do not overlap
         self._P_cop = w.cop_weight * (self._Nx.T @ self._Nx + self._Ny.T @ self._Ny)
         self._P_cop_symmetric = bool(np.array_equal(self._P_cop, self._P_cop.T))
+        self._P_cop_diag = np.diag(self._P_cop).tolist()  # floats, for set_alpha
+        self._foot_of_vertex_list = foot_of_vertex.tolist()
         # per-vertex data as floats for the per-tick sums: foot, -d_y, d_x; and each foot's vertex range
         self._vertex_rows = tuple(zip(foot_of_vertex.tolist(), (-d[:, 1]).tolist(), d[:, 0].tolist(), strict=True))
         bounds = np.concatenate(([0], np.cumsum(sizes))).tolist()
@@ -215,7 +217,7 @@ class ForceDistributionQP:
 
     def set_alpha(self, alpha: float) -> None:
         """Change the right/left distribution ratio (only the W_f part of the cost is rebuilt)."""
-        if not np.isfinite(alpha) or not 0.0 <= alpha <= 1.0:
+        if not (math.isfinite(alpha) and 0.0 <= alpha <= 1.0):
             raise InvalidCommand(f"alpha is the right foot's share and must be in [0, 1]; got {alpha!r}")
         self.alpha = float(alpha)
         w = self.weights
@@ -223,16 +225,17 @@ class ForceDistributionQP:
             a = min(max(self.alpha, w.alpha_epsilon), 1.0 - w.alpha_epsilon)
             # The paper writes w_l = 1/(alpha - 1), negative for alpha in (0, 1), which would make the QP
             # non-convex and reward force on the left foot; 1/(1 - alpha) is the intended weight.
-            per_foot = np.array([1.0 / a, 1.0 / (1.0 - a)])
+            per_foot = (1.0 / a, 1.0 / (1.0 - a))
         else:
-            per_foot = np.ones(1)
-        w_f = per_foot[self._foot_of_vertex]  # (n,)
+            per_foot = (1.0,)
+        norm_weight = w.norm_weight
+        # P_cop + diag(norm_weight w_f), w_f the weight of each vertex's foot (on floats: same sums)
+        diag = [d + norm_weight * per_foot[k] for d, k in zip(self._P_cop_diag, self._foot_of_vertex_list, strict=True)]
         P = self._P_cop.copy()
-        n = len(w_f)
-        diag = P.reshape(-1)[::n + 1]  # view of P's diagonal
-        diag += w.norm_weight * w_f  # P_cop + diag(norm_weight w_f)
+        n = len(diag)
+        P.reshape(-1)[::n + 1] = diag  # P's diagonal
         # rescale the cost: same minimiser, O(1) numbers for the solver
-        P /= sorted(diag.tolist())[n // 2]
+        P /= sorted(diag)[n // 2]
         # symmetric part (P already is when P_cop is: a diagonal term does not change that)
         self._P = P if self._P_cop_symmetric else 0.5 * (P + P.T)
 

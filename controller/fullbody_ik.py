@@ -49,7 +49,7 @@ class FullbodyIK:
     def __init__(self, kinematics: RobotKinematics, params: FullbodyIKParams | None = None) -> None:
         self.kin = kinematics
         self.params = params or FullbodyIKParams()
-        self._com_minus_base_xy = None  # warm start
+        self._com_minus_base_xy: tuple[float, float] | None = None  # warm start [m]
         self._leg_q_slices = None  # (kinematics, rleg, lleg) positions in pinocchio's configuration
 
     def com_of(self, base_pos_world, R_world_body, q_rad) -> np.ndarray:
@@ -63,12 +63,14 @@ class FullbodyIK:
         """q_upper_rad: joint vector whose non-leg joints are kept; soles as (position, rotation)."""
         p = self.params
         q = np.array(q_upper_rad, dtype=float)
+        tx, ty = np.asarray(com_xy_target, dtype=float)[:2].tolist()
         if base_xy_guess is not None:
-            base_xy = np.array(base_xy_guess, dtype=float)
+            bx, by = np.array(base_xy_guess, dtype=float)[:2].tolist()
         elif self._com_minus_base_xy is not None:
-            base_xy = np.asarray(com_xy_target) - self._com_minus_base_xy
+            dx, dy = self._com_minus_base_xy  # the last solution's COG - BODY offset
+            bx, by = tx - dx, ty - dy
         else:
-            base_xy = 0.5 * (T_world_rsole[0][:2] + T_world_lsole[0][:2])
+            bx, by = (0.5 * (T_world_rsole[0][:2] + T_world_lsole[0][:2])).tolist()
         reachable = True
         com = np.zeros(3)
         it = 0
@@ -83,10 +85,8 @@ class FullbodyIK:
         R_rows = _floats(R_world_body)
         rsole = (_floats(T_world_rsole[0]), _floats(T_world_rsole[1]))
         lsole = (_floats(T_world_lsole[0]), _floats(T_world_lsole[1]))
-        tx, ty = (float(v) for v in np.asarray(com_xy_target)[:2])
         tol = p.com_tolerance_m
         gain = p.move_base_gain
-        bx, by = float(base_xy[0]), float(base_xy[1])
         bz = float(base_z_m)
         for it in range(1, p.max_iterations + 1):  # noqa: B007 - reported after the loop
             base_l = [bx, by, bz]
@@ -116,5 +116,6 @@ class FullbodyIK:
         q[_RLEG_SLICE] = qr
         q[_LLEG_SLICE] = ql
         base = np.array((bx, by, bz))
-        self._com_minus_base_xy = com[:2] - base[:2]
+        cx, cy, _ = com.tolist()
+        self._com_minus_base_xy = (cx - bx, cy - by)
         return FullbodyIKResult(q_rad=q, base_pos_world=base, com_world=com, reachable=reachable, iterations=it)
