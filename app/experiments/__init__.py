@@ -10,6 +10,7 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Mapping
+from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
@@ -31,13 +32,29 @@ CSV_COLUMNS = ("time_s", "cp_error_x_m", "cp_error_y_m", "cp_error_m", "threshol
                "flag", "motion_stopped", "fallen")
 
 
+@lru_cache(maxsize=8)
+def _support_polygon(feet: tuple) -> np.ndarray:
+    return support_polygon([(pose, rect) for pose, rect in zip(feet, (HRP2_RIGHT_SOLE, HRP2_LEFT_SOLE), strict=True)])
+
+
 def _edge_distance(snap) -> float:
     """Signed distance [m] of the actual capture point to the edge of the planned support polygon."""
     gait = snap.reference.gait
-    feet = [((p[0], p[1], math.atan2(R[1, 0], R[0, 0])), rect) for (p, R, rect) in (
-        (gait.p_rsole_world, gait.R_rsole_world, HRP2_RIGHT_SOLE),
-        (gait.p_lsole_world, gait.R_lsole_world, HRP2_LEFT_SOLE))]
-    return float(distance_to_polygon_edge(np.asarray(snap.layers["st"]["cp_act"]), support_polygon(feet)))
+    feet = tuple((float(p[0]), float(p[1]), math.atan2(R[1, 0], R[0, 0])) for p, R in (
+        (gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world)))
+    return float(distance_to_polygon_edge(np.asarray(snap.layers["st"]["cp_act"]), _support_polygon(feet)))
+
+
+def settled_below_after_s(t: np.ndarray, err: np.ndarray, threshold: float, t_from: float) -> float | None:
+    """Time [s] from `t_from` until the error goes below `threshold` for good (to the end of the run);
+    0 if it never exceeds it after `t_from`, None if it ends above it."""
+    after = t >= t_from
+    above = np.flatnonzero(after & (err >= threshold))
+    if above.size == 0:
+        return 0.0
+    if above[-1] + 1 >= len(t):
+        return None
+    return float(t[above[-1] + 1] - t_from)
 
 
 def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, settle_s: float = 2.5,
@@ -94,9 +111,7 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
     if flag_time is not None:
         k = min(int(np.searchsorted(t, flag_time)), len(t) - 1)
         at_flag, edge_at_flag = float(err[k]), float(data[k, 5])
-        after = np.flatnonzero((t >= flag_time + t2) & (err < threshold))
-        if after.size:
-            recovered = float(t[after[0]] - (flag_time + t2))
+        recovered = settled_below_after_s(t, err, threshold, flag_time + t2)
     label = name if variant == exp.variants[0] else f"{name}-{variant}"
     result_name = f"{label}{'' if es else '-no-es'}"
     csv_path = png_path = None

@@ -41,7 +41,7 @@ class ExperimentResult:
     cp_error_at_flag_m: float | None
     edge_margin_at_flag_m: float | None  # distance of the actual CP to the support edge when the flag rose
     min_edge_margin_m: float  # smallest distance of the actual CP to the support edge (negative: outside)
-    below_threshold_after_revert_s: float | None  # time from the end of the revert to error < threshold
+    below_threshold_after_revert_s: float | None  # from the end of the revert until the error stays < threshold
     duration_s: float
     outcome: dict[str, float] = field(default_factory=dict)
     csv_path: str | None = None

@@ -49,3 +49,15 @@ def test_unknown_experiment_lists_the_available_ones():
     with pytest.raises(ValueError, match="wall-push-forward"):
         run_experiment("moon-walk")
     assert "wall-push-forward" in EXPERIMENTS and "wall-push-left" in EXPERIMENTS
+
+
+def test_settling_time_counts_until_the_error_stays_below_the_threshold():
+    import numpy as np
+
+    from app.experiments import settled_below_after_s
+
+    t = np.arange(10) * 0.5
+    err = np.array([0, 5, 1, 5, 1, 1, 5, 1, 1, 1], dtype=float)
+    assert settled_below_after_s(t, err, 2.0, 1.0) == 2.5  # re-crossing at 3.0 s counts: below from 3.5 s
+    assert settled_below_after_s(t, err, 2.0, 3.5) == 0.0
+    assert settled_below_after_s(t, np.r_[err[:-1], 5.0], 2.0, 1.0) is None
