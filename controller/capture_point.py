@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
@@ -110,14 +111,21 @@ def shrink_polygon(vertices, margin_m: float) -> np.ndarray:
 
 
 def distance_to_polygon_edge(p_xy, vertices) -> float:
-    """Signed distance [m] from the point to the polygon boundary: positive inside, negative outside."""
-    v = _as_ccw(vertices)
-    p = np.asarray(p_xy, dtype=float).reshape(2)
-    starts, _, normals = _edges(v)
-    inside_dist = float(np.min(np.einsum("ij,ij->i", p - starts, normals)))
-    if inside_dist >= 0.0:
-        return inside_dist
-    return -float(np.linalg.norm(p - _nearest_on_boundary(p, v)))
+    """Signed distance [m] from the point to the polygon boundary: positive inside, negative outside.
+
+    Scalar maths over the few vertices of a support polygon (it runs every tick)."""
+    v = _as_ccw(vertices).tolist()
+    px, py = np.asarray(p_xy, dtype=float).reshape(2).tolist()
+    inside_m = math.inf  # smallest distance to an edge's line, inward positive
+    boundary_m = math.inf  # distance to the nearest boundary point
+    for (ax, ay), (bx, by) in zip(v, v[1:] + v[:1], strict=True):
+        dx, dy = bx - ax, by - ay
+        length2 = dx * dx + dy * dy
+        length = math.sqrt(length2)
+        inside_m = min(inside_m, (dx * (py - ay) - dy * (px - ax)) / max(length, _EPS))
+        t = min(1.0, max(0.0, ((px - ax) * dx + (py - ay) * dy) / max(length2, _EPS)))
+        boundary_m = min(boundary_m, math.hypot(px - (ax + t * dx), py - (ay + t * dy)))
+    return inside_m if inside_m >= 0.0 else -boundary_m
 
 
 def point_in_convex_polygon(p_xy, vertices, tol_m: float = 1e-12) -> bool:

@@ -93,7 +93,8 @@ class _Channel:
             self.motions = [m for m in self.motions if m[2].is_moving]
 
     def moving(self, idx: np.ndarray) -> bool:
-        return any(np.isin(m_idx, idx).any() for m_idx, _, _ in self.motions)
+        wanted = set(np.asarray(idx).tolist())  # plain sets: status() asks this per group every tick
+        return any(not wanted.isdisjoint(m_idx.tolist()) for m_idx, _, _ in self.motions)
 
     def remaining_s(self) -> float:
         return max((track.remaining_s for _, _, track in self.motions), default=0.0)
