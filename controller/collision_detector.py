@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 
 from controller.blend import RecoverBlend
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, SharedStatus
 from controller.types import Reference, TickContext
 from robot.names import JOINT_NAMES, MJCF_ROBOT
 
@@ -78,6 +78,7 @@ class CollisionDetector(Layer):
         self.pairs: list[tuple[str, str]] = []
         self.blend: RecoverBlend | None = None
         self.collision_ticks = 0
+        self._pairs_status = SharedStatus()
 
     def set_params(self, params: CollisionDetectorParams) -> None:
         self.params = params
@@ -112,5 +113,6 @@ class CollisionDetector(Layer):
 
     def status(self) -> dict:
         return {"enabled": self.enabled, "collision": self.in_collision,
-                "pairs": [list(p) for p in self.pairs[:4]], "recovering": self.blend is not None,
+                "pairs": self._pairs_status.get(tuple(self.pairs[:4]), lambda: [list(p) for p in self.pairs[:4]]),
+                "recovering": self.blend is not None,
                 "collision_ticks": self.collision_ticks}

@@ -11,7 +11,7 @@ import pinocchio as pin
 
 from controller.errors import InvalidCommand, InvalidState
 from controller.kinematics import RobotKinematics
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, SharedStatus
 from controller.stabilizer import sigmoid_transition
 from controller.types import Reference, TickContext
 from robot.names import FORCE_SENSOR_NAMES, JOINT_GROUPS
@@ -70,6 +70,7 @@ class _Limb:
         self.transition: tuple[float, float, float] | None = None  # (from, to, elapsed)
         self.imp = ImpedanceState()
         self.q: np.ndarray | None = None  # last IK solution (arm joints)
+        self.status_part = SharedStatus()  # its part of ImpedanceController.status()
 
 
 class ImpedanceController(Layer):
@@ -157,7 +158,9 @@ class ImpedanceController(Layer):
                                 max_iter=8, pos_tol_m=2e-5, rot_tol_rad=2e-4)
 
     def status(self) -> dict:
-        return {"enabled": self.enabled,
-                **{name: {"active": lb.active, "weight": round(lb.weight, 4),
-                          "displacement_m": lb.imp.dp.tolist(), "rotation_rad": lb.imp.dr.tolist()}
-                   for name, lb in self.limbs.items()}}
+        return {"enabled": self.enabled, **{name: self._limb_status(lb) for name, lb in self.limbs.items()}}
+
+    def _limb_status(self, lb: _Limb) -> dict:
+        weight, dp, dr = round(lb.weight, 4), lb.imp.dp, lb.imp.dr
+        return lb.status_part.get((lb.active, weight, dp.tobytes(), dr.tobytes()), lambda: {
+            "active": lb.active, "weight": weight, "displacement_m": dp.tolist(), "rotation_rad": dr.tolist()})

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -60,6 +61,25 @@ class Params:
         for f in dataclasses.fields(cls):
             out.append({"name": f.name, "default": f.default, **dict(f.metadata)})
         return out
+
+
+class SharedStatus:
+    """A piece of a status() dict rebuilt only when its key changes, so consecutive snapshots share one
+    object while it stays the same (every list a snapshot keeps is work for the garbage collector).
+    Readers of a snapshot must not modify it."""
+
+    __slots__ = ("_key", "_value")
+    _UNSET = object()
+
+    def __init__(self) -> None:
+        self._key: Any = SharedStatus._UNSET
+        self._value: Any = None
+
+    def get(self, key: Any, build: Callable[[], Any]) -> Any:
+        if key != self._key:
+            self._value = build()
+            self._key = key
+        return self._value
 
 
 class Layer:

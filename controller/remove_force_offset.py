@@ -8,7 +8,7 @@ import numpy as np
 
 from controller.errors import InvalidCommand
 from controller.kinematics import RobotKinematics
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, SharedStatus
 from controller.rotations import cross3
 from controller.types import Reference, TickContext, read_only
 from robot.names import FORCE_SENSOR_NAMES
@@ -52,6 +52,7 @@ class RemoveForceOffset(Layer):
         self._frame_ids: list[int] | None = None  # sensor frames and the joints below them, FORCE_SENSOR_NAMES order
         self._below_joints: list[int] = []
         self._masses: list[float] = []
+        self._offsets_status = SharedStatus()
 
     def set_params(self, params: RemoveForceOffsetParams) -> None:
         self.params = params
@@ -135,4 +136,4 @@ class RemoveForceOffset(Layer):
 
     def status(self) -> dict:
         return {"enabled": self.enabled, "calibrating": sorted(self._calibrating),
-                "offsets": self.offsets.tolist()}
+                "offsets": self._offsets_status.get(self.offsets.tobytes(), self.offsets.tolist)}
