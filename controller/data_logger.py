@@ -1,11 +1,10 @@
-"""DataLogger: a ring buffer of snapshots, exported as CSV (PlotJuggler and Foxglove open it)."""
+"""DataLogger: a ring buffer of the snapshots' CSV rows (PlotJuggler and Foxglove open the CSV)."""
 
 from __future__ import annotations
 
 import csv
 import io
 import threading
-from collections import deque
 from pathlib import Path
 
 import numpy as np
@@ -15,14 +14,15 @@ from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
 
 def snapshot_row(snap) -> list[float]:
     """One CSV row: time, commanded and measured joints [rad], attitude, COG, ZMP, wrenches, flags."""
-    return [
-        snap.time_s,
-        *snap.q_cmd_rad, *snap.q_meas_rad,
-        *snap.base_rpy_est_rad, *snap.cog_world, *snap.zmp_world,
-        *np.asarray(snap.wrenches_ext).ravel(),
-        float(snap.emergency.get("hard_stop", False)),
-        *snap.truth.base_pos_world, float(snap.fallen),
-    ]
+    return snapshot_row_array(snap).tolist()
+
+
+def snapshot_row_array(snap) -> np.ndarray:
+    """snapshot_row as a float array."""
+    return np.concatenate(((snap.time_s,), snap.q_cmd_rad, snap.q_meas_rad, snap.base_rpy_est_rad,
+                           snap.cog_world, snap.zmp_world, np.asarray(snap.wrenches_ext).ravel(),
+                           (float(snap.emergency.get("hard_stop", False)),), snap.truth.base_pos_world,
+                           (float(snap.fallen),)))
 
 
 def csv_header() -> list[str]:
@@ -35,38 +35,53 @@ def csv_header() -> list[str]:
     return h
 
 
-class DataLogger:
-    """Keeps the last `max_length` snapshots (hrpsys DataLogger's ring buffer); thread-safe.
+#: the width of a CSV row (snapshot_row)
+ROW_LENGTH = len(csv_header())
 
-    `record` only appends a reference to the immutable snapshot: no I/O on the hot path.
+
+class DataLogger:
+    """Keeps the CSV rows of the last `max_length` snapshots (hrpsys DataLogger's ring buffer); thread-safe.
+
+    `record` copies the row's numbers into a preallocated array: no I/O on the hot path, and no snapshot
+    kept alive (thousands of retained snapshots would be thousands of objects for the garbage collector
+    to walk through, in pauses of milliseconds).
     """
 
     def __init__(self, max_length: int = 12000) -> None:
-        self._buf: deque = deque(maxlen=max_length)
+        self._rows = np.zeros((max_length, ROW_LENGTH))
+        self._next = 0  # ring index of the next row
+        self._count = 0  # rows held
         self._lock = threading.Lock()
 
     def record(self, snap) -> None:
+        """Store snapshot_row(snap)."""
+        row = snapshot_row_array(snap)
         with self._lock:
-            self._buf.append(snap)
+            self._rows[self._next] = row
+            self._next = (self._next + 1) % len(self._rows)
+            self._count = min(self._count + 1, len(self._rows))
 
     def clear(self) -> None:
         with self._lock:
-            self._buf.clear()
+            self._next = self._count = 0
 
     def __len__(self) -> int:
-        return len(self._buf)
+        return self._count
 
-    def snapshots(self) -> list:
+    def rows(self) -> np.ndarray:
+        """The rows held, oldest first, (n, ROW_LENGTH) (a copy)."""
         with self._lock:
-            return list(self._buf)
+            if self._count < len(self._rows):
+                return self._rows[:self._count].copy()
+            return np.concatenate((self._rows[self._next:], self._rows[:self._next]))
 
     def to_csv(self, path: str | Path | None = None) -> str:
         """Write the buffer as CSV to `path` (if given) and return the text."""
         out = io.StringIO()
         w = csv.writer(out, lineterminator="\n")
         w.writerow(csv_header())
-        for snap in self.snapshots():
-            w.writerow([f"{v:.6g}" for v in snapshot_row(snap)])
+        for row in self.rows().tolist():
+            w.writerow([f"{v:.6g}" for v in row])
         text = out.getvalue()
         if path is not None:
             Path(path).write_text(text)
