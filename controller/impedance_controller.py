@@ -142,10 +142,9 @@ class ImpedanceController(Layer):
             q_seed = q_out.copy()
             if lb.q is not None:
                 q_seed[lb.joints] = lb.q
-            try:
-                q_ik = self.kin_ik(lb.name, q_seed, ref, target_p, target_R)
-            except InvalidCommand:
-                q_ik = q_seed  # out of reach: keep the last reachable arm posture
+            # out of reach (or not converged this tick): the closest posture found, never a frozen arm,
+            # so the planned motion (an EmergencyStopper revert too) keeps reaching the hand
+            q_ik = self.kin_ik(lb.name, q_seed, ref, target_p, target_R)
             lb.q = q_ik[lb.joints]
             q_out[lb.joints] = (1.0 - lb.weight) * ref.q_rad[lb.joints] + lb.weight * lb.q
             if not lb.active and lb.weight <= 0.0:
@@ -155,7 +154,7 @@ class ImpedanceController(Layer):
 
     def kin_ik(self, limb: str, q_seed, ref: Reference, target_p, target_R) -> np.ndarray:
         return self.kin.limb_ik(limb, q_seed, ref.base_pos_world, ref.base_rpy_rad, target_p, target_R,
-                                max_iter=8, pos_tol_m=2e-5, rot_tol_rad=2e-4)
+                                max_iter=8, pos_tol_m=2e-5, rot_tol_rad=2e-4, best_effort=True)
 
     def status(self) -> dict:
         return {"enabled": self.enabled, **{name: self._limb_status(lb) for name, lb in self.limbs.items()}}

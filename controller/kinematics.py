@@ -83,11 +83,12 @@ class RobotKinematics:
     # ---- inverse kinematics ---------------------------------------------------------------------
     def limb_ik(self, group: str, q_init_rad, base_pos_world, base_rpy_rad, target_pos, target_R,
                 frame: str | None = None, max_iter: int = 50, pos_tol_m: float = 1e-4,
-                rot_tol_rad: float = 1e-3) -> np.ndarray:
+                rot_tol_rad: float = 1e-3, best_effort: bool = False) -> np.ndarray:
         """Move only `group`'s joints so its end effector reaches the target (hrpsys setTargetPose).
 
         `frame` None: target in the world; otherwise in that link's frame (e.g. "BODY").
-        Damped least squares, joint limits enforced; raises InvalidCommand if it does not converge.
+        Damped least squares, joint limits enforced; raises InvalidCommand if it does not converge,
+        unless `best_effort`, which returns the last iterate (the closest posture it found).
         """
         if group not in LIMB_OF_GROUP:
             raise InvalidCommand(
@@ -104,16 +105,22 @@ class RobotKinematics:
         idx = np.array(JOINT_GROUPS[group])
         cols = self.idx_v[idx]
         fid = self.model.getFrameId(ee)
+        best_q, best_err = q_rad.copy(), np.inf  # the closest iterate, for best_effort
         for _ in range(max_iter):
             self.update(base_pos_world, base_R, q_rad)
             M = self.data.oMf[fid]
             err = pin.log6(M.actInv(target)).vector  # in the local frame
             if np.linalg.norm(err[:3]) < pos_tol_m and np.linalg.norm(err[3:]) < rot_tol_rad:
                 return q_rad
+            err_norm = float(np.linalg.norm(err))
+            if err_norm < best_err:
+                best_q[:], best_err = q_rad, err_norm
             J = pin.computeFrameJacobian(self.model, self.data, self.q, fid, pin.LOCAL)[:, cols]
             lam = 1e-4
             dq = J.T @ np.linalg.solve(J @ J.T + lam * np.eye(6), err)
             q_rad[idx] = np.clip(q_rad[idx] + dq, self.q_lower[idx], self.q_upper[idx])
+        if best_effort:
+            return best_q
         raise InvalidCommand(
             f"setTargetPose: {group} cannot reach the target "
             f"(residual {np.linalg.norm(err[:3]) * 1e3:.1f} mm, "

@@ -87,3 +87,4 @@ def test_the_gripper_follows_its_commands_while_the_impedance_controller_runs():
     snap = loop.run_for(1.5)
     assert abs(snap.q_cmd_rad[gripper] - target_rad) < 1e-6
     assert abs(loop.plant.data.qpos[loop.plant.model.joint("RARM_JOINT6").qposadr[0]] - target_rad) < np.deg2rad(1.0)
+
