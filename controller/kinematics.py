@@ -61,6 +61,17 @@ class RobotKinematics:
     def update_rpy(self, base_pos_world, base_rpy_rad, q_rad) -> None:
         self.update(base_pos_world, rpy_to_matrix(base_rpy_rad), q_rad)
 
+    def update_joints_rpy(self, base_pos_world, base_rpy_rad, q_rad) -> None:
+        """update_rpy without the frame placements: joint placements and COMs only; read frames with
+        `frame_homogeneous` (the same placement updateFramePlacements computes, for the frames needed)."""
+        self.q = self.configuration(base_pos_world, rpy_to_matrix(base_rpy_rad), q_rad)
+        pin.forwardKinematics(self.model, self.data, self.q)
+        pin.centerOfMass(self.model, self.data, pin.KinematicLevel.POSITION, True)  # True: subtree COMs too
+
+    def frame_homogeneous(self, frame_id: int) -> np.ndarray:
+        """(4, 4) world <- frame after update_joints_rpy (the frame's placement is updated in data.oMf)."""
+        return pin.updateFramePlacement(self.model, self.data, frame_id).homogeneous
+
     # ---- queries on the last update -------------------------------------------------------------
     def com_world(self) -> np.ndarray:
         return self.data.com[0].copy()

@@ -70,10 +70,10 @@ class RemoveForceOffset(Layer):
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         est = ctx.estimate
         kin = self.kin
-        kin.update_rpy(_ZERO3, est.base_rpy_rad, ctx.sensors.q_rad)
+        kin.update_joints_rpy(_ZERO3, est.base_rpy_rad, ctx.sensors.q_rad)  # only the sensor frames are read
         data = kin.data
-        oMf = data.oMf
-        H = np.array([oMf[fid].homogeneous for fid in self._sensor_frame_ids()])  # (n, 4, 4) world <- sensor
+        frame = kin.frame_homogeneous
+        H = np.array([frame(fid) for fid in self._sensor_frame_ids()])  # (n, 4, 4) world <- sensor
         est.sensor_pos_from_base = H[:, :3, 3]  # sensor origins, world axes from BODY [m]
         est.sensor_R_world = H[:, :3, :3]
         H_rows = H.tolist()  # per sensor, rows of [R | p] as floats

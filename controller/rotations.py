@@ -9,7 +9,7 @@ import numpy as np
 
 def rpy_to_matrix(rpy: np.ndarray) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll)."""
-    return np.array(rpy_to_rows(*(float(v) for v in rpy)))
+    return np.array(rpy_to_rows(*np.asarray(rpy, dtype=float).tolist()))
 
 
 def rpy_to_rows(r: float, p: float, y: float) -> tuple[tuple[float, float, float], ...]:
