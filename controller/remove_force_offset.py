@@ -81,8 +81,9 @@ class RemoveForceOffset(Layer):
             ext_rows = self._external_wrenches(H_rows, ctx.sensors.wrenches.tolist(), data.com)
             if self._calibrating:
                 self._calibrate_step(ext_rows, ctx.dt_s)
-            ext_rows = [[e - o for e, o in zip(row, off, strict=True)]
-                        for row, off in zip(ext_rows, self.offsets.tolist(), strict=True)]  # ext - offsets
+            if self.offsets.any():  # ext - offsets (nothing to subtract before a calibration)
+                ext_rows = [[e - o for e, o in zip(row, off, strict=True)]
+                            for row, off in zip(ext_rows, self.offsets.tolist(), strict=True)]
         else:
             ext_rows = ctx.sensors.wrenches.tolist()
         ext_w = []

@@ -74,7 +74,7 @@ class ActualStateEstimator:
         meas_soles = est.sensor_pos_from_base[_FEET]
         rows = est.wrenches_ext_world.tolist()
         foot_wrenches = [rows[i] for i in FOOT_SENSORS]
-        fz0, fz1 = (max(wrench[2], 0.0) for wrench in foot_wrenches)  # np.clip(fz, 0.0, None)
+        fz0, fz1 = max(foot_wrenches[0][2], 0.0), max(foot_wrenches[1][2], 0.0)  # np.clip(fz, 0.0, None)
         fz_sum = fz0 + fz1
         w = np.array((fz0 / fz_sum, fz1 / fz_sum)) if fz_sum > 2 * CONTACT_FZ_N else _EQUAL_WEIGHTS
         offset = w @ (ref_soles - meas_soles)
