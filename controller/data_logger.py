@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
+from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES, NUM_JOINTS
 
 
 def snapshot_row(snap) -> list[float]:
@@ -19,10 +19,26 @@ def snapshot_row(snap) -> list[float]:
 
 def snapshot_row_array(snap) -> np.ndarray:
     """snapshot_row as a float array."""
-    return np.concatenate(((snap.time_s,), snap.q_cmd_rad, snap.q_meas_rad, snap.base_rpy_est_rad,
-                           snap.cog_world, snap.zmp_world, np.asarray(snap.wrenches_ext).ravel(),
-                           (float(snap.emergency.get("hard_stop", False)),), snap.truth.base_pos_world,
-                           (float(snap.fallen),)))
+    row = np.empty(ROW_LENGTH)
+    _fill_row(row, snap)
+    return row
+
+
+def _fill_row(row: np.ndarray, snap) -> None:
+    """Write snapshot_row(snap) into `row` (ROW_LENGTH,)."""
+    n, k = NUM_JOINTS, 6 * len(FORCE_SENSOR_NAMES)
+    row[0] = snap.time_s
+    row[1:1 + n] = snap.q_cmd_rad
+    row[1 + n:1 + 2 * n] = snap.q_meas_rad
+    i = 1 + 2 * n
+    row[i:i + 3] = snap.base_rpy_est_rad
+    row[i + 3:i + 6] = snap.cog_world
+    row[i + 6:i + 9] = snap.zmp_world
+    row[i + 9:i + 9 + k] = np.asarray(snap.wrenches_ext).reshape(-1)
+    i += 9 + k
+    row[i] = float(snap.emergency.get("hard_stop", False))
+    row[i + 1:i + 4] = snap.truth.base_pos_world
+    row[i + 4] = float(snap.fallen)
 
 
 def csv_header() -> list[str]:
@@ -55,9 +71,8 @@ class DataLogger:
 
     def record(self, snap) -> None:
         """Store snapshot_row(snap)."""
-        row = snapshot_row_array(snap)
         with self._lock:
-            self._rows[self._next] = row
+            _fill_row(self._rows[self._next], snap)
             self._next = (self._next + 1) % len(self._rows)
             self._count = min(self._count + 1, len(self._rows))
 

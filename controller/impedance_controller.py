@@ -157,9 +157,10 @@ class ImpedanceController(Layer):
                                 max_iter=8, pos_tol_m=2e-5, rot_tol_rad=2e-4, best_effort=True)
 
     def status(self) -> dict:
-        return {"enabled": self.enabled, **{name: self._limb_status(lb) for name, lb in self.limbs.items()}}
-
-    def _limb_status(self, lb: _Limb) -> dict:
-        weight, dp, dr = round(lb.weight, 4), lb.imp.dp, lb.imp.dr
-        return lb.status_part.get((lb.active, weight, dp.tobytes(), dr.tobytes()), lambda: {
-            "active": lb.active, "weight": weight, "displacement_m": dp.tolist(), "rotation_rad": dr.tolist()})
+        out = {"enabled": self.enabled}
+        for name, lb in self.limbs.items():
+            dp, dr = lb.imp.dp, lb.imp.dr
+            out[name] = lb.status_part.get((lb.active, lb.weight, dp.tobytes(), dr.tobytes()), lambda lb=lb: {
+                "active": lb.active, "weight": round(lb.weight, 4), "displacement_m": lb.imp.dp.tolist(),
+                "rotation_rad": lb.imp.dr.tolist()})
+        return out

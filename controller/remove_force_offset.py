@@ -16,6 +16,7 @@ from robot.names import FORCE_SENSOR_NAMES
 G = 9.80665  # [m/s^2]
 _ZERO3 = np.zeros(3)
 _ZERO3.flags.writeable = False
+_NO_OFFSETS = bytes(8 * 6 * len(FORCE_SENSOR_NAMES))  # the bytes of all-zero offsets (a cheap test)
 
 
 @dataclass(frozen=True)
@@ -81,7 +82,7 @@ class RemoveForceOffset(Layer):
             ext_rows = self._external_wrenches(H_rows, ctx.sensors.wrenches.tolist(), data.com)
             if self._calibrating:
                 self._calibrate_step(ext_rows, ctx.dt_s)
-            if self.offsets.any():  # ext - offsets (nothing to subtract before a calibration)
+            if self.offsets.tobytes() != _NO_OFFSETS:  # ext - offsets (none before a calibration: x - 0 is x)
                 ext_rows = [[e - o for e, o in zip(row, off, strict=True)]
                             for row, off in zip(ext_rows, self.offsets.tolist(), strict=True)]
         else:
