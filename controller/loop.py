@@ -144,10 +144,11 @@ class ControlLoop:
         return self.submit(fn).result(timeout=timeout_s)
 
     def _drain(self) -> None:
-        while True:
+        q = self._queue
+        while not q.empty():  # (cheaper than get_nowait raising Empty on the usual empty queue)
             try:
-                fn, fut = self._queue.get_nowait()
-            except queue.Empty:
+                fn, fut = q.get_nowait()
+            except queue.Empty:  # another thread drained it meanwhile
                 return
             if not fut.set_running_or_notify_cancel():
                 continue

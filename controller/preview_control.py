@@ -178,7 +178,7 @@ class PreviewController:
             raise InvalidCommand(f"zmp_ref_future shape {r.shape}; expected ({self._n}, 2)")
         x = self.x
         e = self._C @ x - self._zmp_ref_prev  # (2,)
-        du = self._w @ r - self._f1 * self._zmp_ref_prev - self._ks * e - (self._kx * self._dx).sum(0)
+        du = self._w @ r - self._f1 * self._zmp_ref_prev - self._ks * e - np.add.reduce(self._kx * self._dx, axis=0)
         self._u = self._u + du
         x_new = self._A @ x + self._B * self._u
         self._dx = x_new - x
