@@ -291,9 +291,9 @@ class ForceDistributionQP:
         fz = np.array(fz_l)
         n_xy = np.array(tuple(zip(nx_l, ny_l, strict=True)))
         cop = np.array(cop_l)
-        f.flags.writeable = False
+        f.setflags(write=False)
         for arr in (fz, n_xy, cop, zmp):
-            arr.flags.writeable = False
+            arr.setflags(write=False)
         return FootForces(fz, n_xy, cop, tuple(f[a:b] for a, b in self._bounds), zmp, projected)
 
 

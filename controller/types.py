@@ -71,7 +71,7 @@ class Reference:
             shape = shapes.get(k)
             if shape is not None:
                 if type(v) is np.ndarray and v.dtype == np.float64 and v.shape == shape:
-                    v.flags.writeable = False
+                    v.setflags(write=False)
                 else:
                     v = frozen_array(v, shape)
             out[k] = v
@@ -123,7 +123,7 @@ class Estimate:
 
 def read_only(a: np.ndarray) -> np.ndarray:
     """`a` itself, made read-only: for an array just built and handed over (frozen_array copies)."""
-    a.flags.writeable = False
+    a.setflags(write=False)
     return a
 
 
