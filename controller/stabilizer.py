@@ -326,10 +326,13 @@ class Stabilizer(Layer):
         self.emergency = flag
 
     def status(self) -> dict:
+        ex, ey = cp_error = self.cp_error.tolist()
+        (r_roll, r_pitch), (l_roll, l_pitch) = self.d_foot_rpy.tolist()  # (foot, [roll, pitch]) [rad]
+        deg = math.degrees
         return {"enabled": self.enabled, "active": self.active, "weight": round(self.weight, 4),
-                "cp_ref": self.cp_ref.tolist(), "cp_act": self.cp_act.tolist(), "cp_error": self.cp_error.tolist(),
-                "cp_error_norm": math.hypot(*self.cp_error.tolist()), "threshold": self.params.cp_threshold_m,
+                "cp_ref": self.cp_ref.tolist(), "cp_act": self.cp_act.tolist(), "cp_error": cp_error,
+                "cp_error_norm": math.hypot(ex, ey), "threshold": self.params.cp_threshold_m,
                 "emergency": self.emergency, "flag_rise_time": self.flag_rise_time_s,
-                "d_foot_rpy_deg": [[math.degrees(v) for v in row] for row in self.d_foot_rpy.tolist()],
+                "d_foot_rpy_deg": [[deg(r_roll), deg(r_pitch)], [deg(l_roll), deg(l_pitch)]],
                 "dz_diff_m": self.dz_diff,
                 "new_zmp": self.new_zmp.tolist()}
