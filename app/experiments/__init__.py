@@ -58,7 +58,7 @@ def settled_below_after_s(t: np.ndarray, err: np.ndarray, threshold: float, t_fr
 
 
 def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, settle_s: float = 2.5,
-                   plot: bool = True, variant: str | None = None,
+                   plot: bool = True, variant: str | None = None, write_csv: bool = True,
                    params: Mapping[str, Mapping[str, Any]] | None = None) -> ExperimentResult:
     """Run experiment `name` (variant `variant`, default its first) with or without the EmergencyStopper.
 
@@ -112,16 +112,17 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         k = min(int(np.searchsorted(t, flag_time)), len(t) - 1)
         at_flag, edge_at_flag = float(err[k]), float(data[k, 5])
         recovered = settled_below_after_s(t, err, threshold, flag_time + t2)
-    label = name if variant == exp.variants[0] else f"{name}-{variant}"
+    label = name if variant == "default" else f"{name}-{variant}"
     result_name = f"{label}{'' if es else '-no-es'}"
     csv_path = png_path = None
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
-        csv_path = out_dir / f"{result_name}.csv"
-        with open(csv_path, "w", newline="") as fh:
-            w = csv.writer(fh, lineterminator="\n")
-            w.writerow(CSV_COLUMNS)
-            w.writerows([[f"{v:.6g}" for v in r] for r in rows])
+        if write_csv:
+            csv_path = out_dir / f"{result_name}.csv"
+            with open(csv_path, "w", newline="") as fh:
+                w = csv.writer(fh, lineterminator="\n")
+                w.writerow(CSV_COLUMNS)
+                w.writerows([[f"{v:.6g}" for v in r] for r in rows])
         if plot:
             png_path = out_dir / f"{result_name}.png"
             plot_fig10(data, flag_time, f"{label} ({'with' if es else 'without'} EmergencyStopper)", png_path)
