@@ -242,7 +242,7 @@ class Stabilizer(Layer):
                 d = d_foot[i]
                 d_foot[i] = [d[j] - d[j] * dt / 0.08 for j in range(2)]  # swing foot: back to the plan quickly
         lim = math.radians(p.rot_limit_deg)
-        d_foot = [[min(max(v, -lim), lim) for v in d] for d in d_foot]  # np.clip on floats
+        d_foot = [[min(max(roll, -lim), lim), min(max(pitch, -lim), lim)] for roll, pitch in d_foot]  # np.clip
         self.d_foot_rpy[:] = d_foot
         if len(idx) == 2 and contact_act[0] and contact_act[1]:
             fz_ref = forces.fz_n.tolist()

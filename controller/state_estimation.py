@@ -88,20 +88,23 @@ class ActualStateEstimator:
 
     def _with_gait(self, est: Estimate, gait) -> tuple[np.ndarray, np.ndarray]:
         """__call__ with a gait reference, on Python floats (same maths)."""
-        ref_soles = (gait.p_rsole_world.tolist(), gait.p_lsole_world.tolist())
+        (rx, ry, rz), (lx, ly, lz) = gait.p_rsole_world.tolist(), gait.p_lsole_world.tolist()  # planned
         pos = est.sensor_pos_from_base.tolist()
-        meas_soles = [pos[i] for i in FOOT_SENSORS]
-        c0, c1 = (1.0 if c else 0.0 for c in gait.contact)
+        (mrx, mry, mrz), (mlx, mly, mlz) = pos[FOOT_SENSORS[0]], pos[FOOT_SENSORS[1]]  # measured, from BODY
+        right_down, left_down = gait.contact
+        c0, c1 = (1.0 if right_down else 0.0), (1.0 if left_down else 0.0)
         csum = c0 + c1
         w0, w1 = (c0 / csum, c1 / csum) if csum > 0 else (0.5, 0.5)
-        offset = [w0 * (ref_soles[0][j] - meas_soles[0][j]) + w1 * (ref_soles[1][j] - meas_soles[1][j])
-                  for j in range(3)]
-        self.base_pos_world = np.array(offset)
-        com = est.com_from_base.tolist()
-        cog = np.array([com[j] + offset[j] for j in range(3)])
-        soles = [[m[j] + offset[j] for j in range(3)] for m in meas_soles]
+        # BODY offset: the weighted mean of planned minus measured soles (x, y, z written out)
+        ox = w0 * (rx - mrx) + w1 * (lx - mlx)
+        oy = w0 * (ry - mry) + w1 * (ly - mly)
+        oz = w0 * (rz - mrz) + w1 * (lz - mlz)
+        self.base_pos_world = np.array((ox, oy, oz))
+        cx, cy, cz = est.com_from_base.tolist()
+        cog = np.array((cx + ox, cy + oy, cz + oz))
+        soles = ((mrx + ox, mry + oy, mrz + oz), (mlx + ox, mly + oy, mlz + oz))
         wrenches = est.wrenches_ext_world.tolist()
-        zmp = zmp_from_foot_wrenches(soles, [wrenches[i] for i in FOOT_SENSORS],
+        zmp = zmp_from_foot_wrenches(soles, (wrenches[FOOT_SENSORS[0]], wrenches[FOOT_SENSORS[1]]),
                                      w0 * soles[0][2] + w1 * soles[1][2])
         if zmp is not None:
             self.last_zmp = zmp
