@@ -84,9 +84,8 @@ def alpha_from_zmp(zmp_xy: np.ndarray, rfoot_xy: np.ndarray, lfoot_xy: np.ndarra
     The ZMP is projected on the segment from the left to the right foot position [m] and the ratio
     clamped to [0, 1]. Coincident feet give 0.5.
     """
-    r0, r1 = (float(v) for v in rfoot_xy)
-    l0, l1 = (float(v) for v in lfoot_xy)
-    z0, z1 = (float(v) for v in zmp_xy)
+    (r0, r1), (l0, l1), (z0, z1) = rfoot_xy, lfoot_xy, zmp_xy
+    r0, r1, l0, l1, z0, z1 = float(r0), float(r1), float(l0), float(l1), float(z0), float(z1)
     d0, d1 = r0 - l0, r1 - l1
     dd = d0 * d0 + d1 * d1
     if dd < 1e-18:

@@ -212,7 +212,8 @@ class Stabilizer(Layer):
                     for j in range(2))
         # QP distribution (Eq. 9-14) over the feet meant to be in contact
         soles_world = ((gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
-        idx = [i for i in range(2) if gait.contact[i]]
+        contact = gait.contact
+        idx = [i for i in (0, 1) if contact[i]]
         qp = self._force_qp(idx, soles_world)
         p_r = gait.p_rsole_world.tolist()
         p_l = gait.p_lsole_world.tolist()
