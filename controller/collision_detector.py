@@ -30,6 +30,10 @@ class SelfCollisionChecker:
         self.model = mujoco.MjModel.from_xml_path(str(mjcf_path))
         self.data = mujoco.MjData(self.model)
         self.qpos_adr = np.array([self.model.joint(n).qposadr[0] for n in JOINT_NAMES])
+        adr = self.qpos_adr.tolist()
+        # the joints' qpos entries as a slice when consecutive (a cheaper write); the qpos view, kept
+        self._qpos_index = slice(adr[0], adr[-1] + 1) if adr == list(range(adr[0], adr[0] + len(adr))) else adr
+        self._qpos = self.data.qpos
         self._free_geom_margin = self.model.geom_margin.copy()
         self._body_names = [self.model.body(i).name for i in range(self.model.nbody)]
         self._last_key: tuple[bytes, float] | None = None  # (posture, margin) of _last_pairs
@@ -51,7 +55,7 @@ class SelfCollisionChecker:
 
     def _colliding_pairs(self, q_rad: np.ndarray) -> list[tuple[str, str]]:
         d = self.data
-        d.qpos[self.qpos_adr] = q_rad
+        self._qpos[self._qpos_index] = q_rad
         mujoco.mj_kinematics(self.model, d)
         mujoco.mj_collision(self.model, d)
         n = d.ncon
