@@ -240,6 +240,7 @@ def experiment(argv: Sequence[str]) -> int:
               f"CP {r.edge_margin_at_flag_m * 1e3:.1f} mm inside the support polygon")
     if r.below_threshold_after_revert_s is not None:
         print(f"error below the threshold {r.below_threshold_after_revert_s:.2f} s after the revert ended")
+    print(f"simulated at {r.real_time_factor:.1f}x real time")
     for key, value in r.outcome.items():
         print(f"{key}: {value:.4g}")
     print(r.verdict_line())

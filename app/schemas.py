@@ -174,10 +174,11 @@ class ExperimentResponse(BaseModel):
     min_edge_margin_m: float | None = Field(description="smallest distance [m] of the actual CP to the support "
                                                         "edge (negative: outside)")
     below_threshold_after_revert_s: float | None = Field(
-        description="time [s] from the end of the revert (flag + T2) until the CP error is below the threshold")
+        description="time [s] from the end of the revert (flag + T2) until the CP error stays below the threshold")
     duration_s: float = Field(description="simulated time run [s] (shorter than planned when the robot fell)")
     outcome: dict[str, Any] = Field(description="task measures of the experiment (valve angle, ...)")
     params: dict[str, Any] = Field(default_factory=dict, description="the EmergencyStopper parameters of the run")
     csv_path: str | None = None
     png_path: str | None = None
     wall_time_s: float = Field(description="wall-clock time the run took [s]")
+    real_time_factor: float = Field(description="simulated time / wall time spent simulating (no set-up, no files)")

@@ -69,8 +69,8 @@ def _as_ccw(vertices) -> np.ndarray:
     v = np.asarray(vertices, dtype=float).reshape(-1, 2)
     if len(v) < 3:
         raise InvalidCommand(f"polygon with {len(v)} vertices; give at least 3 (M, 2) vertices")
-    x, y = v[:, 0], v[:, 1]
-    area2 = float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    pts = v.tolist()
+    area2 = sum(ax * by - bx * ay for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1], strict=True))  # [m^2]
     return v[::-1] if area2 < 0.0 else v
 
 

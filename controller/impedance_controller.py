@@ -12,6 +12,7 @@ import pinocchio as pin
 from controller.errors import InvalidCommand, InvalidState
 from controller.kinematics import RobotKinematics
 from controller.layer import Layer, Params, SharedStatus
+from controller.rotations import cross3
 from controller.stabilizer import sigmoid_transition
 from controller.types import Reference, TickContext
 from robot.names import FORCE_SENSOR_NAMES, JOINT_GROUPS
@@ -132,7 +133,7 @@ class ImpedanceController(Layer):
             p_ee, R_ee = kin.frame_pose(lb.frame)
             p_s, _ = kin.frame_pose(lb.sensor)
             f_act = est.wrenches_ext_world[lb.sensor_index, :3]
-            tau_act = est.wrenches_ext_world[lb.sensor_index, 3:] + np.cross(p_s - p_ee, f_act)
+            tau_act = est.wrenches_ext_world[lb.sensor_index, 3:] + cross3(p_s - p_ee, f_act)
             f_ref = ref.wrenches[lb.sensor_index, :3]
             tau_ref = ref.wrenches[lb.sensor_index, 3:]
             if lb.active:

@@ -99,7 +99,8 @@ class RobotKinematics:
 
         `frame` None: target in the world; otherwise in that link's frame (e.g. "BODY").
         Damped least squares, joint limits enforced; raises InvalidCommand if it does not converge,
-        unless `best_effort`, which returns the last iterate (the closest posture it found).
+        unless `best_effort`, which returns the closest posture it found. Afterwards only the joint
+        placements and the end-effector frame of the returned posture are up to date (not all frames).
         """
         if group not in LIMB_OF_GROUP:
             raise InvalidCommand(
@@ -117,16 +118,19 @@ class RobotKinematics:
         cols = self.idx_v[idx]
         fid = self.model.getFrameId(ee)
         best_q, best_err = q_rad.copy(), np.inf  # the closest iterate, for best_effort
+        model, data = self.model, self.data
         for _ in range(max_iter):
-            self.update(base_pos_world, base_R, q_rad)
-            M = self.data.oMf[fid]
+            # one kinematic pass per iteration: joint placements and Jacobians, then the end-effector frame
+            self.q = self.configuration(base_pos_world, base_R, q_rad)
+            pin.computeJointJacobians(model, data, self.q)
+            M = pin.updateFramePlacement(model, data, fid)
             err = pin.log6(M.actInv(target)).vector  # in the local frame
             if np.linalg.norm(err[:3]) < pos_tol_m and np.linalg.norm(err[3:]) < rot_tol_rad:
                 return q_rad
             err_norm = float(np.linalg.norm(err))
             if err_norm < best_err:
                 best_q[:], best_err = q_rad, err_norm
-            J = pin.computeFrameJacobian(self.model, self.data, self.q, fid, pin.LOCAL)[:, cols]
+            J = pin.getFrameJacobian(model, data, fid, pin.LOCAL)[:, cols]
             lam = 1e-4
             dq = J.T @ np.linalg.solve(J @ J.T + lam * np.eye(6), err)
             q_rad[idx] = np.clip(q_rad[idx] + dq, self.q_lower[idx], self.q_upper[idx])

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import csv
 import math
+import time
 from collections.abc import Mapping
 from functools import lru_cache
 from pathlib import Path
@@ -77,6 +78,7 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         layer.set_params(layer.params.replaced(**changes))
     if not es:
         loop.chain["es"].enabled = False
+    wall_t0 = time.perf_counter()
     loop.run_for(settle_s)  # AutoBalancer and Stabilizer blended in
     for limb in exp.impedance:
         loop.call(lambda limb=limb: loop.chain["ic"].start(limb))
@@ -102,6 +104,7 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         if snap.fallen:
             fell_at = snap.time_s - t0
             break
+    sim_wall_s = time.perf_counter() - wall_t0  # simulating only: no set-up, no files, no plot
     outcome = exp.outcome(system) if exp.outcome is not None else {}
     data = np.array(rows)
     t = data[:, 0]
@@ -131,4 +134,5 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         flag_time_s=flag_time, peak_cp_error_m=float(err.max()), cp_error_at_flag_m=at_flag,
         edge_margin_at_flag_m=edge_at_flag, min_edge_margin_m=float(data[:, 5].min()),
         below_threshold_after_revert_s=recovered, duration_s=float(t[-1]), outcome=outcome,
+        real_time_factor=(settle_s + float(t[-1])) / sim_wall_s,
         csv_path=None if csv_path is None else str(csv_path), png_path=None if png_path is None else str(png_path))

@@ -44,6 +44,7 @@ class ExperimentResult:
     below_threshold_after_revert_s: float | None  # from the end of the revert until the error stays < threshold
     duration_s: float
     outcome: dict[str, float] = field(default_factory=dict)
+    real_time_factor: float = 0.0  # simulated time (settling included) / wall time spent simulating it
     csv_path: str | None = None
     png_path: str | None = None
 
