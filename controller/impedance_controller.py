@@ -85,6 +85,9 @@ class ImpedanceController(Layer):
         self.params = {name: params or ImpedanceParams() for name in LIMBS}
         self.kin = kinematics or RobotKinematics()
         self.limbs = {name: _Limb(name) for name in LIMBS}
+        model = self.kin.model
+        self._frame_ids = {name: (model.getFrameId(lb.frame), model.getFrameId(lb.sensor))
+                           for name, lb in self.limbs.items()}
 
     def _limb(self, name: str) -> _Limb:
         if name not in self.limbs:
@@ -117,8 +120,10 @@ class ImpedanceController(Layer):
             return ref
         q_out = np.array(ref.q_rad, dtype=float)
         kin = self.kin
-        kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
+        # one kinematic pass for the planned posture: the hand and sensor frames of every working limb
+        kin.update_joints_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
         est = ctx.estimate
+        targets = []
         for lb in self.limbs.values():
             if not (lb.active or lb.weight > 0.0):
                 continue
@@ -130,16 +135,18 @@ class ImpedanceController(Layer):
                 lb.weight = w0 + (w1 - w0) * sigmoid_transition(s)
                 lb.transition = None if s >= 1.0 else (w0, w1, el)
             # the planned hand pose (spring centre) and the measured-minus-planned wrench at the hand
-            p_ee, R_ee = kin.frame_pose(lb.frame)
-            p_s, _ = kin.frame_pose(lb.sensor)
+            frame_id, sensor_id = self._frame_ids[lb.name]
+            T_ee = kin.frame_homogeneous(frame_id)
+            p_ee, R_ee = T_ee[:3, 3], T_ee[:3, :3]
+            p_s = kin.frame_homogeneous(sensor_id)[:3, 3]
             f_act = est.wrenches_ext_world[lb.sensor_index, :3]
             tau_act = est.wrenches_ext_world[lb.sensor_index, 3:] + cross3(p_s - p_ee, f_act)
             f_ref = ref.wrenches[lb.sensor_index, :3]
             tau_ref = ref.wrenches[lb.sensor_index, 3:]
             if lb.active:
                 lb.imp.step(p, f_act - f_ref, tau_act - tau_ref, ctx.dt_s)
-            target_p = p_ee + lb.imp.dp
-            target_R = pin.exp3(lb.imp.dr) @ R_ee
+            targets.append((lb, p_ee + lb.imp.dp, pin.exp3(lb.imp.dr) @ R_ee))
+        for lb, target_p, target_R in targets:
             q_seed = q_out.copy()
             if lb.q is not None:
                 q_seed[lb.joints] = lb.q
@@ -150,7 +157,6 @@ class ImpedanceController(Layer):
             q_out[lb.joints] = (1.0 - lb.weight) * ref.q_rad[lb.joints] + lb.weight * lb.q
             if not lb.active and lb.weight <= 0.0:
                 lb.q = None
-            kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
         return ref.with_(q_rad=q_out)
 
     def kin_ik(self, limb: str, q_seed, ref: Reference, target_p, target_R) -> np.ndarray:

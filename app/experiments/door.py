@@ -146,8 +146,8 @@ def door_script(system: ControllerSystem, variant: str) -> list[Event]:
         (0.0, lambda: reach(system, APPROACH_M, 2.0)),
         (2.2, lambda: reach(system, 0.0, 1.0)),
         (3.4, lambda: seq.set_joint_angle(GRIPPER, math.radians(GRIPPER_CLOSED_DEG), 0.6)),
-        # the ImpedanceController holds the gripper joint where it was when it started (it re-solves the whole
-        # "larm" group): it starts once the gripper is closed on the knob
+        # the ImpedanceController starts once the gripper is closed on the knob: the hand then yields to the
+        # door's reaction, not to the knob's contact while the jaws close
         (4.1, lambda: system.loop.chain["ic"].start(LIMB)),
         (4.5, lambda: move_along_arc(system, door_deg, 3.0, chest_deg)),
     ]
