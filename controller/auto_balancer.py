@@ -74,7 +74,7 @@ class AutoBalancer(Layer):
         self.has_ik_failed = False
         self.last_gait: GaitState | None = None
         self._footsteps_cache: tuple[list, int, list[dict]] | None = None
-        self.walking_stop = False  # emergency walking stop requested and the robot still stepping
+        self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
         if active:
             self.start()
 
@@ -94,6 +94,11 @@ class AutoBalancer(Layer):
     def set_params(self, params: AutoBalancerParams) -> None:
         self.params = params
 
+    @property
+    def walking_stop(self) -> bool:
+        """The emergency walking stop is in force: asked for, and the robot still stepping in place."""
+        return self._walking_stop_requested and self.gait.walking
+
     def _require_active(self, what: str) -> None:
         if not self.active or self._blend is not None:
             raise InvalidState(f"{what}: the AutoBalancer must be running (start it first)")
@@ -103,10 +108,12 @@ class AutoBalancer(Layer):
         self._require_active("goPos")
         if self.gait.walking:
             raise InvalidState("goPos while walking: stop first (goStop) or use goVelocity")
+        self._walking_stop_requested = False
         return len(self.gait.go_pos(x_m, y_m, theta_rad))
 
     def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
         self._require_active("goVelocity")
+        self._walking_stop_requested = False
         self.gait.go_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
 
     def go_stop(self) -> None:
@@ -115,7 +122,7 @@ class AutoBalancer(Layer):
     def emergency_stop_walking(self) -> None:
         """Remaining footsteps replaced so the robot stops in place (manipulation is left alone)."""
         self.gait.emergency_stop()
-        self.walking_stop = self.gait.walking
+        self._walking_stop_requested = True
 
     def set_footsteps(self, footsteps: list[tuple], step_params: list[StepParams | None] | None = None) -> int:
         """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
@@ -123,6 +130,7 @@ class AutoBalancer(Layer):
         self._require_active("setFootSteps")
         if self.gait.walking:
             raise InvalidState("setFootSteps while walking is not supported; wait for the steps to finish")
+        self._walking_stop_requested = False
         return len(self.gait.set_footsteps(footsteps, step_params))
 
     def remaining_footsteps(self) -> list[dict]:
@@ -202,8 +210,6 @@ class AutoBalancer(Layer):
 
     def status(self) -> dict:
         g = self.last_gait
-        if self.walking_stop and not self.gait.walking:
-            self.walking_stop = False  # stopped in place: the emergency walking stop is over
         return {"enabled": self.enabled, "active": self.active, "weight": round(self._weight, 4),
                 "walking": bool(g.walking) if g else False, "support": g.support if g else "both",
                 "walking_stop": self.walking_stop,
