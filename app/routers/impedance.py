@@ -56,17 +56,17 @@ def put_params(limb: LimbPath, runtime: RuntimeDep, changes: ChangesBody) -> dic
     return params_view(runtime.call(_apply))
 
 
-@router.post("/{limb}/start", response_model=Ok, responses=_STATE_ERRORS,
-             summary="Start impedance control of one hand (blends in over transition_time_s)")
-def start(limb: LimbPath, runtime: RuntimeDep) -> Ok:
-    _ic(runtime, limb)
-    runtime.call(lambda: _ic(runtime, limb).start(limb))  # InvalidState -> 409
-    return Ok(message=f"impedance control of {limb} started")
+def _add_state_route(action: str, done: str, summary: str) -> None:
+    """POST /{limb}/start or /{limb}/stop: the controller's own start(limb) / stop(limb) in the loop."""
+
+    def route(limb: LimbPath, runtime: RuntimeDep) -> Ok:
+        _ic(runtime, limb)  # unknown limb: 404 before anything reaches the loop
+        runtime.call(lambda: getattr(_ic(runtime, limb), action)(limb))  # InvalidState -> 409
+        return Ok(message=f"impedance control of {limb} {done}")
+
+    router.add_api_route(f"/{{limb}}/{action}", route, methods=["POST"], response_model=Ok,
+                         responses=_STATE_ERRORS, summary=summary, name=f"impedance-{action}")
 
 
-@router.post("/{limb}/stop", response_model=Ok, responses=_STATE_ERRORS,
-             summary="Stop impedance control of one hand (blends back to the planned pose)")
-def stop(limb: LimbPath, runtime: RuntimeDep) -> Ok:
-    _ic(runtime, limb)
-    runtime.call(lambda: _ic(runtime, limb).stop(limb))  # InvalidState -> 409
-    return Ok(message=f"impedance control of {limb} stopped")
+_add_state_route("start", "started", "Start impedance control of one hand (blends in over transition_time_s)")
+_add_state_route("stop", "stopped", "Stop impedance control of one hand (blends back to the planned pose)")
