@@ -4,13 +4,14 @@ and orientation; when not walking it keeps the COG over the feet while the upper
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from controller.capture_point import HRP2_RIGHT_SOLE
+from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
 from controller.errors import InvalidState
 from controller.footsteps import StepParams
 from controller.fullbody_ik import FullbodyIK
@@ -18,7 +19,7 @@ from controller.gait_generator import GaitGenerator, GaitParams
 from controller.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.hoff_arbib import hoff_arbib
 from controller.kinematics import RobotKinematics
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, Status, described
 from controller.preview_control import PreviewController, PreviewControlParams
 from controller.rotations import rpy_to_rows
 from controller.toe_heel import ToeHeelParams
@@ -27,6 +28,10 @@ from robot.names import FORCE_SENSOR_NAMES
 
 G = 9.80665
 HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
+REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this far inside the sole
+FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
+#: [N] a swing foot reading more has touched down (the Stabilizer's contact threshold)
+SWING_FOOT_LOADED_N = 25.0
 
 
 @dataclass(frozen=True)
@@ -35,6 +40,28 @@ class AutoBalancerParams(Params):
     use_hand_force_offset: bool = field(default=True, metadata={"unit": "-"})
     preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6})
     preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0})
+
+
+@dataclass(frozen=True, slots=True)
+class FootstepStatus:
+    """A planned footstep not landed yet, world frame."""
+
+    leg: str = field(metadata=described("'rleg' or 'lleg'"))
+    pos: tuple[float, float, float] = field(metadata=described("sole position", "m"))
+    rpy: tuple[float, float, float] = field(metadata=described("sole roll, pitch, yaw", "rad"))
+    step_time_s: float = field(metadata=described("duration of the step", "s"))
+    step_height_m: float = field(metadata=described("swing height", "m"))
+
+
+@dataclass(frozen=True, slots=True)
+class AutoBalancerStatus(Status):
+    active: bool = field(metadata=described("the AutoBalancer is running (started)"))
+    weight: float = field(metadata=described("start/stop blend weight, 0..1", "-"))
+    walking: bool = field(metadata=described("a walk is in progress"))
+    support: str = field(metadata=described("support phase: 'both', 'rleg' or 'lleg'"))
+    walking_stop: bool = field(metadata=described("the emergency walking stop is in force (stepping in place)"))
+    has_ik_failed: bool = field(metadata=described("the whole-body IK could not reach its targets this tick"))
+    footsteps: tuple[FootstepStatus, ...] = field(metadata=described("the footsteps not landed yet"))
 
 
 class AutoBalancer(Layer):
@@ -75,6 +102,8 @@ class AutoBalancer(Layer):
         self.last_gait: GaitState | None = None
         self._footsteps_cache: tuple[list, int, list[dict]] | None = None
         self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
+        self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
+        self._holding = False  # the hard e-stop holds the chain
         if active:
             self.start()
 
@@ -133,10 +162,10 @@ class AutoBalancer(Layer):
         self._walking_stop_requested = False
         return len(self.gait.set_footsteps(footsteps, step_params))
 
-    def remaining_footsteps(self) -> list[dict]:
-        return [{"leg": f.leg, "pos": [f.x, f.y, f.z], "rpy": [f.roll, f.pitch, f.yaw],
-                 "step_time_s": f.step_time_s, "step_height_m": f.step_height_m}
-                for f in self.gait.remaining_footsteps()]
+    def remaining_footsteps(self) -> tuple[FootstepStatus, ...]:
+        return tuple(FootstepStatus(leg=f.leg, pos=(f.x, f.y, f.z), rpy=(f.roll, f.pitch, f.yaw),
+                                    step_time_s=f.step_time_s, step_height_m=f.step_height_m)
+                     for f in self.gait.remaining_footsteps())
 
     # ---- pieces ----------------------------------------------------------------------------------
     def _hand_force_offset(self, ref: Reference, cog_pc_xy: np.ndarray, zmp_z: float) -> np.ndarray:
@@ -164,6 +193,10 @@ class AutoBalancer(Layer):
         if not self.enabled:  # pass-through
             self.last_gait = None
             return ref
+        if ctx.hold and self._last_out is not None:
+            return self._hold()
+        if self._holding:
+            self._resume(ctx)
         if self._blend is not None:
             seg, elapsed = self._blend
             elapsed = min(elapsed + ctx.dt_s, seg.duration_s)
@@ -206,17 +239,47 @@ class AutoBalancer(Layer):
         base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         zmp_base = R_body.T @ (zmp - base)
         # all fresh arrays of this tick: frozen in place rather than copied
-        return ref._with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base, gait=gait)
+        self._last_out = ref._with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
+                                         gait=gait)
+        return self._last_out
 
-    def status(self) -> dict:
+    def _resume(self, ctx: TickContext) -> None:
+        """Released from the hard e-stop: the robot stood still, so the COG plan restarts from rest where it
+        is; a walk that was cut ends from there, on both feet if the robot tipped onto its swing foot."""
+        self._holding = False
+        self.preview.reset(self.preview.x[0].copy())
+        gait = self._last_out.gait if self._last_out is not None else None
+        if self.gait.walking and gait is not None and gait.support != "both":
+            swing = FEET[0] if gait.support == "lleg" else FEET[1]
+            loaded = float(ctx.estimate.wrenches_ext[swing][2]) > SWING_FOOT_LOADED_N
+            self.gait.stop_from_rest(self._rest_zmp_xy(gait if not loaded else None), swing_foot_loaded=loaded)
+
+    def _hold(self) -> Reference:
+        """A tick under the hard e-stop: the plan does not advance, and the last output is repeated with the
+        COG at rest. A walk is cut to a stop that starts from rest where the robot is frozen (the swing
+        foot goes down, the ZMP comes to the feet's middle), played after the release."""
+        if not self._holding:
+            self._holding = True
+            if self.gait.walking:
+                self._walking_stop_requested = True
+                self.gait.stop_from_rest(self._rest_zmp_xy(self._last_out.gait))
+            out = self._last_out
+            if out.gait is not None:
+                still = np.zeros(3)
+                still.setflags(write=False)
+                out = out._replace({"gait": dataclasses.replace(out.gait, cog_vel_world=still, cog_acc_world=still)})
+            self._last_out = out
+            self.last_gait = out.gait
+        return self._last_out
+
+    def status(self) -> AutoBalancerStatus:
         g = self.last_gait
-        return {"enabled": self.enabled, "active": self.active, "weight": round(self._weight, 4),
-                "walking": bool(g.walking) if g else False, "support": g.support if g else "both",
-                "walking_stop": self.walking_stop,
-                "has_ik_failed": self.has_ik_failed,
-                "footsteps": self._status_footsteps() if self.gait.walking else []}
+        return AutoBalancerStatus(enabled=self.enabled, active=self.active, weight=round(self._weight, 4),
+                                  walking=bool(g.walking) if g else False, support=g.support if g else "both",
+                                  walking_stop=self.walking_stop, has_ik_failed=self.has_ik_failed,
+                                  footsteps=self._status_footsteps() if self.gait.walking else ())
 
-    def _status_footsteps(self) -> list[dict]:
+    def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes
         (the list is shared between snapshots: readers must not modify it)."""
         remaining = self.gait.remaining_footsteps()
@@ -227,6 +290,26 @@ class AutoBalancer(Layer):
         if cache is None or cache[0] is not plan or cache[1] != len(remaining):
             cache = self._footsteps_cache = (plan, len(remaining), self.remaining_footsteps())
         return cache[2]
+
+
+    def _rest_zmp_xy(self, gait: GaitState | None) -> tuple[float, float]:
+        """Where the ZMP of the robot frozen now is once at rest: under the planned COG, kept REST_ZMP_MARGIN_M
+        inside the support sole when on one foot."""
+        x, y = self.preview.x[0].tolist()
+        if gait is None or gait.support == "both":
+            return x, y
+        right = gait.support == "rleg"
+        p, R = (gait.p_rsole_world, gait.R_rsole_world) if right else (gait.p_lsole_world, gait.R_lsole_world)
+        sole = HRP2_RIGHT_SOLE if right else HRP2_LEFT_SOLE
+        c, s_ = float(R[0, 0]), float(R[1, 0])
+        n = math.hypot(c, s_)
+        c, s_ = c / n, s_ / n
+        dx, dy = x - float(p[0]), y - float(p[1])
+        u, v = c * dx + s_ * dy, -s_ * dx + c * dy  # in the sole frame
+        m = REST_ZMP_MARGIN_M
+        u = min(max(u, -sole.rear_m + m), sole.front_m - m)
+        v = min(max(v, -sole.right_m + m), sole.left_m - m)
+        return float(p[0]) + c * u - s_ * v, float(p[1]) + s_ * u + c * v
 
 
 def _homogeneous(p: np.ndarray, R: np.ndarray) -> np.ndarray:

@@ -10,7 +10,7 @@ import mujoco
 import numpy as np
 
 from controller.blend import RecoverBlend
-from controller.layer import Layer, Params, SharedStatus
+from controller.layer import Layer, Params, Status, described
 from controller.types import Reference, TickContext
 from robot.names import JOINT_NAMES, MJCF_ROBOT
 
@@ -68,6 +68,14 @@ class SelfCollisionChecker:
         return [(names[body[con.geom1[i]]], names[body[con.geom2[i]]]) for i in close]
 
 
+@dataclass(frozen=True, slots=True)
+class CollisionDetectorStatus(Status):
+    collision: bool = field(metadata=described("the command would collide: the last collision-free posture is held"))
+    pairs: tuple[tuple[str, str], ...] = field(metadata=described("colliding body pairs (at most four)"))
+    recovering: bool = field(metadata=described("blending back to the live command after a collision"))
+    collision_ticks: int = field(metadata=described("ticks spent holding since the start"))
+
+
 class CollisionDetector(Layer):
     name = "co"
     description = "CollisionDetector: holds the last collision-free posture"
@@ -82,7 +90,6 @@ class CollisionDetector(Layer):
         self.pairs: list[tuple[str, str]] = []
         self.blend: RecoverBlend | None = None
         self.collision_ticks = 0
-        self._pairs_status = SharedStatus()
 
     def set_params(self, params: CollisionDetectorParams) -> None:
         self.params = params
@@ -115,8 +122,7 @@ class CollisionDetector(Layer):
         self.q_safe = np.array(ref.q_rad, dtype=float)
         self.in_collision, self.blend, self.pairs = False, None, []
 
-    def status(self) -> dict:
-        return {"enabled": self.enabled, "collision": self.in_collision,
-                "pairs": self._pairs_status.get(tuple(self.pairs[:4]), lambda: [list(p) for p in self.pairs[:4]]),
-                "recovering": self.blend is not None,
-                "collision_ticks": self.collision_ticks}
+    def status(self) -> CollisionDetectorStatus:
+        pairs = tuple(tuple(p) for p in self.pairs[:4])
+        return CollisionDetectorStatus(enabled=self.enabled, collision=self.in_collision, pairs=pairs,
+                                       recovering=self.blend is not None, collision_ticks=self.collision_ticks)

@@ -36,7 +36,7 @@ def _fill_row(row: np.ndarray, snap) -> None:
     row[i + 6:i + 9] = snap.zmp_world
     row[i + 9:i + 9 + k] = np.asarray(snap.wrenches_ext).reshape(-1)
     i += 9 + k
-    row[i] = float(snap.emergency.get("hard_stop", False))
+    row[i] = float(snap.safety.hard_stop)
     row[i + 1:i + 4] = snap.truth.base_pos_world
     row[i + 4] = float(snap.fallen)
 
@@ -63,32 +63,56 @@ class DataLogger:
     to walk through, in pauses of milliseconds).
     """
 
-    def __init__(self, max_length: int = 12000) -> None:
-        self._rows = np.zeros((max_length, ROW_LENGTH))
-        self._next = 0  # ring index of the next row
-        self._count = 0  # rows held
+    def __init__(self, max_length: int = 12000, storage: np.ndarray | None = None) -> None:
+        """`storage` (max_length + 1, ROW_LENGTH) float64, e.g. in shared memory, lets another process read
+        the log while this one writes it (`DataLogger.reader(storage)`); row 0 holds the write counter."""
+        if storage is None:
+            storage = np.zeros((max_length + 1, ROW_LENGTH))
+        if storage.shape != (max_length + 1, ROW_LENGTH) or storage.dtype != np.float64:
+            raise ValueError(f"storage must be float64 of shape ({max_length + 1}, {ROW_LENGTH})")
+        self._storage = storage
+        self._rows = storage[1:]
+        self._written = storage[0]  # [0]: rows written since the last clear (a float holds 2^53 exactly)
         self._lock = threading.Lock()
+
+    @staticmethod
+    def storage_shape(max_length: int) -> tuple[int, int]:
+        return (max_length + 1, ROW_LENGTH)
+
+    @classmethod
+    def reader(cls, storage: np.ndarray) -> DataLogger:
+        """A view of a log another process writes into `storage`."""
+        return cls(storage.shape[0] - 1, storage)
 
     def record(self, snap) -> None:
         """Store snapshot_row(snap)."""
         with self._lock:
-            _fill_row(self._rows[self._next], snap)
-            self._next = (self._next + 1) % len(self._rows)
-            self._count = min(self._count + 1, len(self._rows))
+            n = int(self._written[0])
+            _fill_row(self._rows[n % len(self._rows)], snap)
+            self._written[0] = n + 1
 
     def clear(self) -> None:
         with self._lock:
-            self._next = self._count = 0
+            self._written[0] = 0
 
     def __len__(self) -> int:
-        return self._count
+        return min(int(self._written[0]), len(self._rows))
 
     def rows(self) -> np.ndarray:
-        """The rows held, oldest first, (n, ROW_LENGTH) (a copy)."""
+        """The rows held, oldest first, (n, ROW_LENGTH) (a copy). A row the writer overwrote while this
+        copy was being taken is dropped."""
+        size = len(self._rows)
         with self._lock:
-            if self._count < len(self._rows):
-                return self._rows[:self._count].copy()
-            return np.concatenate((self._rows[self._next:], self._rows[:self._next]))
+            n0 = int(self._written[0])
+            if n0 <= size:
+                out = self._rows[:n0].copy()
+            else:
+                nxt = n0 % size
+                out = np.concatenate((self._rows[nxt:], self._rows[:nxt]))
+            n1 = int(self._written[0])
+        # the writer puts row k into slot k % size: rows written meanwhile replaced the oldest ones copied
+        overwritten = min(len(out), max(0, n1 - max(n0, size)))
+        return out[overwritten:]
 
     def to_csv(self, path: str | Path | None = None) -> str:
         """Write the buffer as CSV to `path` (if given) and return the text."""

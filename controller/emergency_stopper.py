@@ -5,7 +5,6 @@ keep running. Release blends back to the live plan (hrpsys recover)."""
 from __future__ import annotations
 
 from collections import deque
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -13,7 +12,7 @@ import numpy as np
 from controller.blend import RecoverBlend
 from controller.errors import InvalidState
 from controller.hoff_arbib import quintic_step
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, Status, described
 from controller.types import Reference, TickContext
 
 
@@ -23,6 +22,16 @@ class EmergencyStopperParams(Params):
     t1_s: float = field(default=1.0, metadata={"unit": "s", "min": 0.0, "max": 10.0})
     t2_s: float = field(default=0.5, metadata={"unit": "s", "min": 0.0, "max": 10.0})
     recover_time_s: float = field(default=2.5, metadata={"unit": "s", "min": 0.0, "max": 30.0})
+
+
+@dataclass(frozen=True, slots=True)
+class EmergencyStopperStatus(Status):
+    stopped: bool = field(metadata=described("the planned motion is stopped (reverting or holding)"))
+    reason: str | None = field(metadata=described("why: 'capture_point' (the Stabilizer's flag) or 'operator'"))
+    flag_time: float | None = field(metadata=described("simulated time of the last stop", "s"))
+    recovering: bool = field(metadata=described("blending back to the live plan after a release"))
+    t1_s: float = field(metadata=described("T1: how far back the revert goes", "s"))
+    t2_s: float = field(metadata=described("T2: how long the revert takes", "s"))
 
 
 def pack(ref: Reference) -> np.ndarray:
@@ -94,18 +103,17 @@ class MotionReverter:
 
 
 class EmergencyStopper(Layer):
-    """Sits after the SequencePlayer. Autonomous stop from `flag_source()` (the Stabilizer's capture-point
-    flag, one tick old as in hrpsys), manual stop from `stop_motion()`; latched until `release_motion()`."""
+    """Sits after the SequencePlayer. Autonomous stop from the `cp_flag` port (the Stabilizer's capture-point
+    flag, one tick old as in hrpsys), manual stop from `stop_motion()`; latched until `release_motion()`.
+    While the hard e-stop holds the chain, the flag is not acted on (nothing moves to revert)."""
 
     name = "es"
     description = "EmergencyStopper: stop and revert the planned motion (Eq. 15)"
 
-    def __init__(self, dt_s: float, params: EmergencyStopperParams | None = None,
-                 flag_source: Callable[[], bool] | None = None) -> None:
+    def __init__(self, dt_s: float, params: EmergencyStopperParams | None = None) -> None:
         super().__init__()
         self.params = params or EmergencyStopperParams()
         self.dt_s = dt_s
-        self.flag_source = flag_source
         self.reverter = MotionReverter(self.params, dt_s)
         self.blend: RecoverBlend | None = None
         self._requested: str | None = None
@@ -141,7 +149,7 @@ class EmergencyStopper(Layer):
         x_seq = pack(ref)
         t = ctx.time_s
         self.reverter.push(t, x_seq)
-        flag = self.flag_source() if self.flag_source is not None else False
+        flag = ctx.last_ports.cp_flag and not ctx.last_ports.hold
         if not self.stopped and (flag or self._requested):
             self.reason = self._requested or "capture_point"
             self.flag_time_s = t
@@ -166,7 +174,7 @@ class EmergencyStopper(Layer):
         self.blend, self._requested, self.reason = None, None, None
         self._last_out = self._prev_out = None
 
-    def status(self) -> dict:
-        return {"enabled": self.enabled, "stopped": self.stopped, "reason": self.reason,
-                "flag_time": self.flag_time_s, "recovering": self.blend is not None,
-                "t1_s": self.params.t1_s, "t2_s": self.params.t2_s}
+    def status(self) -> EmergencyStopperStatus:
+        return EmergencyStopperStatus(enabled=self.enabled, stopped=self.stopped, reason=self.reason,
+                                      flag_time=self.flag_time_s, recovering=self.blend is not None,
+                                      t1_s=self.params.t1_s, t2_s=self.params.t2_s)

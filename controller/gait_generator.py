@@ -28,6 +28,8 @@ __all__ = ["GaitGenerator", "GaitParams", "GaitSample"]
 _R, _L = 0, 1  # foot index in the (2, ...) arrays
 _SUPPORT_NAMES = ("rleg", "lleg", "both")
 _BOTH = 2
+#: [s] the final double support of a stop from rest: the ZMP (and the COG with it) moves to the feet's middle
+REST_STOP_DOUBLE_SUPPORT_S = 2.0
 
 
 @dataclass(frozen=True)
@@ -147,6 +149,8 @@ class GaitGenerator:
         self._origin = 0  # absolute tick of row 0 of the sample arrays
         self._arrays: dict[str, np.ndarray] | None = None
         self._checks: dict[int, int] = {}  # absolute tick -> segment index of the mid-step overwrite checks
+        self._stopping_from_rest = False  # the rest of the walk is a stop_from_rest plan
+        self._rest_from: tuple | None = None  # the pose stop_from_rest planned from (feet p, R, support, footstep)
         self._idle = self._idle_sample()
 
     def __repr__(self) -> str:
@@ -191,6 +195,7 @@ class GaitGenerator:
             raise InvalidCommand(f"footsteps[0] ({first.leg}) must be at the current {first.leg} pose "
                                  f"{current.position.tolist()}; build it with go_pos/set_footsteps from the feet")
         self._footsteps = footsteps
+        self._stopping_from_rest = False
         q0 = np.stack([_q_of(self._feet["rleg"]), _q_of(self._feet["lleg"])])
         self._segments = [_Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0)]
         self._tick = self._origin = 0
@@ -234,7 +239,7 @@ class GaitGenerator:
 
     def emergency_stop(self) -> None:
         """hrpsys emergencyStop: the steps after the overwritable one are replaced by steps in place."""
-        if not self._walking:
+        if not self._walking or self._stopping_from_rest:
             return
         k = self._overwritable_index()
         if k > len(self._footsteps):
@@ -251,10 +256,93 @@ class GaitGenerator:
                          step_time_s=self.footstep_params.step_time_s)
         self.replan(steps + stop_in_place(landed.replaced(step_time_s=other.step_time_s), other), k)
 
+    def stop_from_rest(self, zmp_world_xy: Sequence[float], swing_foot_loaded: bool = False,
+                       landing_speed_m_s: float = 0.05, min_landing_time_s: float = 0.8) -> None:
+        """Replace what is left of the walk by a stop that starts from rest where the plan is now: for a
+        robot that was held still mid-walk (the hard e-stop), so its COG is at rest above `zmp_world_xy`.
+
+        In single support the swing foot goes straight down to where its footstep lands it in height and
+        tilt (x, y and yaw where it is now), at `landing_speed_m_s` or over `min_landing_time_s`, with the
+        ZMP kept at `zmp_world_xy`; then a final double support brings the ZMP to the feet's mid-point.
+        `swing_foot_loaded`: the held robot has tipped onto its swing foot; the landing is then a double
+        support already, the ZMP moving to the mid-point all along. In double support only that final
+        double support remains (the feet stay where they are). Called again before the next tick, it
+        replans from the same pose (e.g. once the robot's measured state is known)."""
+        if not self._walking or self._tick == 0:
+            return
+        a = self._arrays
+        j = self._tick - 1 - self._origin  # the sample handed out last: where the plan is now
+        if j >= 0:
+            self._rest_from = (a["p"][:, j].copy(), a["R"][:, j].copy(), int(a["support"][j]),
+                               self._footsteps[min(int(a["index"][j]), len(self._footsteps) - 1)])
+        p, R, support, dst = self._rest_from
+        p, R = p.copy(), R.copy()  # (2, 3), (2, 3, 3)
+        zmp0 = np.array([float(zmp_world_xy[0]), float(zmp_world_xy[1]), 0.0])
+        zmp0[2] = 0.5 * (p[_R, 2] + p[_L, 2]) if support == _BOTH or swing_foot_loaded else p[support, 2]
+        legs = ("rleg", "lleg")
+        stand = support if support != _BOTH else _R
+        steps = [Footstep(legs[stand], *(float(v) for v in p[stand]),
+                          yaw=float(np.arctan2(R[stand, 1, 0], R[stand, 0, 0])),
+                          step_time_s=self.footstep_params.step_time_s)]
+        blocks = []
+        if support != _BOTH:
+            sw = 1 - support
+            if dst.leg != legs[sw]:  # (the footstep being stepped is the swing foot's) else land it level
+                dst = Footstep(legs[sw], float(p[sw, 0]), float(p[sw, 1]), float(p[support, 2]))
+            yaw_now = float(np.arctan2(R[sw, 1, 0], R[sw, 0, 0]))
+            landing = Footstep(dst.leg, float(p[sw, 0]), float(p[sw, 1]), dst.z, yaw_now, dst.roll, dst.pitch,
+                               step_time_s=self.footstep_params.step_time_s)
+            height = float(p[sw, 2] - landing.z)
+            n = self._n_ticks(self.dt_s * max(1, int(np.ceil(max(min_landing_time_s, abs(height) / landing_speed_m_s)
+                                                            / self.dt_s))))
+            t = np.arange(1, n + 1) / n
+            s_mj = t**3 * (10.0 - 15.0 * t + 6.0 * t**2)  # minimum jerk, 0 -> 1
+            q_dst = _q_of(landing)
+            rpy_now = np.array([float(np.arctan2(R[sw, 2, 1], R[sw, 2, 2])), float(-np.arcsin(R[sw, 2, 0])), yaw_now])
+            rpy_sw = rpy_now[None] + s_mj[:, None] * (q_dst[3:] - rpy_now)[None]
+            pp = np.repeat(p[:, None], n, axis=1)
+            RR = np.repeat(R[:, None], n, axis=1)
+            pp[sw] = p[sw][None] + s_mj[:, None] * (q_dst[:3] - p[sw])[None]
+            RR[sw] = _rpy_matrices(rpy_sw)
+            landing_support = _BOTH if swing_foot_loaded else support
+            blocks.append({"zmp": np.repeat(zmp0[None], n, axis=0), "p": pp, "R": RR,
+                           "r": np.full(n, float(support == _L)), "cop": np.zeros((n, 2)), "pitch": np.zeros((n, 2)),
+                           "support": np.full(n, landing_support, dtype=np.int8),
+                           "index": np.full(n, 1, dtype=np.int32)})
+            p[sw], R[sw] = q_dst[:3], _rpy_matrices(q_dst[None, 3:])[0]
+            steps.append(landing)
+        n = self._n_ticks(REST_STOP_DOUBLE_SUPPORT_S)
+        t = (np.arange(1, n + 1) / n)[:, None]
+        t = t**3 * (10.0 - 15.0 * t + 6.0 * t**2)  # minimum jerk, 0 -> 1
+        mid = 0.5 * (p[_R] + R[_R] @ self._zmp_offsets[_R] + p[_L] + R[_L] @ self._zmp_offsets[_L])
+        blocks.append({"zmp": zmp0[None] + t * (mid - zmp0)[None], "p": np.repeat(p[:, None], n, axis=1),
+                       "R": np.repeat(R[:, None], n, axis=1), "r": np.full(n, 0.5), "cop": np.zeros((n, 2)),
+                       "pitch": np.zeros((n, 2)), "support": np.full(n, _BOTH, dtype=np.int8),
+                       "index": np.full(n, len(steps), dtype=np.int32)})
+        new = {key: np.concatenate([b[key] for b in blocks], axis=1 if key in ("p", "R") else 0) for key in blocks[0]}
+        self._arrays = {key: _readonly(v) for key, v in new.items()}
+        self._origin = self._tick
+        self._end_tick = self._tick + len(new["zmp"])
+        start = self._tick
+        self._segments = []
+        for k, b in enumerate(blocks):
+            kind = "end" if k == len(blocks) - 1 else "step"
+            index = int(b["index"][0])
+            seg = _Segment(kind, index, len(b["zmp"]) * self.dt_s, len(b["zmp"]), start, np.stack(
+                [np.concatenate([b["p"][f, 0], [0.0, 0.0, 0.0]]) for f in (_R, _L)]))
+            self._segments.append(seg)
+            start += len(b["zmp"])
+        self._footsteps = steps
+        self._stepper = None
+        self._checks = {}
+        self._stopping_from_rest = True
+
     def replan(self, footsteps: Sequence[Footstep], from_index: int) -> None:
         """Replace the plan from footstep `from_index` on (>= the overwritable index) and resample from there."""
         if not self._walking:
             raise InvalidState("replan needs a walk in progress; use plan() to start one")
+        if self._stopping_from_rest:
+            raise InvalidState("the walk is ending (a stop from rest after the e-stop); wait for it to end")
         k = self._overwritable_index()
         if from_index < k:
             raise InvalidCommand(f"from_index={from_index}; footsteps before the overwritable index {k} "

@@ -11,7 +11,7 @@ import pinocchio as pin
 
 from controller.errors import InvalidCommand, InvalidState
 from controller.kinematics import RobotKinematics
-from controller.layer import Layer, Params, SharedStatus
+from controller.layer import Layer, Params, SharedStatus, Status, described
 from controller.rotations import cross3
 from controller.stabilizer import sigmoid_transition
 from controller.types import Reference, TickContext
@@ -33,6 +33,23 @@ class ImpedanceParams(Params):
     transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
     max_displacement_m: float = field(default=0.2, metadata={"unit": "m", "min": 0.0, "max": 1.0})
     max_rotation_deg: float = field(default=45.0, metadata={"unit": "deg", "min": 0.0, "max": 180.0})
+
+
+@dataclass(frozen=True, slots=True)
+class ImpedanceLimbStatus:
+    """One hand of the ImpedanceController."""
+
+    active: bool = field(metadata=described("impedance control of this hand is on"))
+    weight: float = field(metadata=described("start/stop blend weight, 0..1", "-"))
+    displacement_m: tuple[float, float, float] = field(metadata=described("hand deviation from the plan", "m"))
+    rotation_rad: tuple[float, float, float] = field(metadata=described("hand rotation from the plan (rotation vector)",
+                                                                        "rad"))
+
+
+@dataclass(frozen=True, slots=True)
+class ImpedanceControllerStatus(Status):
+    rarm: ImpedanceLimbStatus = field(metadata=described("the right hand"))
+    larm: ImpedanceLimbStatus = field(metadata=described("the left hand"))
 
 
 class ImpedanceState:
@@ -88,6 +105,7 @@ class ImpedanceController(Layer):
         model = self.kin.model
         self._frame_ids = {name: (model.getFrameId(lb.frame), model.getFrameId(lb.sensor))
                            for name, lb in self.limbs.items()}
+        self._last_out: Reference | None = None  # repeated while the hard e-stop holds the chain
 
     def _limb(self, name: str) -> _Limb:
         if name not in self.limbs:
@@ -117,7 +135,10 @@ class ImpedanceController(Layer):
         if not self.enabled:
             return ref
         if not any(lb.active or lb.weight > 0.0 for lb in self.limbs.values()):
+            self._last_out = None
             return ref
+        if ctx.hold and self._last_out is not None:
+            return self._last_out  # the hard e-stop: no force is integrated into a command that is not played
         q_out = np.array(ref.q_rad, dtype=float)
         kin = self.kin
         # one kinematic pass for the planned posture: the hand and sensor frames of every working limb
@@ -157,17 +178,18 @@ class ImpedanceController(Layer):
             q_out[lb.joints] = (1.0 - lb.weight) * ref.q_rad[lb.joints] + lb.weight * lb.q
             if not lb.active and lb.weight <= 0.0:
                 lb.q = None
-        return ref.with_(q_rad=q_out)
+        self._last_out = ref.with_(q_rad=q_out)
+        return self._last_out
 
     def kin_ik(self, limb: str, q_seed, ref: Reference, target_p, target_R) -> np.ndarray:
         return self.kin.limb_ik(limb, q_seed, ref.base_pos_world, ref.base_rpy_rad, target_p, target_R,
                                 max_iter=8, pos_tol_m=2e-5, rot_tol_rad=2e-4, best_effort=True)
 
-    def status(self) -> dict:
-        out = {"enabled": self.enabled}
+    def status(self) -> ImpedanceControllerStatus:
+        parts = {}
         for name, lb in self.limbs.items():
             dp, dr = lb.imp.dp, lb.imp.dr
-            out[name] = lb.status_part.get((lb.active, lb.weight, dp.tobytes(), dr.tobytes()), lambda lb=lb: {
-                "active": lb.active, "weight": round(lb.weight, 4), "displacement_m": lb.imp.dp.tolist(),
-                "rotation_rad": lb.imp.dr.tolist()})
-        return out
+            parts[name] = lb.status_part.get((lb.active, lb.weight, dp.tobytes(), dr.tobytes()), lambda lb=lb: (
+                ImpedanceLimbStatus(active=lb.active, weight=round(lb.weight, 4),
+                                    displacement_m=tuple(lb.imp.dp.tolist()), rotation_rad=tuple(lb.imp.dr.tolist()))))
+        return ImpedanceControllerStatus(enabled=self.enabled, **parts)

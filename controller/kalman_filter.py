@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, Status, described
 from controller.rotations import rpy_to_rows
 from controller.types import Reference, TickContext, read_only
 
@@ -91,6 +91,12 @@ class AttitudeKalmanFilter:
         return self.rpy.copy()
 
 
+@dataclass(frozen=True, slots=True)
+class KalmanFilterStatus(Status):
+    rpy_rad: tuple[float, float, float] = field(metadata=described("estimated BODY roll, pitch, yaw", "rad"))
+    gyro_bias_rad_s: tuple[float, float, float] = field(metadata=described("estimated gyro bias", "rad/s"))
+
+
 class KalmanFilter(Layer):
     """Estimates the BODY attitude every tick into `ctx.estimate`; the reference passes through."""
 
@@ -126,6 +132,6 @@ class KalmanFilter(Layer):
         tilt = AttitudeKalmanFilter.tilt_from_accel(ctx.sensors.accel_m_s2)
         self.filter = AttitudeKalmanFilter(self.params, (tilt[0], tilt[1], 0.0))
 
-    def status(self) -> dict:
-        return {"enabled": self.enabled, "rpy_rad": self.filter.rpy.tolist(),
-                "gyro_bias_rad_s": self.filter.bias.tolist()}
+    def status(self) -> KalmanFilterStatus:
+        return KalmanFilterStatus(enabled=self.enabled, rpy_rad=tuple(self.filter.rpy.tolist()),
+                                  gyro_bias_rad_s=tuple(self.filter.bias.tolist()))

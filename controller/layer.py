@@ -5,7 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from controller.errors import InvalidCommand
@@ -63,6 +63,41 @@ class Params:
         return out
 
 
+def described(doc: str, unit: str | None = None) -> dict[str, str]:
+    """Field metadata of a Status dataclass: what the value is, and its unit ("m", "s", "rad", "N", ...)."""
+    return {"doc": doc} if unit is None else {"doc": doc, "unit": unit}
+
+
+def plain(value: Any) -> Any:
+    """A status value as JSON-shaped Python: dataclasses to dicts, tuples to lists (no deep copies of leaves)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, (tuple, list)):
+        return [plain(v) for v in value]
+    return value
+
+
+@dataclass(frozen=True, slots=True)
+class Status:
+    """Base of the per-layer frozen status dataclasses a layer publishes each tick (in the snapshot).
+
+    Fields hold plain values (bool, int, float, str, None, tuples, nested Status) and declare what they
+    are in `metadata` (`field(metadata=described("capture-point error", "m"))`), so the app can generate
+    the response schema of /api/state from them without per-field code.
+    """
+
+    enabled: bool = field(metadata=described("the layer works; false: it passes its input through"))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as plain dicts and lists, nested status dataclasses included."""
+        return plain(self)
+
+    @classmethod
+    def describe(cls) -> list[dict[str, Any]]:
+        """Field name, type, unit and description: what a schema generator needs."""
+        return [{"name": f.name, "type": f.type, **dict(f.metadata)} for f in dataclasses.fields(cls)]
+
+
 class SharedStatus:
     """A piece of a status() dict rebuilt only when its key changes, so consecutive snapshots share one
     object while it stays the same (every list a snapshot keeps is work for the garbage collector).
@@ -99,9 +134,9 @@ class Layer:
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         raise NotImplementedError
 
-    def status(self) -> dict[str, Any]:
-        """A small JSON-able dict that goes into every snapshot."""
-        return {"enabled": self.enabled}
+    def status(self) -> Status:
+        """The layer's frozen Status (a subclass per layer), published in every snapshot."""
+        return Status(enabled=self.enabled)
 
     def reset(self, ctx: TickContext, ref: Reference) -> None:  # noqa: B027 - optional hook
         """Re-initialise internal state from the current measured state and reference."""

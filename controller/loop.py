@@ -10,14 +10,17 @@ import time
 import traceback
 from collections.abc import Callable
 from concurrent.futures import Future
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any, Protocol
 
 import numpy as np
 
 from controller.chain import Chain, TickTimer
 from controller.errors import InvalidCommand
-from controller.types import Estimate, Reference, TickContext, frozen_array
+from controller.fall_detector import FallDetector, foot_load_n
+from controller.layer import Status
+from controller.loop_timing import LatenessMeter, LoopTiming
+from controller.types import Estimate, Ports, Reference, TickContext, frozen_array
 from robot.sensors import GroundTruth, Sensors
 
 log = logging.getLogger(__name__)
@@ -36,6 +39,16 @@ class Plant(Protocol):
 
 
 @dataclass(frozen=True, slots=True)
+class Safety:
+    """The loop's own safety state: the hard e-stop, a controller fault, a detected fall."""
+
+    hard_stop: bool  # the HardEmergencyStopper is engaged
+    hard_stop_reason: str | None  # "operator" | "fault" | "fallen"
+    fault: str | None  # the last exception inside the chain ("Type: message"), until cleared
+    fall: str | None  # why the FallDetector says the robot has fallen (latched until a reset)
+
+
+@dataclass(frozen=True, slots=True)
 class Snapshot:
     """Everything published after one tick. Immutable: readers may keep it as long as they like."""
 
@@ -49,13 +62,16 @@ class Snapshot:
     wrenches_ext: np.ndarray  # (4, 6) RemoveForceOffset output, sensor frame
     cog_world: np.ndarray  # (3,) estimated from encoders + attitude [m]
     zmp_world: np.ndarray  # (3,) estimated from the foot F/T sensors [m]
-    layers: dict[str, dict[str, Any]]  # per-layer status
-    emergency: dict[str, Any]
-    fault: str | None
+    layers: dict[str, Status]  # per-layer frozen status
+    layer_tick_ms: dict[str, float]  # wall time of each layer's tick [ms]
+    safety: Safety
     truth: GroundTruth  # simulator ground truth: GUI and tests only
     fallen: bool  # from ground truth: BODY below 0.35 m or tilted over 45 deg
     loop_ms: float  # wall time of the whole tick (chain + physics) [ms]
-    extras: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def fault(self) -> str | None:
+        return self.safety.fault
 
 
 _COS_45_DEG = float(np.cos(np.deg2rad(45.0)))
@@ -91,7 +107,8 @@ class ControlLoop:
     def __init__(self, plant: Plant, chain_factory: Callable[[Sensors, float], Chain],
                  dt_control_s: float = 0.005,
                  state_estimator: StateEstimatorFn | None = None,
-                 on_snapshot: Callable[[Snapshot], None] | None = None) -> None:
+                 on_snapshot: Callable[[Snapshot], None] | None = None,
+                 fall_detector_factory: Callable[[], FallDetector] | None = None) -> None:
         if dt_control_s <= 0:
             raise InvalidCommand(f"dt_control_s must be > 0, got {dt_control_s}")
         self._chain_factory = chain_factory
@@ -104,6 +121,8 @@ class ControlLoop:
         self.speed: float | None = 1.0
         self.tick_timer = TickTimer()
         self.physics_timer = TickTimer()
+        self.lateness = LatenessMeter()
+        self._fall_detector_factory = fall_detector_factory
         self._attach(plant)
 
     # ---- construction / reset -------------------------------------------------------------
@@ -120,6 +139,8 @@ class ControlLoop:
         self.chain = self._chain_factory(sensors, self.dt_control_s)
         self.tick_count = 0
         self.fault: str | None = None
+        self.fall = None if self._fall_detector_factory is None else self._fall_detector_factory()
+        self._ports = Ports()
         self._last_ref = Reference.from_arrays(sensors.q_rad)
         self._last_q_cmd = np.array(sensors.q_rad, dtype=float)
         self.snapshot: Snapshot = self._make_snapshot(
@@ -164,7 +185,7 @@ class ControlLoop:
         sensors = self.plant.read()
         est = Estimate.for_tick()
         ctx = TickContext(tick=self.tick_count, time_s=sensors.time_s, dt_s=self.dt_control_s,
-                          sensors=sensors, estimate=est)
+                          sensors=sensors, estimate=est, last_ports=self._ports, ports=Ports())
         ref_in = self._last_ref
         try:
             ref = self.chain.tick(ctx, ref_in)
@@ -175,6 +196,14 @@ class ControlLoop:
             self._on_fault(exc)
             ref = ref_in.with_(q_rad=self._last_q_cmd)
             q_cmd = self._last_q_cmd
+            ctx.ports.hold = True
+        self._ports = ctx.ports
+        fall = self.fall
+        if fall is not None and fall.reason is None:
+            roll, pitch, _ = est.base_rpy_rad.tolist()
+            if fall.update(roll, pitch, foot_load_n(est.wrenches_ext), self.dt_control_s) is not None:
+                log.error("fall detected at t=%.3f s: %s", sensors.time_s, fall.reason)
+                self.safe_stop("fallen", q_cmd)
         self.plant.write(q_cmd)
         self._last_q_cmd = _frozen(q_cmd)  # read-only (a copy unless already immutable): the snapshot shares it
         self._last_ref = ref
@@ -196,9 +225,18 @@ class ControlLoop:
             log.error("controller fault at t=%.3f s: %s\n%s", self.plant.read().time_s, msg,
                       traceback.format_exc())
         self.fault = msg
+        self.safe_stop("fault", self._last_q_cmd)
+
+    def safe_stop(self, reason: str, q_rad: np.ndarray | None = None) -> None:
+        """Engage the hard e-stop (the chain's safe stop) for `reason`: "operator", "fault" or "fallen"."""
         hes = self.chain.layers.get("hes")
         if hes is not None and hasattr(hes, "engage"):
-            hes.engage(self._last_q_cmd)
+            hes.engage(q_rad, reason=reason)
+
+    @property
+    def hard_stop_engaged(self) -> bool:
+        hes = self.chain.layers.get("hes")
+        return bool(getattr(hes, "engaged", False))
 
     def clear_fault(self) -> None:
         self.fault = None
@@ -212,23 +250,19 @@ class ControlLoop:
             cog, zmp = self._state_estimator(sensors, est, ref)
         else:
             cog, zmp = np.zeros(3), np.zeros(3)
-        layers = {}
         timers = self.chain.timers
-        for name, layer in self.chain.layers.items():
-            st = layer.status()
-            st["tick_ms"] = timers[name].last_ms
-            layers[name] = st
-        hes_status = layers.get("hes")
-        emergency: dict[str, Any] = {
-            "hard_stop": bool(hes_status.get("engaged", False)) if hes_status is not None else False,
-            "fault": self.fault}
+        layers = {name: layer.status() for name, layer in self.chain.layers.items()}
+        hes = layers.get("hes")
+        safety = Safety(hard_stop=bool(getattr(hes, "engaged", False)), hard_stop_reason=getattr(hes, "reason", None),
+                        fault=self.fault, fall=None if self.fall is None else self.fall.reason)
         return Snapshot(
             tick=self.tick_count, time_s=float(sensors.time_s if self.tick_count == 0 else truth.time_s),
             q_cmd_rad=_frozen(self._last_q_cmd), q_seq_rad=_frozen(seq_ref.q_rad),
             q_meas_rad=sensors.q_rad, reference=ref,
             base_rpy_est_rad=_frozen(est.base_rpy_rad), wrenches_ext=_frozen(est.wrenches_ext),
             cog_world=_frozen(cog), zmp_world=_frozen(zmp), layers=layers,
-            emergency=emergency, fault=self.fault, truth=truth, fallen=is_fallen(truth), loop_ms=loop_ms,
+            layer_tick_ms={name: t.last_ms for name, t in timers.items()},
+            safety=safety, truth=truth, fallen=is_fallen(truth), loop_ms=loop_ms,
         )
 
     # ---- synchronous running ----------------------------------------------------------------
@@ -248,7 +282,7 @@ class ControlLoop:
                 return snap
         raise TimeoutError(f"condition not reached within {timeout_s} s of simulated time")
 
-    # ---- threaded running -------------------------------------------------------------------
+    # ---- paced running -------------------------------------------------------------------------
     @property
     def running(self) -> bool:
         return self._thread is not None and self._thread.is_alive()
@@ -261,7 +295,7 @@ class ControlLoop:
             return
         self.speed = speed
         self._stop_event.clear()
-        self._thread = threading.Thread(target=self._run, name="control-loop", daemon=True)
+        self._thread = threading.Thread(target=self.run_paced, name="control-loop", daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 5.0) -> None:
@@ -271,26 +305,53 @@ class ControlLoop:
         self._thread = None
         self._drain()
 
-    def _run(self) -> None:
-        wall0 = time.perf_counter()
-        sim0 = self.snapshot.time_s
-        self.overruns = 0
+    def request_stop(self) -> None:
+        """Make run_paced return after the current boundary (from inside the loop, or from another thread)."""
+        self._stop_event.set()
+
+    def timing(self) -> LoopTiming:
+        """Tick start-lateness and simulated / wall time of the paced run so far."""
+        return self.lateness.summary()
+
+    def run_paced(self, wait: Callable[[float], None] | None = None,
+                  between_ticks: Callable[[], None] | None = None) -> None:
+        """Tick until stop(): paced to wall time at `self.speed` (None: as fast as possible).
+
+        `wait(seconds)` sleeps until the next tick is due (default: an interruptible sleep); an owner may
+        wait on its command channels instead and handle what arrives, since nothing ticks meanwhile.
+        `between_ticks()` runs at every tick boundary before the tick (commands, e-stop, publishing).
+        The lateness of each tick's start against its schedule is measured (`timing()`)."""
+        sleep = wait or self._stop_event.wait
+        clock = time.perf_counter
+        meter = self.lateness
+        meter.clear()
+        wall0, sim0 = clock(), self.snapshot.time_s
+        anchored_speed = self.speed
+        meter.speed_target = self.speed
         while not self._stop_event.is_set():
+            speed = self.speed
+            if speed != anchored_speed:  # re-anchor the schedule at a new speed
+                wall0, sim0, anchored_speed = clock(), self.snapshot.time_s, speed
+                meter.clear()
+                meter.speed_target = speed
+            if speed is not None:
+                due = wall0 + (self.snapshot.time_s - sim0) / speed
+                delay = due - clock()
+                while delay > 0 and not self._stop_event.is_set():
+                    sleep(delay)
+                    delay = due - clock()
+                if self._stop_event.is_set():
+                    break
+                lateness = -delay
+                if lateness > 0.25:  # far behind (debugger, suspended machine): re-anchor instead of racing
+                    wall0, sim0 = clock(), self.snapshot.time_s
+            else:
+                lateness = 0.0
+            if between_ticks is not None:
+                between_ticks()
+            meter.add(lateness, clock(), self.snapshot.time_s)
             try:
                 self.step()
             except Exception as exc:  # noqa: BLE001 - the plant itself failed: report, hold, go on
                 self._on_fault(exc)
-                time.sleep(self.dt_control_s)
-                continue
-            if self.speed is not None:
-                target = wall0 + (self.snapshot.time_s - sim0) / self.speed
-                delay = target - time.perf_counter()
-                if delay > 0:
-                    time.sleep(delay)
-                elif delay < -0.25:  # far behind (debugger, overload): re-anchor instead of racing
-                    self.overruns += 1
-                    wall0 = time.perf_counter()
-                    sim0 = self.snapshot.time_s
-            if self.speed is not None and self.speed != getattr(self, "_anchored_speed", self.speed):
-                wall0, sim0 = time.perf_counter(), self.snapshot.time_s
-            self._anchored_speed = self.speed
+                self._stop_event.wait(self.dt_control_s)

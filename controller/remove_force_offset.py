@@ -8,7 +8,7 @@ import numpy as np
 
 from controller.errors import InvalidCommand
 from controller.kinematics import RobotKinematics
-from controller.layer import Layer, Params, SharedStatus
+from controller.layer import Layer, Params, SharedStatus, Status, described
 from controller.rotations import cross3
 from controller.types import Reference, TickContext, read_only
 from robot.names import FORCE_SENSOR_NAMES
@@ -31,6 +31,13 @@ def gravity_wrench_in_sensor(mass_kg: float, com_world: np.ndarray, sensor_pos_w
     f_world = np.array([0.0, 0.0, -mass_kg * g])
     tau_world = cross3(com_world - sensor_pos_world, f_world)
     return np.concatenate((R_world_sensor.T @ f_world, R_world_sensor.T @ tau_world))
+
+
+@dataclass(frozen=True, slots=True)
+class RemoveForceOffsetStatus(Status):
+    calibrating: tuple[str, ...] = field(metadata=described("sensors whose offset is being measured"))
+    offsets: tuple[tuple[float, ...], ...] = field(metadata=described(
+        "offset of each sensor (FORCE_SENSOR_NAMES order), fx fy fz [N] tx ty tz [N m]"))
 
 
 class RemoveForceOffset(Layer):
@@ -136,6 +143,7 @@ class RemoveForceOffset(Layer):
             self._masses = [float(kin.data.mass[j]) for j in self._below_joints]
         return ids
 
-    def status(self) -> dict:
-        return {"enabled": self.enabled, "calibrating": sorted(self._calibrating),
-                "offsets": self._offsets_status.get(self.offsets.tobytes(), self.offsets.tolist)}
+    def status(self) -> RemoveForceOffsetStatus:
+        offsets = self._offsets_status.get(self.offsets.tobytes(), lambda: tuple(map(tuple, self.offsets.tolist())))
+        return RemoveForceOffsetStatus(enabled=self.enabled, calibrating=tuple(sorted(self._calibrating)),
+                                       offsets=offsets)

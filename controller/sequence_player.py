@@ -5,13 +5,12 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
 from controller.errors import InvalidCommand, InvalidState
 from controller.hoff_arbib import HoffArbibTrack
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, Status, described
 from controller.types import Reference, TickContext, frozen_array
 from robot.names import FORCE_SENSOR_NAMES, JOINT_GROUPS, JOINT_NAMES, NUM_JOINTS
 
@@ -29,6 +28,13 @@ class SequencePlayerParams(Params):
     default_avg_vel_rad_s: float = field(default=0.5, metadata={"unit": "rad/s", "min": 0.01, "max": 10.0})
     # hrpsys calc_interpolation_time floor for those automatic durations
     min_auto_time_s: float = field(default=1.0, metadata={"unit": "s", "min": 0.01, "max": 60.0})
+
+
+@dataclass(frozen=True, slots=True)
+class SequencePlayerStatus(Status):
+    interpolating: bool = field(metadata=described("a motion is being interpolated (isInterpolating)"))
+    active_groups: tuple[str, ...] = field(metadata=described("joint groups moving now"))
+    remaining_s: float = field(metadata=described("time left of the longest motion", "s"))
 
 
 class _Channel:
@@ -137,6 +143,8 @@ class SequencePlayer(Layer):
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         if not self.enabled:
             return ref
+        if ctx.hold and self.is_interpolating():
+            self.clear()  # the hard e-stop: the motion stops where it is and does not resume on release
         if not self.is_interpolating():
             return self.last_output
         dt_s = ctx.dt_s
@@ -321,15 +329,12 @@ class SequencePlayer(Layer):
         """True while any joint of `group` moves (hrpsys waitInterpolationOfGroup)."""
         return self._q.moving(self._group("is_interpolating_group", group))
 
-    def status(self) -> dict[str, Any]:
+    def status(self) -> SequencePlayerStatus:
         moving = [ch for ch in self._channels if ch.motions]  # a channel at rest has 0 s remaining
-        active = [g for g, idx in self.groups.items() if self._q.moving(idx)] if self._q.motions else []
-        return {
-            "enabled": self.enabled,
-            "interpolating": bool(moving),  # is_interpolating()
-            "active_groups": active,
-            "remaining_s": max((ch.remaining_s() for ch in moving), default=0.0),
-        }
+        active = tuple(g for g, idx in self.groups.items() if self._q.moving(idx)) if self._q.motions else ()
+        return SequencePlayerStatus(enabled=self.enabled, interpolating=bool(moving),  # is_interpolating()
+                                    active_groups=active,
+                                    remaining_s=max((ch.remaining_s() for ch in moving), default=0.0))
 
     def _group(self, op: str, group: str) -> np.ndarray:
         try:

@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, Status, described
 from controller.types import Reference, TickContext
 from robot.names import JOINT_NAMES
 
@@ -31,6 +31,24 @@ def limit_command(q_in: np.ndarray, q_prev: np.ndarray, q_meas: np.ndarray, lowe
     return minimum(maximum(q, lower), upper)
 
 
+@dataclass(frozen=True, slots=True)
+class LimitedJoints:
+    """The joints whose command the SoftErrorLimiter changed this tick, by reason."""
+
+    position: tuple[str, ...] = field(metadata=described("commanded outside the joint range (less the margin)"))
+    velocity: tuple[str, ...] = field(metadata=described("commanded faster than the velocity limit"))
+    error: tuple[str, ...] = field(metadata=described("commanded too far from the encoder"))
+
+
+_NOTHING_LIMITED = LimitedJoints((), (), ())
+
+
+@dataclass(frozen=True, slots=True)
+class SoftErrorLimiterStatus(Status):
+    limited: LimitedJoints = field(metadata=described("joints limited this tick, by reason"))
+    limited_ticks: int = field(metadata=described("ticks with a limited command since the start"))
+
+
 class SoftErrorLimiter(Layer):
     """Last layer before the servos: nothing outside the joint range, too fast, or too far from the
     encoders reaches the hardware. Reports which joints it limited."""
@@ -45,7 +63,7 @@ class SoftErrorLimiter(Layer):
         self.lower = np.asarray(lower_rad, dtype=float)
         self.upper = np.asarray(upper_rad, dtype=float)
         self.q_prev = np.array(q0_rad, dtype=float)
-        self.limited: dict[str, list[str]] = {"position": [], "velocity": [], "error": []}
+        self.limited = _NOTHING_LIMITED
         self.limited_ticks = 0
         self.limited_now = False
 
@@ -66,15 +84,15 @@ class SoftErrorLimiter(Layer):
         self.q_prev = q
         if q.shape == q_in.shape and (q == q_in).all():  # np.array_equal
             if self.limited_now:
-                self.limited = {"position": [], "velocity": [], "error": []}
+                self.limited = _NOTHING_LIMITED
                 self.limited_now = False
             return ref
         names = np.array(JOINT_NAMES)
-        self.limited = {
-            "position": names[(q_in < lo) | (q_in > hi)].tolist(),
-            "velocity": names[np.abs(np.clip(q_in, lo, hi) - q_prev) > max_step + 1e-12].tolist(),
-            "error": names[np.abs(q - q_meas) >= p.error_limit_rad - 1e-12].tolist(),
-        }
+        self.limited = LimitedJoints(
+            position=tuple(names[(q_in < lo) | (q_in > hi)].tolist()),
+            velocity=tuple(names[np.abs(np.clip(q_in, lo, hi) - q_prev) > max_step + 1e-12].tolist()),
+            error=tuple(names[np.abs(q - q_meas) >= p.error_limit_rad - 1e-12].tolist()),
+        )
         self.limited_now = True
         self.limited_ticks += 1
         return ref.with_(q_rad=q)
@@ -82,5 +100,5 @@ class SoftErrorLimiter(Layer):
     def reset(self, ctx: TickContext, ref: Reference) -> None:
         self.q_prev = np.array(ctx.sensors.q_rad, dtype=float)
 
-    def status(self) -> dict:
-        return {"enabled": self.enabled, "limited": self.limited, "limited_ticks": self.limited_ticks}
+    def status(self) -> SoftErrorLimiterStatus:
+        return SoftErrorLimiterStatus(enabled=self.enabled, limited=self.limited, limited_ticks=self.limited_ticks)

@@ -21,7 +21,7 @@ from controller.errors import InvalidState
 from controller.force_distribution import FootPolygon, ForceDistributionQP, alpha_from_zmp
 from controller.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.kinematics import RobotKinematics
-from controller.layer import Layer, Params
+from controller.layer import Layer, Params, Status, described
 from controller.leg_ik import LEG_INDICES, LLEG, RLEG, _leg_ik_floats
 from controller.rotations import rpy_to_rows
 from controller.state_estimation import ActualStateEstimator
@@ -70,6 +70,23 @@ class StabilizerParams(Params):
     cp_threshold_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.001, "max": 0.5})
     cp_margin_m: float = field(default=0.03, metadata={"unit": "m", "min": 0.0, "max": 0.1})
     estop_while_walking: bool = field(default=False, metadata={"unit": "-"})
+
+
+@dataclass(frozen=True, slots=True)
+class StabilizerStatus(Status):
+    active: bool = field(metadata=described("the Stabilizer is running (started)"))
+    weight: float = field(metadata=described("start/stop blend weight, 0..1", "-"))
+    cp_ref: tuple[float, float] = field(metadata=described("reference capture point x, y (world)", "m"))
+    cp_act: tuple[float, float] = field(metadata=described("actual capture point x, y (world, estimated)", "m"))
+    cp_error: tuple[float, float] = field(metadata=described("cp_ref - cp_act", "m"))
+    cp_error_norm: float = field(metadata=described("|cp_ref - cp_act|", "m"))
+    threshold: float = field(metadata=described("the emergency flag's threshold on |cp_error|", "m"))
+    emergency: bool = field(metadata=described("the capture-point emergency flag"))
+    flag_rise_time: float | None = field(metadata=described("simulated time the flag last rose", "s"))
+    d_foot_rpy_deg: tuple[tuple[float, float], tuple[float, float]] = field(metadata=described(
+        "foot damping control's roll, pitch of the right and the left sole", "deg"))
+    dz_diff_m: float = field(metadata=described("right minus left sole height offset of the force control", "m"))
+    new_zmp: tuple[float, float, float] = field(metadata=described("ZMP the feet are asked to realise (world)", "m"))
 
 
 def sigmoid_transition(s: float) -> float:
@@ -124,6 +141,7 @@ class Stabilizer(Layer):
         self._qp: ForceDistributionQP | None = None
         self._qp_key: tuple | None = None
         self._qp_raw_key: tuple | None = None  # the unrounded key of the last call
+        self._last_out: Reference | None = None  # what the last working tick output (repeated while held)
         if active:
             self.start()
 
@@ -179,6 +197,7 @@ class Stabilizer(Layer):
         if gait is None:
             self.emergency = False
             return ref
+        held = ctx.hold and self._last_out is not None
         # capture points
         zr = gait.zmp_world.tolist()
         height = max(0.1, cz - zr[2])
@@ -194,8 +213,13 @@ class Stabilizer(Layer):
         w_r, w_l = wrenches[FEET[0]], wrenches[FEET[1]]
         fz = (w_r[2], w_l[2])
         contact_act = (fz[0] > p.contact_threshold_n, fz[1] > p.contact_threshold_n)
+        if held:  # the hard e-stop freezes the command: estimate only, integrate nothing, raise no flag
+            self.emergency = False
+            return self._last_out
         self._update_emergency(ctx.time_s, gait, contact_act)
+        ctx.ports.cp_flag = self.emergency
         if self.weight <= 0.0:
+            self._last_out = ref
             return ref
         w = self.weight
         # LIP state feedback (Eq. 8): the ZMP the feet should realise. References as the paper says:
@@ -270,7 +294,8 @@ class Stabilizer(Layer):
             R = soles_world[i][1].tolist()
             R_mod = _matmul3(rpy_to_rows(w * d_foot[i][0], w * d_foot[i][1], 0.0), R)
             q[_LEG_SLICES[leg]], _ = _leg_ik_floats(geom, base, R_body, (pos[0], pos[1], pos[2] + dz[i]), R_mod)
-        return ref._with_owned(q_rad=q)
+        self._last_out = ref._with_owned(q_rad=q)
+        return self._last_out
 
     def _force_qp(self, idx: list[int], soles_world) -> ForceDistributionQP:
         """The QP for the feet in contact, rebuilt only when they move (a support switch or a new step)."""
@@ -326,14 +351,14 @@ class Stabilizer(Layer):
             self.flag_rise_time_s = time_s
         self.emergency = flag
 
-    def status(self) -> dict:
-        ex, ey = cp_error = self.cp_error.tolist()
+    def status(self) -> StabilizerStatus:
+        ex, ey = cp_error = tuple(self.cp_error.tolist())
         (r_roll, r_pitch), (l_roll, l_pitch) = self.d_foot_rpy.tolist()  # (foot, [roll, pitch]) [rad]
         deg = math.degrees
-        return {"enabled": self.enabled, "active": self.active, "weight": round(self.weight, 4),
-                "cp_ref": self.cp_ref.tolist(), "cp_act": self.cp_act.tolist(), "cp_error": cp_error,
-                "cp_error_norm": math.hypot(ex, ey), "threshold": self.params.cp_threshold_m,
-                "emergency": self.emergency, "flag_rise_time": self.flag_rise_time_s,
-                "d_foot_rpy_deg": [[deg(r_roll), deg(r_pitch)], [deg(l_roll), deg(l_pitch)]],
-                "dz_diff_m": self.dz_diff,
-                "new_zmp": self.new_zmp.tolist()}
+        return StabilizerStatus(
+            enabled=self.enabled, active=self.active, weight=round(self.weight, 4),
+            cp_ref=tuple(self.cp_ref.tolist()), cp_act=tuple(self.cp_act.tolist()), cp_error=cp_error,
+            cp_error_norm=math.hypot(ex, ey), threshold=self.params.cp_threshold_m, emergency=self.emergency,
+            flag_rise_time=self.flag_rise_time_s,
+            d_foot_rpy_deg=((deg(r_roll), deg(r_pitch)), (deg(l_roll), deg(l_pitch))), dz_diff_m=self.dz_diff,
+            new_zmp=tuple(self.new_zmp.tolist()))

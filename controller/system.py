@@ -10,6 +10,7 @@ from controller.auto_balancer import AutoBalancer
 from controller.chain import Chain
 from controller.collision_detector import CollisionDetector
 from controller.emergency_stopper import EmergencyStopper
+from controller.fall_detector import FallDetector
 from controller.hard_emergency_stopper import HardEmergencyStopper
 from controller.impedance_controller import ImpedanceController
 from controller.kalman_filter import AttitudeKalmanFilter, KalmanFilter
@@ -23,6 +24,15 @@ from controller.stabilizer import Stabilizer
 from controller.state_estimation import ActualStateEstimator
 from controller.types import Reference
 from robot.sensors import Sensors
+
+G = 9.80665  # [m/s^2]
+
+
+def layer_classes() -> dict[str, type]:
+    """Layer name -> class of every layer this system builds (chain order)."""
+    classes = (KalmanFilter, RemoveForceOffset, SequencePlayer, EmergencyStopper, ImpedanceController, AutoBalancer,
+               Stabilizer, CollisionDetector, HardEmergencyStopper, SoftErrorLimiter)
+    return {cls.name: cls for cls in classes}
 
 
 def initial_reference(kin: RobotKinematics, q_rad: np.ndarray) -> Reference:
@@ -50,8 +60,10 @@ class ControllerSystem:
         self._kin_est = RobotKinematics()
         self._kin_seq = RobotKinematics()
         self.estimator = ActualStateEstimator(self._kin_est)
+        weight_n = self.kin.total_mass * G
         self.loop = ControlLoop(plant, self.build_chain, dt_control_s=dt_control_s,
-                                state_estimator=self.estimator, on_snapshot=on_snapshot)
+                                state_estimator=self.estimator, on_snapshot=on_snapshot,
+                                fall_detector_factory=lambda: FallDetector(weight_n))
 
     def build_chain(self, sensors: Sensors, dt_s: float) -> Chain:
         q0 = np.array(sensors.q_rad, dtype=float)
@@ -61,16 +73,14 @@ class ControllerSystem:
             KalmanFilter(rpy0=(tilt[0], tilt[1], 0.0)),
             RemoveForceOffset(RobotKinematics()),
             SequencePlayer(ref0, dt_s, ik_solver=self._solve_limb_ik),
-            es := EmergencyStopper(dt_s),
+            EmergencyStopper(dt_s),
             ImpedanceController(),
             AutoBalancer(ref0, dt_s, active=self.start_auto_balancer),
-            st := Stabilizer(dt_s, active=self.start_stabilizer),
+            Stabilizer(dt_s, active=self.start_stabilizer),
             CollisionDetector(q0),
             HardEmergencyStopper(q0),
             SoftErrorLimiter(self.kin.q_lower, self.kin.q_upper, q0),
         ]
-        # the Stabilizer's capture-point flag reaches the EmergencyStopper one tick late (hrpsys port)
-        es.flag_source = lambda: st.emergency
         return Chain({layer.name: layer for layer in layers})
 
     def _solve_limb_ik(self, group, q_rad, base_pos_world, base_rpy_rad, target_pos, target_rpy_rad, frame):

@@ -9,7 +9,7 @@ import numpy as np
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
-__all__ = ["Estimate", "GaitState", "Reference", "TickContext", "frozen_array", "read_only"]
+__all__ = ["Estimate", "GaitState", "Ports", "Reference", "TickContext", "frozen_array", "read_only"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -132,6 +132,18 @@ _READ_ONLY_DEFAULTS = (read_only(np.zeros(3)), read_only(np.zeros((len(FORCE_SEN
 
 
 @dataclass(slots=True)
+class Ports:
+    """What layers publish for later layers and for the next tick (hrpsys data ports), besides the reference.
+
+    Each tick the loop hands the chain the ports the previous tick published (`TickContext.last_ports`,
+    to read) and a fresh set (`TickContext.ports`, to publish into). A port is written by one layer only.
+    """
+
+    hold: bool = False  # hes: the hard e-stop is engaged; the layers before it hold their motion
+    cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
+
+
+@dataclass(slots=True)
 class TickContext:
     """Everything a layer may read in one tick besides the upstream reference."""
 
@@ -140,3 +152,10 @@ class TickContext:
     dt_s: float
     sensors: Sensors
     estimate: Estimate
+    last_ports: Ports = field(default_factory=Ports)  # published by the previous tick (read only)
+    ports: Ports = field(default_factory=Ports)  # published by this tick's layers
+
+    @property
+    def hold(self) -> bool:
+        """The hard e-stop was engaged at the end of the last tick: motion-producing layers hold."""
+        return self.last_ports.hold

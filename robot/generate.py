@@ -292,9 +292,13 @@ def finger_geoms(side: str) -> list[Geom]:
 
 
 def half_sitting_rad(params: dict) -> list[float]:
-    hs = params["half_sitting_deg"]
-    deg = [*hs["RLEG"], *hs["LLEG"], *hs["CHEST"], *hs["HEAD"], *hs["RARM"], *hs["LARM"]]
-    return [math.radians(v) for v in deg]
+    return [math.radians(v) for v in half_sitting_deg(params)]
+
+
+def half_sitting_deg(params: dict | None = None) -> tuple[float, ...]:
+    """HRP-2's half-sitting posture [deg], JOINT_NAMES order (the scenes' "home" keyframe)."""
+    hs = (params or load_parameters())["half_sitting_deg"]
+    return (*hs["RLEG"], *hs["LLEG"], *hs["CHEST"], *hs["HEAD"], *hs["RARM"], *hs["LARM"])
 
 
 def site_frames(params: dict) -> dict[str, tuple[str, tuple[float, float, float]]]:

@@ -1,13 +1,14 @@
 """The chain order and the fixed-rate loop: queue at tick boundaries, faults, pacing."""
 
 import time
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 
 from controller.chain import CHAIN_ORDER, Chain
 from controller.errors import InvalidCommand
-from controller.layer import Layer
+from controller.layer import Layer, Status
 from controller.loop import ControlLoop
 from controller.types import Reference
 from robot.sensors import GroundTruth
@@ -64,22 +65,30 @@ class Ramp(Layer):
         return ref.with_(q_rad=q)
 
 
+@dataclass(frozen=True, slots=True)
+class FreezeStatus(Status):
+    engaged: bool
+    reason: str | None
+
+
 class Freeze(Layer):
     name = "hes"
 
     def __init__(self):
         super().__init__()
         self.engaged = False
+        self.reason = None
         self.q = None
 
-    def engage(self, q=None):
-        self.engaged, self.q = True, q
+    def engage(self, q=None, reason="operator"):
+        self.engaged, self.q, self.reason = True, q, reason
 
     def tick(self, ctx, ref):
+        ctx.ports.hold = self.engaged
         return ref.with_(q_rad=self.q) if self.engaged else ref
 
     def status(self):
-        return {"enabled": True, "engaged": self.engaged}
+        return FreezeStatus(enabled=True, engaged=self.engaged, reason=self.reason)
 
 
 def make_loop(**kw):
@@ -134,7 +143,7 @@ def test_a_failing_layer_is_a_reported_fault_that_holds_the_command_and_engages_
     layers["seq"].fail = True
     snap = loop.run_for(0.05)
     assert snap.fault is not None and "boom" in snap.fault
-    assert snap.emergency["hard_stop"] is True
+    assert snap.safety.hard_stop is True
     assert np.array_equal(plant.writes[-1], held)
     layers["seq"].fail = False
     loop.clear_fault()

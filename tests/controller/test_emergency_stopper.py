@@ -26,8 +26,9 @@ def run(es, t0, t1, flag=lambda t: False):
     ts, out = [], []
     for k in range(int(round((t1 - t0) / DT)) + 1):
         t = t0 + k * DT
-        es.flag_source = (lambda t=t: flag(t))
-        r = es.tick(make_ctx(t=t, dt=DT), ref_at(t))
+        ctx = make_ctx(t=t, dt=DT)
+        ctx.last_ports.cp_flag = flag(t)  # the Stabilizer's flag of the tick before
+        r = es.tick(ctx, ref_at(t))
         ts.append(t)
         out.append(np.concatenate((r.q_rad, r.base_pos_world, r.base_rpy_rad, r.zmp_base, r.wrenches.ravel())))
     return np.array(ts), np.array(out)
@@ -59,7 +60,7 @@ def test_on_the_flag_it_reverts_to_the_plan_t1_earlier_exactly_at_t2_with_zero_v
     assert np.max(np.abs(out[k_end] - out[k_end - 1])) / DT < 1e-3
     # case 2 after: holds while the plan goes on
     assert np.all(out[k_end:] == target)
-    assert es.status()["stopped"] and es.status()["reason"] == "capture_point"
+    assert es.status().stopped and es.status().reason == "capture_point"
 
 
 def test_the_revert_starts_without_a_velocity_jump():
@@ -78,7 +79,7 @@ def test_release_blends_back_to_the_live_plan_without_a_jump():
     steps = np.abs(np.diff(out[:, 0]))
     assert np.max(steps) < 0.01  # no jump: the gap was 0.15, closed over 1 s
     assert np.allclose(out[-1], planned(ts[-1]), atol=1e-12)  # back on the plan after recover_time_s
-    assert not es.status()["stopped"] and not es.status()["recovering"]
+    assert not es.status().stopped and not es.status().recovering
 
 
 def test_the_operator_stop_is_latched_until_release_and_release_when_running_is_an_error():
@@ -87,7 +88,7 @@ def test_the_operator_stop_is_latched_until_release_and_release_when_running_is_
     es.stop_motion()
     ts, out = run(es, 1.005, 4.0)
     assert np.max(np.abs(out - out[0])) < 1e-12  # frozen for 3 s (T1 = T2 = 0: hrpsys's plain freeze)
-    assert es.status()["reason"] == "operator"
+    assert es.status().reason == "operator"
     es.release_motion()
     with pytest.raises(InvalidState, match="not stopped"):
         EmergencyStopper(DT).release_motion()

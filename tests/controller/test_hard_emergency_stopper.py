@@ -29,7 +29,7 @@ def test_engaged_stopper_holds_the_last_output_whatever_comes_in():
     hes.engage()
     outs = np.array([hes.tick(make_ctx(), ramp(k)).q_rad for k in range(10, 600)])
     assert np.max(np.abs(outs - 0.009)) < 1e-12
-    assert hes.status()["engaged"] is True
+    assert hes.status().engaged is True
 
 
 def test_engaging_twice_keeps_the_first_frozen_posture():

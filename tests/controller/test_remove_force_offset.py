@@ -52,7 +52,7 @@ def test_calibration_learns_the_offset_of_an_unloaded_sensor():
         ctx = make_ctx(q=HALF, wrenches=hand_reading(kin, offset=offset))
         rmfo.tick(ctx, Reference.from_arrays(HALF))
     assert np.allclose(rmfo.offsets[RH], offset, atol=1e-9)
-    assert rmfo.status()["calibrating"] == []
+    assert rmfo.status().calibrating == ()
     ctx = make_ctx(q=HALF, wrenches=hand_reading(kin, np.array([10.0, 0, 0]), offset=offset))
     rmfo.tick(ctx, Reference.from_arrays(HALF))
     assert np.allclose(ctx.estimate.wrenches_ext_world[RH, :3], [10.0, 0, 0], atol=1e-9)

@@ -106,7 +106,7 @@ def test_new_set_joint_angles_overrides_the_motion_in_progress():
     seq.set_joint_angles(MOVE_POSE, 5.0)
     run(seq, 2.5)
     seq.set_joint_angles(RESET_POSE, 1.0)
-    assert seq.status()["remaining_s"] == pytest.approx(1.0)
+    assert seq.status().remaining_s == pytest.approx(1.0)
     assert_joints(wait(seq), RESET_POSE)
 
 
@@ -218,7 +218,7 @@ def test_set_joint_angles_of_group_moves_only_that_group():
     seq = make_player()
     for p in (LARM_POS0, LARM_POS1):
         seq.set_joint_angles_of_group("larm", p, 1.0)
-        assert seq.status()["active_groups"] == ["larm"]
+        assert seq.status().active_groups == ("larm",)
         assert_joints(wait_group(seq, "larm"), with_larm(p))
 
 
@@ -272,7 +272,7 @@ def test_group_motion_and_whole_body_motion_interact_by_joint_sets():
     seq.set_joint_angles_of_group("rarm", RESET_POSE[RARM], 5.0)
     run(seq, 0.5)
     seq.set_joint_angles(RESET_POSE, 1.0)  # the whole-body command overrides the group motion
-    assert seq.status()["remaining_s"] == pytest.approx(1.0)
+    assert seq.status().remaining_s == pytest.approx(1.0)
     assert_joints(wait(seq), RESET_POSE)
 
 
@@ -334,7 +334,7 @@ def test_set_target_pose_plays_the_ik_solution_of_the_group():
     assert (group, frame) == ("larm", "BODY")
     assert np.allclose(q_current, RESET_POSE) and np.allclose(target_pos, [0.3, 0.2, -0.1])
     assert np.allclose(target_rpy, [0.0, -0.5, 0.0])
-    assert seq.status()["active_groups"] == ["larm"]
+    assert seq.status().active_groups == ("larm",)
     assert_joints(wait(seq), with_larm(LARM_POS0))
     seq.set_target_pose("larm", [0.3, 0.2, 0.6], [0.0, 0.0, 0.0], 1.0)
     assert ik.calls[-1][0] == "larm" and ik.calls[-1][-1] is None
@@ -424,21 +424,21 @@ def test_reset_reseeds_every_channel_at_rest():
 
 def test_status_reports_motion_and_remaining_time():
     seq = make_player()
-    assert seq.status() == {"enabled": True, "interpolating": False, "active_groups": [], "remaining_s": 0.0}
+    assert seq.status().to_dict() == {"enabled": True, "interpolating": False, "active_groups": [], "remaining_s": 0.0}
     seq.set_joint_angles_of_group("rarm", RESET_POSE[RARM] + 0.1, 3.0)
     seq.set_zmp([0.01, 0.0, 0.0], 1.0)
     run(seq, 1.0)
     st = seq.status()
-    assert st["interpolating"] and st["active_groups"] == ["rarm"]
-    assert st["remaining_s"] == pytest.approx(2.0)
+    assert st.interpolating and st.active_groups == ("rarm",)
+    assert st.remaining_s == pytest.approx(2.0)
 
 
 def test_time_none_uses_the_hrpsys_average_velocity_rule():
     seq = make_player(params=SequencePlayerParams(default_avg_vel_rad_s=0.5, min_auto_time_s=1.0))
     seq.set_joint_angle("CHEST_JOINT1", 1.0, None)  # 1 rad at 0.5 rad/s
-    assert seq.status()["remaining_s"] == pytest.approx(2.0)
+    assert seq.status().remaining_s == pytest.approx(2.0)
     seq.set_joint_angle("CHEST_JOINT1", 0.05, None)  # short moves take at least 1 s
-    assert seq.status()["remaining_s"] == pytest.approx(1.0)
+    assert seq.status().remaining_s == pytest.approx(1.0)
 
 
 def test_params_are_validated_with_their_range():

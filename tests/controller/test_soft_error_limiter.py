@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from controller.soft_error_limiter import SoftErrorLimiter, SoftErrorLimiterParams, limit_command
+from controller.soft_error_limiter import LimitedJoints, SoftErrorLimiter, SoftErrorLimiterParams, limit_command
 from controller.types import Reference
 from tests.controller.fakes import make_ctx
 
@@ -23,7 +23,7 @@ def test_command_within_limits_passes_through_unchanged():
     ref = Reference.from_arrays(np.full(N, 0.001))
     out = el.tick(make_ctx(q=np.zeros(N)), ref)
     assert out is ref
-    assert el.status()["limited"] == {"position": [], "velocity": [], "error": []}
+    assert el.status().limited == LimitedJoints(position=(), velocity=(), error=())
 
 
 def test_out_of_range_command_is_clamped_and_reported_by_joint_name():
@@ -32,7 +32,7 @@ def test_out_of_range_command_is_clamped_and_reported_by_joint_name():
     q[3] = 1.5
     out = el.tick(make_ctx(q=np.full(N, 0.99)), Reference.from_arrays(q))
     assert out.q_rad[3] == 1.0
-    assert "RLEG_JOINT3" in el.status()["limited"]["position"]
+    assert "RLEG_JOINT3" in el.status().limited.position
 
 
 def test_velocity_is_limited_per_tick():
@@ -40,7 +40,7 @@ def test_velocity_is_limited_per_tick():
     el = SoftErrorLimiter(LO, HI, np.zeros(N), p)
     out = el.tick(make_ctx(q=np.zeros(N), dt=0.005), Reference.from_arrays(np.full(N, 0.5)))
     assert np.allclose(out.q_rad, 2.0 * 0.005)
-    assert len(el.status()["limited"]["velocity"]) == N
+    assert len(el.status().limited.velocity) == N
 
 
 def test_tracking_error_is_limited_around_the_encoder():
@@ -49,7 +49,7 @@ def test_tracking_error_is_limited_around_the_encoder():
     q_meas = np.zeros(N)
     out = el.tick(make_ctx(q=q_meas, dt=0.1), Reference.from_arrays(np.full(N, 0.5)))
     assert np.allclose(out.q_rad, 0.1)
-    assert "LARM_JOINT6" in el.status()["limited"]["error"]
+    assert "LARM_JOINT6" in el.status().limited.error
 
 
 def test_disabled_limiter_is_identity():

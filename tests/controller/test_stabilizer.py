@@ -80,7 +80,7 @@ def test_capture_point_error_over_the_threshold_raises_the_flag_and_records_its_
     run_ticks(st, fast, 5)
     assert st.emergency
     assert st.cp_error[0] == pytest.approx(0.3 / np.sqrt(9.80665 / 0.81), abs=0.01)
-    assert st.status()["flag_rise_time"] is not None
+    assert st.status().flag_rise_time is not None
 
 
 def test_support_polygon_mode_flags_only_a_capture_point_outside_the_shrunk_feet():

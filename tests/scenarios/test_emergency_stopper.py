@@ -18,9 +18,9 @@ def test_stop_motion_during_a_10s_motion_holds_the_command_then_release_reaches_
     held = loop.snapshot.q_cmd_rad.copy()
     commands = np.array([loop.step().q_cmd_rad for _ in range(600)])  # 3 s
     assert np.max(np.abs(commands - held)) < 1e-6
-    assert loop.snapshot.layers["es"]["stopped"]
+    assert loop.snapshot.layers["es"].stopped
     loop.call(lambda: es.release_motion())
-    loop.run_until(lambda s: not s.layers["es"]["recovering"] and not s.layers["seq"]["interpolating"], 10.0)
+    loop.run_until(lambda s: not s.layers["es"].recovering and not s.layers["seq"].interpolating, 10.0)
     snap = loop.run_for(0.5)
     assert np.allclose(snap.q_cmd_rad, target, atol=1e-7)
     assert not snap.fallen
@@ -43,7 +43,7 @@ def test_stop_motion_during_a_10s_wrench_command_holds_the_wrenches_then_release
     wrenches = np.array([loop.step().reference.wrenches.ravel() for _ in range(600)])  # 3 s
     assert np.max(np.abs(wrenches - held)) < 1e-9
     loop.call(lambda: es.release_motion())
-    loop.run_until(lambda s: not s.layers["es"]["recovering"] and not s.layers["seq"]["interpolating"], 10.0)
+    loop.run_until(lambda s: not s.layers["es"].recovering and not s.layers["seq"].interpolating, 10.0)
     snap = loop.run_for(1.0)
     assert np.allclose(snap.reference.wrenches.ravel(), target, atol=1e-7)
     assert not snap.fallen
@@ -55,9 +55,9 @@ def test_with_the_planned_motion_stopped_a_push_is_still_absorbed_by_the_stabili
     loop.run_for(3.0)
     loop.call(lambda: system.chain["es"].stop_motion())
     loop.run_for(0.5)
-    assert loop.snapshot.layers["st"]["active"] and loop.snapshot.layers["es"]["stopped"]
+    assert loop.snapshot.layers["st"].active and loop.snapshot.layers["es"].stopped
     loop.call(lambda: loop.plant.push("BODY", np.array([200.0, 0.0, 0.0]), 0.1))  # 20 N s forward
     worst = max(tilt_deg(loop.step().truth.base_quat_wxyz) for _ in range(800))
     assert not loop.snapshot.fallen
     assert worst < 10.0
-    assert loop.snapshot.layers["st"]["cp_error_norm"] < 0.02
+    assert loop.snapshot.layers["st"].cp_error_norm < 0.02

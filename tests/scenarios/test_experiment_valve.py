@@ -9,8 +9,9 @@ import pytest
 
 from app.experiments import EXPERIMENTS, run_experiment
 from app.experiments import valve as V
-from controller.system import ControllerSystem
-from robot.plant import MujocoPlant
+from app.experiments.common import Rig
+from app.service import OperatorService
+from app.service.local import LocalRobot
 
 
 @pytest.mark.slow
@@ -44,20 +45,24 @@ def _controller_faults(caplog) -> list:
     return [rec for rec in caplog.records if "controller fault" in rec.getMessage()]
 
 
+def valve_rig() -> Rig:
+    robot = LocalRobot("valve")
+    return Rig(OperatorService(robot), robot)
+
+
 def test_the_disturbances_are_the_papers_and_only_move_the_recognition():
-    system = ControllerSystem(MujocoPlant("valve"))
-    true = V.recognise_valve(system)
+    rig = valve_rig()
+    true = V.recognise_valve(rig)
     for variant, d in (("disturbed-forward", (0.13113, 0.0, 0.03292)), ("disturbed-left", (0.0, 0.19454, 0.0))):
-        seen = V.recognise_valve(system, V.DISTURBANCE_WORLD_M[variant])
+        seen = V.recognise_valve(rig, V.DISTURBANCE_WORLD_M[variant])
         np.testing.assert_allclose(seen.centre_world - true.centre_world, d, atol=1e-12)
-    np.testing.assert_allclose(true.centre_world, system.loop.plant.data.body("valve").xpos)
+    np.testing.assert_allclose(true.centre_world, rig.plant.data.body("valve").xpos)
     assert EXPERIMENTS["valve"].variants[0] == "disturbed-forward"  # Fig. 11 (a-1), the headline case
     assert EXPERIMENTS["valve"].duration_s <= 17.5  # an 8 s walk to the stance, 9.3 s of manipulation
 
 
 def test_the_planned_grasp_puts_the_rim_between_the_jaws_on_the_recognised_circle():
-    system = ControllerSystem(MujocoPlant("valve"))
-    valve = V.recognise_valve(system)
+    valve = V.recognise_valve(valve_rig())
     for psi_deg in V.ARC_PSI_DEG:
         p_rim, R = V.rim_frame(valve, math.radians(psi_deg))
         assert np.linalg.norm(p_rim - valve.centre_world) == pytest.approx(V.VALVE_RING_RADIUS_M)

@@ -32,7 +32,7 @@ def test_a_steady_20_newton_push_on_the_hand_displaces_it_by_f_over_k():
     moved = hand_site(loop) - before
     expected = 20.0 / k  # 0.05 m
     # the commanded deviation and the simulated hand both within 10 % of F / K, along the push
-    assert abs(snap.layers["ic"]["rarm"]["displacement_m"][0] - expected) < 0.1 * expected
+    assert abs(snap.layers["ic"].rarm.displacement_m[0] - expected) < 0.1 * expected
     assert abs(moved[0] - expected) < 0.1 * expected
     assert abs(moved[1]) < 0.3 * expected and abs(moved[2]) < 0.3 * expected
     assert not snap.fallen
@@ -51,7 +51,7 @@ def test_starting_and_stopping_never_jumps_a_joint_command_by_half_a_degree():
     cmds += [loop.step().q_cmd_rad for _ in range(500)]
     steps = np.abs(np.diff(np.array(cmds), axis=0))
     assert np.degrees(steps.max()) < 0.5
-    assert not loop.snapshot.layers["ic"]["rarm"]["active"]
+    assert not loop.snapshot.layers["ic"].rarm.active
 
 
 def test_no_force_no_deviation_and_wrong_start_stop_are_invalid_states():
@@ -65,7 +65,7 @@ def test_no_force_no_deviation_and_wrong_start_stop_are_invalid_states():
     loop.run_for(2.5)
     loop.call(lambda: ic.start("larm"))
     snap = loop.run_for(2.5)
-    assert np.linalg.norm(snap.layers["ic"]["larm"]["displacement_m"]) < 0.005  # the hand's own weight is removed
+    assert np.linalg.norm(snap.layers["ic"].larm.displacement_m) < 0.005  # the hand's own weight is removed
     with pytest.raises(InvalidState, match="already active"):
         loop.call(lambda: ic.start("larm"))
     with pytest.raises(InvalidState, match="not active"):

@@ -99,7 +99,7 @@ def test_go_velocity_for_twenty_seconds_then_go_stop_never_falls():
     w = Walker()
     w.call(lambda: w.abc.go_velocity(0.1, 0.05, np.radians(10.0)))
     snap = w.run(20.0)
-    assert snap.layers["abc"]["walking"]
+    assert snap.layers["abc"].walking
     moved = np.linalg.norm(snap.truth.base_pos_world[:2])
     w.call(lambda: w.abc.go_stop())
     w.walk_until_stopped(10.0)
