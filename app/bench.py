@@ -9,16 +9,12 @@ from typing import Any
 
 import numpy as np
 
-from app.runtime import Runtime
+from app.service import OperatorService
+from app.service.local import LocalRobot
 from controller.chain import CHAIN_ORDER
 from controller.loop import ControlLoop
+from robot.generate import half_sitting_deg
 from robot.names import JOINT_NAMES
-
-#: HRP-2 half-sitting [deg], JOINT_NAMES order (the plant's "home" keyframe).
-HALF_SITTING_DEG = np.array(
-    [0, 0, -26, 50, -24, 0] * 2 + [0, 0, 0, 0] + [15, -10, 0, -30, 0, 0, 10] + [15, 10, 0, -30, 0, 0, 10],
-    dtype=float,
-)
 
 
 @dataclass(frozen=True)
@@ -27,27 +23,28 @@ class Scenario:
     tick, after `warmup_s` of untimed standing (the AutoBalancer and the Stabilizer blend in)."""
 
     description: str
-    setup: Callable[[ControlLoop], None]
+    setup: Callable[[OperatorService], None]
     warmup_s: float = 0.0
     needs: tuple[str, ...] = ()  # layers the scenario commands
 
 
-def _stand(loop: ControlLoop) -> None:
+def _stand(service: OperatorService) -> None:
     """Nothing to send: the chain holds the half-sitting posture it started in."""
 
 
-def _arms(loop: ControlLoop) -> None:
+def _arms(service: OperatorService) -> None:
     """Both arms forward with the elbows bent and back, over and over (setJointAngles sequence)."""
-    q_fwd = HALF_SITTING_DEG.copy()
+    half_sitting = np.array(half_sitting_deg(), dtype=float)
+    q_fwd = half_sitting.copy()
     for name, deg in (("RARM_JOINT0", -50), ("RARM_JOINT3", -70), ("LARM_JOINT0", -50), ("LARM_JOINT3", -70)):
         q_fwd[JOINT_NAMES.index(name)] = deg
-    poses = [np.deg2rad(q_fwd), np.deg2rad(HALF_SITTING_DEG)] * 30
-    loop.call(lambda: loop.chain["seq"].set_joint_angles_sequence(poses, [1.5] * len(poses)))
+    poses = [np.deg2rad(q_fwd), np.deg2rad(half_sitting)] * 30
+    service.set_joint_angles_sequence(poses, [1.5] * len(poses))
 
 
-def _walk(loop: ControlLoop) -> None:
+def _walk(service: OperatorService) -> None:
     """goVelocity(0.1 m/s forward) for the whole timed part (the AutoBalancer is running by then)."""
-    loop.call(lambda: loop.chain["abc"].go_velocity(0.1, 0.0, 0.0))
+    service.go_velocity(0.1, 0.0, 0.0)
 
 
 #: Benchmark scenarios by name.
@@ -116,16 +113,16 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     selected = None if layers is None else layer_selection(layers)
     if selected is not None and not set(spec.needs) <= set(selected):
         raise ValueError(f"scenario {scenario!r} needs the layer(s) {', '.join(spec.needs)}")
-    runtime = Runtime(scene=scene, speed=None)
-    loop = runtime.loop
+    robot = LocalRobot(scene=scene, speed=None)
+    service = OperatorService(robot)
+    loop = robot.loop
     passthrough = []
     if selected is not None:
         passthrough = [name for name in loop.chain.order() if name not in selected]
-        for name in passthrough:
-            loop.chain[name].enabled = False
+        service.enable_layers({name: False for name in passthrough})
     if spec.warmup_s > 0.0:
         loop.run_for(spec.warmup_s)  # not part of the report
-    spec.setup(loop)
+    spec.setup(service)
     n = max(1, int(round(duration_s / loop.dt_control_s)))
     names = loop.chain.order()
     step_ms = np.empty(n)

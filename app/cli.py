@@ -6,6 +6,7 @@ import argparse
 import json
 import logging
 import math
+import signal
 import sys
 import threading
 import time
@@ -123,7 +124,8 @@ def bench(argv: Sequence[str]) -> int:
 def _start_http(app, host: str, port: int, log_level: str):
     import uvicorn
 
-    server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level=log_level, lifespan="on"))
+    server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level=log_level, lifespan="on",
+                                           timeout_keep_alive=30))
     thread = threading.Thread(target=server.run, name="http", daemon=True)
     thread.start()
     deadline = time.monotonic() + 15.0
@@ -138,75 +140,104 @@ def _start_http(app, host: str, port: int, log_level: str):
     return server, thread, bound
 
 
+class _StopRequested:
+    """Set by SIGINT / SIGTERM: the main loop ends and the console shuts down cleanly."""
+
+    def __init__(self) -> None:
+        self.event = threading.Event()
+        self.signal_name: str | None = None
+
+    def __call__(self, signum, _frame) -> None:
+        self.signal_name = signal.Signals(signum).name
+        self.event.set()
+
+
 def run(argv: Sequence[str]) -> int:
     args = run_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
 
     from app.main import create_app
-    from app.runtime import Runtime
+    from app.service import OperatorService, ServiceError
+    from app.service.process import RobotConfig, RobotProcess
     from app.settings import Settings
 
-    runtime = Runtime(scene=args.scene, speed=args.speed)
-    viewer = None
-    viewer_port = None
-    if not args.headless:
-        from app.viewer import Viewer
-
-        viewer = Viewer(runtime, host=args.host, port=args.viewer_port)
-        viewer_port = viewer.port
-    settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
-                        viewer_port=viewer_port)
-    app = create_app(settings, runtime=runtime)
+    stop = _StopRequested()
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+    wall0 = time.perf_counter()
     try:
-        server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)
-    except RuntimeError as exc:
-        if viewer is not None:
-            viewer.stop()
+        robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed))
+    except ServiceError as exc:
         print(f"hrp2-console: error: {exc}", file=sys.stderr)
         return 2
-    speed = "max" if args.speed is None else f"{args.speed:g}x real time"
-    print(f"hrp2-console: scene {args.scene!r}, {speed}; chain {runtime.loop.chain.describe()}")
-    print(f"  operator page  http://{args.host}:{http_port}/   (API docs /docs)")
-    if viewer_port is not None:
-        print(f"  3D viewer      http://{args.host}:{viewer_port}/")
-    sys.stdout.flush()
-
-    dt = runtime.loop.dt_control_s
-    wall0 = time.perf_counter()
-    runtime.start()
+    service = OperatorService(robot)
+    viewer = None
+    viewer_port = None
+    server = http_thread = None
     try:
-        while True:
-            # simulated time of this run, counted in ticks so that a reset does not restart it
-            if args.duration is not None and runtime.stats.ticks * dt >= args.duration - 1e-9:
-                break
-            if not runtime.running:
-                print("hrp2-console: error: the control loop stopped", file=sys.stderr)
-                break
-            time.sleep(0.005 if args.duration is not None else 0.1)
-    except KeyboardInterrupt:
-        pass
+        if not args.headless:
+            from app.viewer import Viewer
+
+            viewer = Viewer(service, host=args.host, port=args.viewer_port)
+            viewer_port = viewer.port
+        settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
+                            viewer_port=viewer_port)
+        app = create_app(settings, service=service)
+        try:
+            server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)
+        except RuntimeError as exc:
+            print(f"hrp2-console: error: {exc}", file=sys.stderr)
+            return 2
+        speed = "max" if args.speed is None else f"{args.speed:g}x real time"
+        pub = service.published()
+        print(f"hrp2-console: scene {args.scene!r}, {speed}; chain {pub.chain}")
+        print(f"  robot process  pid {robot.process.pid}, scheduling {robot.priority}")
+        print(f"  operator page  http://{args.host}:{http_port}/   (API docs /docs)")
+        if viewer_port is not None:
+            print(f"  3D viewer      http://{args.host}:{viewer_port}/")
+        sys.stdout.flush()
+        dt = robot.info().dt_control_s
+        while not stop.event.is_set():
+            if args.duration is not None:
+                latest = robot.latest()
+                # simulated time of this run, counted in ticks so that a reset does not restart it
+                if latest is not None and latest.stats["ticks"] * dt >= args.duration - 1e-9:
+                    break
+            stop.event.wait(0.005 if args.duration is not None else 0.2)
     finally:
-        runtime.stop()
-        wall_s = time.perf_counter() - wall0
-        server.should_exit = True
-        http_thread.join(timeout=5.0)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        if server is not None:
+            server.should_exit = True
+            http_thread.join(timeout=5.0)
         if viewer is not None:
             viewer.stop()
-
-    stats = runtime.stats
-    snap = runtime.loop.snapshot
-    sim_s = stats.ticks * dt
-    fallen = stats.fallen or snap.fallen
-    faults = sorted(stats.faults)
+        last = robot.latest()
+        summary = robot.close() or (last.stats if last is not None else None)
+        wall_s = time.perf_counter() - wall0
+    if stop.signal_name is not None:
+        print(f"hrp2-console: {stop.signal_name} received, shut down")
+    if summary is None:
+        print("hrp2-console: error: the robot process left no summary "
+              f"({robot.exit_reason or 'unknown reason'})", file=sys.stderr)
+        return 1
+    snap = last.snapshot if last is not None else None
+    dt = robot.config.dt_control_s
+    sim_s = summary["ticks"] * dt
+    fallen = summary["fallen"] or bool(snap is not None and snap.fallen)
+    faults = summary["faults"]
     print("summary:")
-    print(f"  scene: {runtime.scene}")
+    print(f"  scene: {last.scene if last is not None else args.scene}")
     print(f"  sim time: {sim_s:.3f} s")
-    print(f"  ticks: {stats.ticks}")
+    print(f"  ticks: {summary['ticks']}")
     print(f"  wall time: {wall_s:.3f} s")
     print(f"  real-time factor: {sim_s / wall_s if wall_s > 0 else float('inf'):.2f}")
     print(f"  fallen: {str(fallen).lower()}")
-    print(f"  max loop ms: {stats.max_loop_ms:.3f}")
-    print(f"  hard stop: {str(bool(snap.emergency.get('hard_stop', False))).lower()}")
+    print(f"  max loop ms: {summary['max_loop_ms']:.3f}")
+    if last is not None:
+        t = last.timing
+        print(f"  tick start-lateness p50/p99/max ms: {t.lateness_p50_ms:.3f} / {t.lateness_p99_ms:.3f} / "
+              f"{t.lateness_max_ms:.3f}")
+    print(f"  hard stop: {str(bool(snap is not None and snap.safety.hard_stop)).lower()}")
     print(f"  faults: {'; '.join(faults) if faults else 'none'}")
     return 1 if (fallen or faults) else 0
 

@@ -1,27 +1,36 @@
-"""HTTP error mapping: every rejection says which field was wrong and what would have been allowed."""
+"""HTTP error mapping: every rejection is a JSON body {"detail": text, ...} that says which field was wrong
+and what would have been allowed; the OpenAPI schema of the 422 says the same."""
 
 from __future__ import annotations
 
 import logging
-from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from pydantic import BaseModel, Field
 
+from app.service.errors import InvalidArgument, Refused, ServiceError
 from controller.errors import InvalidCommand, InvalidState
 
 log = logging.getLogger(__name__)
 
 
-class BadRequest(Exception):
-    """A request rejected by the app's own checks (before anything reaches the loop) -> 422."""
+class ValidationItem(BaseModel):
+    loc: list[str] = Field(description="where: body, then the field path")
+    msg: str
+    type: str
 
-    def __init__(self, field: str, message: str) -> None:
-        super().__init__(f"{field}: {message}")
-        self.field = field
-        self.message = message
+
+class ErrorBody(BaseModel):
+    """Every error response of the API."""
+
+    detail: str = Field(description="what was wrong and what would have worked")
+    field: str | None = Field(default=None, description="the offending field (422)")
+    reason: str | None = Field(default=None, description="what is in the way (409): hard_stop, fallen, collision, "
+                                                         "motion_stop, state")
+    errors: list[ValidationItem] | None = Field(default=None, description="pydantic's findings (422)")
 
 
 def _is_union_tag(part: Any) -> bool:
@@ -43,22 +52,13 @@ def _readable(err: dict[str, Any]) -> str:
     if typ == "extra_forbidden":
         return f"{field}: unknown field (not part of this request)"
     if typ == "finite_number":
-        return f"{field}: must be a finite number (got {err.get('input')!r})"
+        return f"{field}: must be a finite number"
     if typ == "json_invalid":
         return f"body: invalid JSON ({err.get('ctx', {}).get('error', msg)})"
-    shown = err.get("input")
-    text = repr(shown)
+    text = repr(err.get("input"))
     if len(text) > 80:
         text = text[:77] + "..."
     return f"{field}: {msg} (got {text})"
-
-
-def _json_safe_errors(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
-    out = []
-    for e in errors:
-        out.append({"loc": [str(p) for p in e.get("loc", ())], "msg": str(e.get("msg", "")),
-                    "type": str(e.get("type", ""))})
-    return out
 
 
 def _relevant(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
@@ -69,37 +69,65 @@ def _relevant(errors: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return rest or errors
 
 
+def body(detail: str, **extra: Any) -> dict[str, Any]:
+    return {"detail": detail, **{k: v for k, v in extra.items() if v is not None}}
+
+
 async def _validation_handler(_: Request, exc: RequestValidationError) -> JSONResponse:
-    errors = _relevant(list(exc.errors()))
+    errors = _relevant(list(exc.errors()))[:20]
     detail = "; ".join(_readable(e) for e in errors) or "invalid request"
-    return JSONResponse(status_code=422, content={"detail": detail, "errors": _json_safe_errors(errors)})
+    items = [{"loc": [str(p) for p in e.get("loc", ())], "msg": str(e.get("msg", "")), "type": str(e.get("type", ""))}
+             for e in errors]
+    return JSONResponse(status_code=422, content=body(detail, field=_loc(tuple(errors[0].get("loc", ())))
+                                                      if errors else None, errors=items))
 
 
-async def _bad_request_handler(_: Request, exc: BadRequest) -> JSONResponse:
-    return JSONResponse(status_code=422, content={"detail": str(exc), "field": exc.field})
+async def _service_handler(_: Request, exc: ServiceError) -> JSONResponse:
+    extra: dict[str, Any] = {}
+    if isinstance(exc, InvalidArgument):
+        extra["field"] = exc.field
+    if isinstance(exc, Refused):
+        extra["reason"] = exc.reason
+    if exc.status >= 500:
+        log.error("service error: %s", exc)
+    return JSONResponse(status_code=exc.status, content=body(str(exc), **extra))
 
 
 async def _invalid_command_handler(_: Request, exc: InvalidCommand) -> JSONResponse:
-    return JSONResponse(status_code=422, content={"detail": str(exc)})
+    return JSONResponse(status_code=422, content=body(str(exc)))
 
 
 async def _invalid_state_handler(_: Request, exc: InvalidState) -> JSONResponse:
-    return JSONResponse(status_code=409, content={"detail": str(exc)})
-
-
-async def _timeout_handler(_: Request, exc: FutureTimeout) -> JSONResponse:
-    return JSONResponse(status_code=503, content={"detail": "the control loop did not take the command in time"})
+    return JSONResponse(status_code=409, content=body(str(exc), reason="state"))
 
 
 async def _internal_handler(_: Request, exc: Exception) -> JSONResponse:
-    log.exception("request failed: %s", exc)
-    return JSONResponse(status_code=500, content={"detail": f"internal error: {type(exc).__name__}: {exc}"})
+    # Starlette answers with this, then re-raises to the server: app.security.ConsoleGuard swallows that
+    # re-raise, so the keep-alive connection stays usable (uvicorn would close it)
+    log.error("request failed: %s: %s", type(exc).__name__, exc)
+    return JSONResponse(status_code=500, content=body(f"internal error: {type(exc).__name__}: {exc}"))
 
 
 def install_error_handlers(app: FastAPI) -> None:
+    app.add_exception_handler(Exception, _internal_handler)
     app.add_exception_handler(RequestValidationError, _validation_handler)
-    app.add_exception_handler(BadRequest, _bad_request_handler)
+    app.add_exception_handler(ServiceError, _service_handler)
     app.add_exception_handler(InvalidCommand, _invalid_command_handler)
     app.add_exception_handler(InvalidState, _invalid_state_handler)
-    app.add_exception_handler(FutureTimeout, _timeout_handler)
-    app.add_exception_handler(Exception, _internal_handler)
+
+
+#: responses every route may give besides 200 (in OpenAPI, all with the one error body)
+COMMON_ERRORS = {500: {"model": ErrorBody, "description": "an unexpected error (the connection stays usable)"},
+                 503: {"model": ErrorBody, "description": "the robot process is not running or did not answer"}}
+
+
+def errors(*codes: int, **descriptions: str) -> dict[int, dict[str, Any]]:
+    """OpenAPI `responses` for a route: the error codes it may answer, each with ErrorBody."""
+    default = {404: "something named does not exist (the valid names are listed)",
+               409: "valid, but not now: `reason` says what is in the way",
+               413: "the body is larger than the limit",
+               422: "invalid field: `field` names it, `detail` says what is allowed"}
+    out = dict(COMMON_ERRORS)
+    for code in codes:
+        out[code] = {"model": ErrorBody, "description": descriptions.get(f"e{code}", default.get(code, ""))}
+    return out

@@ -1,62 +1,71 @@
-"""The FastAPI application: assembles the routers, the error handlers and the static operator page."""
+"""The FastAPI application: assembles the routers, the error handlers, the front-door guard and the static
+operator page. Serves an OperatorService its owner built (the CLI: the robot in its own process)."""
 
 from __future__ import annotations
 
-from contextlib import asynccontextmanager
 from pathlib import Path
 
 from fastapi import FastAPI
 from fastapi.responses import FileResponse
 from fastapi.staticfiles import StaticFiles
 
-from app.errors import install_error_handlers
-from app.routers import chain, emergency, experiments, impedance, layers, sequence, sim, state, walk
-from app.runtime import Runtime
+from app.errors import ErrorBody, install_error_handlers
+from app.routers import chain, emergency, experiments, impedance, layers, params, sequence, sim, state, walk
+from app.security import ConsoleGuard, allowed_hosts_for
+from app.service import OperatorService
 from app.settings import Settings
 
 STATIC_DIR = Path(__file__).resolve().parents[1] / "static"
 
 
-def create_app(settings: Settings | None = None, runtime: Runtime | None = None) -> FastAPI:
-    """The console app. With `runtime`, serve it (its owner starts and stops it); with only `settings`,
-    build and run a Runtime for the app's lifetime; with neither, routes need a dependency override."""
-
-    @asynccontextmanager
-    async def lifespan(app: FastAPI):
-        app.state.settings = settings or Settings()
-        owned = None
-        if runtime is not None:
-            app.state.runtime = runtime
-        elif settings is not None:
-            owned = Runtime(scene=settings.scene, dt_control_s=settings.dt_control_s, speed=settings.speed)
-            owned.start()
-            app.state.runtime = owned
-        try:
-            yield
-        finally:
-            if owned is not None:
-                owned.stop()
-            app.state.runtime = None
-
-    app = FastAPI(title="HRP-2 operator console", version="0.1.0", lifespan=lifespan,
+def create_app(settings: Settings | None = None, service: OperatorService | None = None):
+    """The console's ASGI app: FastAPI behind the guard. Its FastAPI instance is `.fastapi`."""
+    settings = settings or Settings()
+    api = FastAPI(title="HRP-2 operator console", version="0.1.0",
                   description="Operator API of the simulated HRP-2 No.10: state, e-stop, motion stop, "
                               "sequence player, walking, layer parameters, impedance, experiments, "
-                              "simulation controls. Units: m, s, deg, N.")
-    app.state.settings = settings or Settings()
-    app.state.runtime = runtime
-    install_error_handlers(app)
-    for module in (state, emergency, sequence, sim, chain, layers, walk, impedance, experiments):
-        app.include_router(module.router)
-    app.include_router(emergency.motion_router)
-    app.include_router(emergency.params_router)
+                              "simulation controls. Units: m, s, deg, N. Control requests (POST, PUT) must be "
+                              "sent as JSON (Content-Type: application/json); only POST /api/estop is "
+                              "accepted without. Bodies are limited to 64 kB.")
+    api.state.settings = settings
+    api.state.service = service
+    install_error_handlers(api)
+    for module in (state, emergency, sequence, sim, chain, layers, params, walk, impedance, experiments):
+        api.include_router(module.router)
+    api.include_router(emergency.motion_router)
+    api.include_router(emergency.params_router)
+    _publish_error_schema(api)
 
-    @app.get("/", include_in_schema=False)
+    @api.get("/", include_in_schema=False)
     def index() -> FileResponse:
         return FileResponse(STATIC_DIR / "index.html")
 
-    app.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
-    return app
+    api.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
+    guarded = ConsoleGuard(api, allowed_hosts_for(settings.host, settings.extra_hosts))
+    guarded.fastapi = api
+    return guarded
 
 
-#: For `uvicorn app.main:app`: default settings, without the viser viewer.
-app = create_app(Settings(viewer_port=None))
+def _publish_error_schema(api: FastAPI) -> None:
+    """OpenAPI's 422 responses say what the handlers send ({"detail": str, ...}), not FastAPI's default."""
+    original = api.openapi
+
+    def openapi():
+        if api.openapi_schema is not None:
+            return api.openapi_schema
+        schema = original()
+        components = schema.setdefault("components", {}).setdefault("schemas", {})
+        error_schema = ErrorBody.model_json_schema(ref_template="#/components/schemas/{model}")
+        for name, sub in error_schema.pop("$defs", {}).items():
+            components[name] = sub
+        components["ErrorBody"] = error_schema
+        components["HTTPValidationError"] = error_schema
+        components.pop("ValidationError", None)
+        for path in schema.get("paths", {}).values():
+            for op in path.values():
+                resp = op.get("responses", {}).get("422")
+                if resp is not None:
+                    resp["content"] = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}
+        return schema
+
+    api.openapi = openapi

@@ -11,37 +11,36 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from controller.system import ControllerSystem  # noqa: E402
-from robot.plant import MujocoPlant  # noqa: E402
+from app.service import OperatorService  # noqa: E402
+from app.service.local import LocalRobot  # noqa: E402
 
 
 def record_walk(seconds: float = 12.0):
     """Stand 2.5 s, goPos(0.6, 0.1, 0); per tick: time, reference/actual ZMP, COG, CP, true COM, flag."""
-    system = ControllerSystem(MujocoPlant())
-    loop = system.loop
-    loop.run_for(2.5)
-    abc = system.chain["abc"]
-    loop.call(lambda: abc.go_pos(0.6, 0.1, 0.0))
+    robot = LocalRobot()
+    service = OperatorService(robot)
+    robot.run_for(2.5)
+    service.go_pos(0.6, 0.1, 0.0)
     rows = []
-    for _ in range(int(seconds / loop.dt_control_s)):
-        s = loop.step()
-        g = abc.last_gait
+    for _ in range(int(seconds / robot.loop.dt_control_s)):
+        s = robot.step()
+        g = s.reference.gait
         st = s.layers["st"]
         rows.append([s.time_s, *g.zmp_world[:2], *s.zmp_world[:2], *g.cog_world[:2], *s.cog_world[:2],
-                     *st["cp_ref"], *st["cp_act"], *s.truth.com_world[:2], st["cp_error_norm"]])
+                     *st.cp_ref, *st.cp_act, *s.truth.com_world[:2], st.cp_error_norm])
     return np.array(rows)
 
 
 def record_push(impulse_ns: float = 20.0, seconds: float = 4.0):
-    system = ControllerSystem(MujocoPlant())
-    loop = system.loop
-    loop.run_for(3.0)
-    loop.call(lambda: loop.plant.push("BODY", np.array([impulse_ns / 0.1, 0.0, 0.0]), 0.1))
+    robot = LocalRobot()
+    service = OperatorService(robot)
+    robot.run_for(3.0)
+    service.push("BODY", (impulse_ns / 0.1, 0.0, 0.0), 0.1)
     rows = []
-    for _ in range(int(seconds / loop.dt_control_s)):
-        s = loop.step()
+    for _ in range(int(seconds / robot.loop.dt_control_s)):
+        s = robot.step()
         st = s.layers["st"]
-        rows.append([s.time_s, *st["cp_error"], st["cp_error_norm"], st["threshold"], float(st["emergency"]),
+        rows.append([s.time_s, *st.cp_error, st.cp_error_norm, st.threshold, float(st.emergency),
                      *s.zmp_world[:2], *s.cog_world[:2]])
     return np.array(rows)
 

@@ -2,31 +2,44 @@
 
 from __future__ import annotations
 
+import math
 from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-MAX_MOTION_TIME_S = 3600.0  # [s]
-MAX_PUSH_FORCE_N = 2000.0  # [N]
-MAX_PUSH_DURATION_S = 5.0  # [s]
-LIMBS = ("rarm", "larm", "rleg", "lleg")
-MAX_GO_POS_M = 5.0  # [m] |x|, |y| of goPos
-MAX_GO_POS_DEG = 360.0  # [deg] |theta| of goPos
-MAX_VELOCITY_M_S = 0.5  # [m/s] |vx|, |vy| of goVelocity (the planner clamps to its stride limits anyway)
-MAX_VELOCITY_DEG_S = 45.0  # [deg/s] |vtheta| of goVelocity
-MAX_FOOTSTEPS = 50
-MAX_FOOTSTEP_POS_M = 10.0  # [m] |pos| components of a setFootSteps entry
+from app.service.verbs import (
+    MAX_FOOTSTEP_POS_M,
+    MAX_FOOTSTEPS,
+    MAX_GO_POS_M,
+    MAX_GO_POS_RAD,
+    MAX_MOTION_TIME_S,
+    MAX_PUSH_DURATION_S,
+    MAX_PUSH_FORCE_N,
+    MAX_TARGET_POS_M,
+    MAX_VELOCITY_M_S,
+    MAX_VELOCITY_RAD_S,
+    MIN_MOTION_TIME_S,
+    TARGET_LIMBS,
+)
+
+LIMBS = TARGET_LIMBS
+MAX_GO_POS_DEG = round(math.degrees(MAX_GO_POS_RAD), 6)  # [deg] |theta| of goPos
+MAX_VELOCITY_DEG_S = round(math.degrees(MAX_VELOCITY_RAD_S), 6)  # [deg/s] |vtheta| of goVelocity
 
 
 class _Body(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    """Request bodies: strict types (no "1" or true for a number), no unknown fields, finite numbers."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
-MotionTime = Field(description="interpolation time [s], in (0, 3600]", gt=0.0, le=MAX_MOTION_TIME_S)
+MotionTime = Field(description=f"interpolation time [s], in [{MIN_MOTION_TIME_S:g}, {MAX_MOTION_TIME_S:g}]",
+                   ge=MIN_MOTION_TIME_S, le=MAX_MOTION_TIME_S)
 
 
 class JointAnglesRequest(_Body):
-    angles_deg: dict[str, float] | list[float] = Field(
+    angles_deg: dict[str, Annotated[float, Field(ge=-360.0, le=360.0)]] | list[
+        Annotated[float, Field(ge=-360.0, le=360.0)]] = Field(
         description="{joint name: angle [deg]} for some joints, or a list of all 30 angles [deg] in "
                     "JOINT_NAMES order", examples=[{"RARM_JOINT0": -30.0}])
     time: float = MotionTime
@@ -34,23 +47,27 @@ class JointAnglesRequest(_Body):
 
 class TargetPoseRequest(_Body):
     limb: Literal["rarm", "larm", "rleg", "lleg"] = Field(description="the limb to move", examples=["rarm"])
-    frame: str | None = Field(default=None, description="reference link (e.g. BODY); default: the "
-                                                        "SequencePlayer's default frame")
-    pos: list[float] = Field(description="target position [m] (x, y, z)", min_length=3, max_length=3)
-    rpy_deg: list[float] = Field(description="target roll, pitch, yaw [deg]", min_length=3, max_length=3)
+    frame: str | None = Field(default=None, max_length=64,
+                              description="reference link (e.g. BODY); default: the SequencePlayer's default frame")
+    pos: list[Annotated[float, Field(ge=-MAX_TARGET_POS_M, le=MAX_TARGET_POS_M)]] = Field(
+        description=f"target position [m] (x, y, z), each |v| <= {MAX_TARGET_POS_M:g}", min_length=3, max_length=3)
+    rpy_deg: list[Annotated[float, Field(ge=-360.0, le=360.0)]] = Field(
+        description="target roll, pitch, yaw [deg], each |v| <= 360", min_length=3, max_length=3)
     time: float = MotionTime
 
 
 class ResetRequest(_Body):
-    scene: str | None = Field(default=None, description="scene name (GET /api/scenes); default: the current one")
+    scene: str | None = Field(default=None, max_length=64,
+                              description="scene name (GET /api/sim/scenes); default: the current one")
 
 
 class PushRequest(_Body):
-    body: str = Field(description="MuJoCo body name, e.g. BODY", examples=["BODY"])
-    force: list[float] = Field(description=f"world-frame force [N], |force| <= {MAX_PUSH_FORCE_N:g}",
-                               min_length=3, max_length=3, examples=[[100.0, 0.0, 0.0]])
-    duration: float = Field(description=f"push duration [s], in (0, {MAX_PUSH_DURATION_S:g}]",
-                            gt=0.0, le=MAX_PUSH_DURATION_S)
+    body: str = Field(description="MuJoCo body name, e.g. BODY", examples=["BODY"], max_length=64)
+    force: list[Annotated[float, Field(ge=-MAX_PUSH_FORCE_N, le=MAX_PUSH_FORCE_N)]] = Field(
+        description=f"world-frame force [N], |force| <= {MAX_PUSH_FORCE_N:g}", min_length=3, max_length=3,
+        examples=[[100.0, 0.0, 0.0]])
+    duration: float = Field(description=f"push duration [s], in [{MIN_MOTION_TIME_S:g}, {MAX_PUSH_DURATION_S:g}]",
+                            ge=MIN_MOTION_TIME_S, le=MAX_PUSH_DURATION_S)
 
 
 class GoPosRequest(_Body):
@@ -112,6 +129,31 @@ class Ok(BaseModel):
     message: str = ""
 
 
+class EstopResponse(Ok):
+    tick: int = Field(description="the control tick at which the loop engaged it")
+    sim_time_s: float = Field(description="simulated time then [s]")
+
+
+class Health(BaseModel):
+    robot_alive: bool = Field(description="the robot process runs")
+    exit_reason: str | None = Field(description="why it does not (POST /api/sim/reset starts a new one)")
+    priority: str = Field(description="the scheduling the robot process got: SCHED_FIFO, a nice value or default")
+    scene: str
+
+
+class LoopTimingResponse(BaseModel):
+    ticks: int = Field(description="ticks the lateness figures are taken over")
+    lateness_p50_ms: float = Field(description="median tick start-lateness [ms]")
+    lateness_p99_ms: float = Field(description="99th percentile tick start-lateness [ms]")
+    lateness_max_ms: float = Field(description="largest tick start-lateness [ms]")
+    late_ticks_over_1ms: int = Field(description="ticks that began more than 1 ms late")
+    speed_last: float | None = Field(description="simulated / wall time of the last finished 1-s window")
+    speed_min: float | None = Field(description="the slowest kept 1-s window")
+    windows: int = Field(description="1-s windows kept")
+    paced: bool = Field(description="false when running as fast as possible (lateness is then 0)")
+    speed_target: float | None = Field(description="the real-time factor asked for")
+
+
 class SequenceStatus(BaseModel):
     interpolating: bool
 
@@ -139,8 +181,8 @@ class ExperimentRequest(_Body):
     es: bool = Field(default=True, description="run with the EmergencyStopper (false: without, as in [MLC] Fig. 8a)")
     variant: str | None = Field(default=None, description="variant of the experiment (GET /api/experiments); "
                                                           "default: its first")
-    save: bool = Field(default=False, description="also write the CSV and the Fig. 10-style PNG into a new "
-                                                  "temporary directory (paths in the response)")
+    save: bool = Field(default=False, description="also keep the CSV and the Fig. 10-style PNG (in the console's "
+                                                  "memory; download them from csv_url / png_url)")
     params: dict[str, Any] | None = Field(
         default=None, description="EmergencyStopper parameters for this run only, named and bounded as in "
                                   "PUT /api/emergency-stopper/params (t1, t2, recover_time [s], threshold [m], "
@@ -178,7 +220,10 @@ class ExperimentResponse(BaseModel):
     duration_s: float = Field(description="simulated time run [s] (shorter than planned when the robot fell)")
     outcome: dict[str, Any] = Field(description="task measures of the experiment (valve angle, ...)")
     params: dict[str, Any] = Field(default_factory=dict, description="the EmergencyStopper parameters of the run")
-    csv_path: str | None = None
-    png_path: str | None = None
+    refused: list[str] = Field(default_factory=list, description="planner commands the robot refused (when, why), "
+                                                                 "e.g. the plan's next step after a motion stop")
+    run_id: int = Field(description="the run's number in this console")
+    csv_url: str | None = Field(default=None, description="where the run's CSV is (with save)")
+    png_url: str | None = Field(default=None, description="where the run's Fig. 10-style PNG is (with save)")
     wall_time_s: float = Field(description="wall-clock time the run took [s]")
     real_time_factor: float = Field(description="simulated time / wall time spent simulating (no set-up, no files)")

@@ -13,3 +13,4 @@ class Settings:
     host: str = "127.0.0.1"
     port: int = 8000
     viewer_port: int | None = 8080  # None: no viser viewer (--headless)
+    extra_hosts: tuple[str, ...] = ()  # Host names accepted besides the bound address (tests: "testserver")

@@ -1,4 +1,8 @@
-"""The viser 3D view (the only module that imports viser): MuJoCo bodies moved from ground truth, E-STOP panel."""
+"""The viser 3D view (the only module that imports viser): MuJoCo bodies moved from ground truth, E-STOP panel.
+
+It runs in the console process: the geometry comes from the scene's model file, the poses from the robot's
+published snapshots, and its buttons call the operator service like every other client. Its websocket only
+accepts the console's own origins (a foreign page cannot drive the robot through it)."""
 
 from __future__ import annotations
 
@@ -13,9 +17,9 @@ import numpy as np
 import trimesh
 import viser
 
-from app.runtime import Runtime
+from app.service import OperatorService, ServiceError
 from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
-from controller.errors import ControllerError
+from robot.plant import scene_path
 
 log = logging.getLogger(__name__)
 
@@ -98,15 +102,15 @@ class CpErrorHistory:
     def add(self, snap) -> bool:
         """Sample the snapshot's Stabilizer status; False when it has none. A reset clears the buffer."""
         st = snap.layers.get("st")
-        if not st:
+        if st is None:
             return False
         t = float(snap.time_s)
         if self._rows and t < self._rows[-1][0]:
             self._rows.clear()  # the simulation was reset
         if self._rows and t == self._rows[-1][0]:
             return False
-        err = np.asarray(st.get("cp_error", (0.0, 0.0)), dtype=float)
-        self._rows.append((t, 1e3 * float(err[0]), 1e3 * float(err[1]), 1e3 * float(st.get("threshold", 0.0))))
+        ex, ey = st.cp_error
+        self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.threshold)))
         while self._rows and self._rows[0][0] < t - self.window_s:
             self._rows.popleft()
         return True
@@ -127,13 +131,70 @@ def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
     return np.asarray(model.geom_rgba[g])
 
 
+def allowed_ws_origins(host: str, port: int) -> list[str | None]:
+    """Origins the viser websocket accepts: its own page (the iframe of the operator page), on the bound
+    host or a loopback name; None (no Origin header) for non-browser clients such as viser's own."""
+    from app.security import LOOPBACK_NAMES, is_loopback
+
+    names = {host, *(LOOPBACK_NAMES if is_loopback(host) else ())}
+    out: list[str | None] = [None]
+    for name in sorted(names):
+        shown = f"[{name}]" if ":" in name else name
+        out.append(f"http://{shown}:{port}")
+    return out
+
+
+class _OriginCheckingServe:
+    """Stands in for `websockets.asyncio.server.serve` inside viser: the same call with a request check in
+    front of viser's own, so the handshake of a page from another origin is refused (403) before viser sees
+    it. The allowed origins use the port the connection arrived on (viser may pick a free port)."""
+
+    def __init__(self, serve, host: str):
+        self._serve = serve
+        self._host = host
+
+    def __call__(self, handler, host, port, **kwargs):
+        inner = kwargs.get("process_request")
+        allowed_host = self._host
+
+        def process_request(connection, request):
+            if request.headers.get("Upgrade", "").lower() == "websocket":
+                origin = request.headers.get("Origin")
+                if origin not in allowed_ws_origins(allowed_host, connection.local_address[1]):
+                    return connection.respond(403, "this viewer only accepts its own page\n")
+            return inner(connection, request) if inner is not None else None
+
+        kwargs["process_request"] = process_request
+        return self._serve(handler, host, port, **kwargs)
+
+
+def _viser_with_origin_check(host: str, port: int, **kwargs) -> viser.ViserServer:
+    """A ViserServer whose websocket checks the Origin header (viser 1.1 has no option for it: its server
+    module's reference to websockets' `serve` is wrapped while the server starts)."""
+    import types
+
+    from viser.infra import _infra
+
+    real = _infra.websockets
+    wrapped = types.SimpleNamespace(**{k: getattr(real, k) for k in ("datastructures", "exceptions")})
+    wrapped.asyncio = types.SimpleNamespace(server=types.SimpleNamespace(
+        serve=_OriginCheckingServe(real.asyncio.server.serve, host),
+        ServerConnection=real.asyncio.server.ServerConnection))
+    _infra.websockets = wrapped
+    try:
+        server = viser.ViserServer(host=host, port=port, verbose=False, **kwargs)
+    finally:
+        _infra.websockets = real
+    return server
+
+
 class Viewer:
     """viser server showing the robot; body poses are pushed in one atomic batch at `rate_hz`."""
 
-    def __init__(self, runtime: Runtime, host: str = "127.0.0.1", port: int = 8080, rate_hz: float = 30.0):
-        self.runtime = runtime
+    def __init__(self, service: OperatorService, host: str = "127.0.0.1", port: int = 8080, rate_hz: float = 30.0):
+        self.service = service
         self.rate_hz = float(rate_hz)
-        self.server = viser.ViserServer(host=host, port=port, verbose=False)
+        self.server = _viser_with_origin_check(host, port)
         self.port = self.server.get_port()
         self.server.scene.configure_default_lights(enabled=True, cast_shadow=False)
         self.server.scene.set_up_direction("+z")
@@ -154,8 +215,9 @@ class Viewer:
         for node in self._scene_nodes:
             node.remove()
         self._frames, self._scene_nodes = [], []
-        model = self.runtime.loop.plant.model
+        model = mujoco.MjModel.from_xml_path(str(scene_path(self.service.info.scene)))
         self._model = model
+        self._scene = self.service.info.scene
         names = tuple(model.body(b).name for b in range(model.nbody))
         self._model_key = names
         has_visual = np.zeros(model.nbody, dtype=bool)
@@ -174,7 +236,10 @@ class Viewer:
             node = self._add_geom(model, g, f"{parent}/geom{g}")
             if node is not None:
                 self._scene_nodes.append(node)
-        self._apply_poses(self.runtime.loop.snapshot.truth)
+        try:
+            self._apply_poses(self.service.snapshot().truth)
+        except ServiceError:
+            pass
 
     def _add_geom(self, model: mujoco.MjModel, g: int, name: str):
         pos = np.asarray(model.geom_pos[g], dtype=float)
@@ -260,9 +325,9 @@ class Viewer:
             floor_z = float(zmp[2]) if np.isfinite(zmp[2]) else 0.0
         self._place(m["cog"], snap.cog_world)
         self._place(m["zmp"], (zmp[0], zmp[1], floor_z + _FLOOR_LIFT_M))
-        st = snap.layers.get("st") or {}
+        st = snap.layers.get("st")
         for key in ("cp_ref", "cp_act"):
-            xy = st.get(key)
+            xy = getattr(st, key, None)
             if xy is None:
                 self._show(m[key], False)
             else:
@@ -283,7 +348,8 @@ class Viewer:
                 poly = support_polygon(in_contact)
                 m["support"].points = _padded(_closed_segments(poly, floor_z + _FLOOR_LIFT_M), 8)
             self._show(m["support"], bool(in_contact))
-        planned = (snap.layers.get("abc") or {}).get("footsteps") or []
+        abc = snap.layers.get("abc")
+        planned = [{"leg": f.leg, "pos": f.pos, "yaw": f.rpy[2]} for f in (abc.footsteps if abc is not None else ())]
         if planned:
             m["footsteps"].points = _padded(footstep_rectangles(planned[:MAX_FOOTSTEPS], floor_z),
                                             4 * MAX_FOOTSTEPS)
@@ -300,7 +366,10 @@ class Viewer:
         self._fallen = gui.add_checkbox("fallen", False, disabled=True)
         self._fault = gui.add_text("fault", "none", disabled=True)
         self._message = gui.add_text("last action", "", disabled=True)
-        self._cp_history.add(self.runtime.loop.snapshot)
+        try:
+            self._cp_history.add(self.service.snapshot())
+        except ServiceError:
+            pass
         self._cp_plot = gui.add_uplot(
             self._cp_history.data(),
             ({"label": "t [s]"},
@@ -315,22 +384,18 @@ class Viewer:
 
         @self._estop.on_click
         def _(_event) -> None:
-            self._command("e-stop engaged", lambda loop: loop.chain["hes"].engage())
+            self._command("e-stop engaged", self.service.estop)
 
         @self._release.on_click
         def _(_event) -> None:
-            def release(loop) -> None:
-                loop.chain["hes"].release()
-                loop.clear_fault()
-            self._command("e-stop released", release)
+            self._command("e-stop released", self.service.release_estop)
 
     def _command(self, done: str, fn) -> None:
-        """Runs in viser's thread pool: the command goes through the loop's queue like an HTTP one."""
-        loop = self.runtime.loop
+        """Runs in viser's thread pool: a verb of the operator service, like an HTTP request."""
         try:
-            self.runtime.call(lambda: fn(loop))
+            fn()
             self._message.value = done
-        except ControllerError as exc:
+        except ServiceError as exc:
             self._message.value = str(exc)
         except Exception as exc:  # noqa: BLE001 - a GUI click never kills anything
             log.exception("viewer command failed")
@@ -340,7 +405,7 @@ class Viewer:
         t = f"{snap.time_s:.3f}"
         if self._time.value != t:
             self._time.value = t
-        hard = bool(snap.emergency.get("hard_stop", False))
+        hard = bool(snap.safety.hard_stop)
         if self._hard_stop.value != hard:
             self._hard_stop.value = hard
         if self._fallen.value != bool(snap.fallen):
@@ -359,12 +424,9 @@ class Viewer:
         last_tick, n = -1, 0
         while not self._stop.wait(period):
             try:
-                model = self.runtime.loop.plant.model
-                if model is not self._model:
-                    self._model = model
-                    if tuple(model.body(b).name for b in range(model.nbody)) != self._model_key:
-                        self._build_scene()  # the simulation was reset to another scene
-                snap = self.runtime.loop.snapshot
+                if self.service.info.scene != self._scene:
+                    self._build_scene()  # the simulation was reset to another scene
+                snap = self.service.snapshot()
                 if snap.tick != last_tick:
                     self.apply_snapshot(snap)
                     last_tick = snap.tick
@@ -373,6 +435,8 @@ class Viewer:
                     self._update_gui(snap)
                 if n % max(1, round(self.rate_hz / PLOT_RATE_HZ)) == 0:
                     self._update_plot(snap)
+            except ServiceError:  # the robot process is gone or restarting: try again shortly
+                time.sleep(0.5)
             except Exception:  # noqa: BLE001 - keep drawing whatever happens
                 log.exception("viewer update failed")
                 time.sleep(0.5)

@@ -18,11 +18,11 @@ from typing import Any
 import numpy as np
 
 from app.experiments import door, valve, wall
-from app.experiments.common import Experiment, ExperimentResult
+from app.experiments.common import Experiment, ExperimentResult, Rig
 from app.experiments.fig10 import plot_fig10
+from app.service import OperatorService, Refused
+from app.service.local import LocalRobot
 from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, distance_to_polygon_edge, support_polygon
-from controller.system import ControllerSystem
-from robot.plant import MujocoPlant
 
 __all__ = ["EXPERIMENTS", "Experiment", "ExperimentResult", "run_experiment"]
 
@@ -43,7 +43,7 @@ def _edge_distance(snap) -> float:
     gait = snap.reference.gait
     feet = tuple((float(p[0]), float(p[1]), math.atan2(R[1, 0], R[0, 0])) for p, R in (
         (gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world)))
-    return float(distance_to_polygon_edge(np.asarray(snap.layers["st"]["cp_act"]), _support_polygon(feet)))
+    return float(distance_to_polygon_edge(np.asarray(snap.layers["st"].cp_act), _support_polygon(feet)))
 
 
 def settled_below_after_s(t: np.ndarray, err: np.ndarray, threshold: float, t_from: float) -> float | None:
@@ -71,41 +71,46 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
     variant = exp.variants[0] if variant is None else variant
     if variant not in exp.variants:
         raise ValueError(f"unknown variant {variant!r} of {name}; available: {', '.join(exp.variants)}")
-    system = ControllerSystem(MujocoPlant(exp.scene))
-    loop = system.loop
-    for layer_name, changes in (params or {}).items():
-        layer = loop.chain[layer_name]
-        layer.set_params(layer.params.replaced(**changes))
+    robot = LocalRobot(exp.scene, speed=None)
+    service = OperatorService(robot)
+    rig = Rig(service, robot)
+    loop = robot.loop
+    if params:
+        service.set_params(params)
     if not es:
-        loop.chain["es"].enabled = False
+        service.enable_layers({"es": False})
     wall_t0 = time.perf_counter()
     loop.run_for(settle_s)  # AutoBalancer and Stabilizer blended in
     for limb in exp.impedance:
-        loop.call(lambda limb=limb: loop.chain["ic"].start(limb))
+        service.start_impedance(limb)
     t0 = loop.snapshot.time_s
-    events = sorted(exp.script(system, variant), key=lambda e: e[0])
+    events = sorted(exp.script(rig, variant), key=lambda e: e[0])
     rows = []
     flag_time = None
     fell_at = None
-    t2 = loop.chain["es"].params.t2_s
+    refused: list[str] = []
+    t2 = service.params("es")["es"].t2_s
     while loop.snapshot.time_s - t0 < exp.duration_s:
         t_rel = loop.snapshot.time_s - t0
         while events and events[0][0] <= t_rel + 1e-9:
-            loop.call(events.pop(0)[1])
+            try:
+                events.pop(0)[1]()  # the planner's verbs, between two ticks
+            except Refused as exc:  # e.g. the motion stopped by the flag: the plan's next step does not run
+                refused.append(f"{t_rel:.2f} s: {exc}")
         snap = loop.step()
         st = snap.layers["st"]
         es_st = snap.layers["es"]
-        if es_st.get("stopped") and flag_time is None and es_st.get("flag_time") is not None:
-            flag_time = es_st["flag_time"] - t0
-        if not es and st["emergency"] and flag_time is None:
+        if es_st.stopped and flag_time is None and es_st.flag_time is not None:
+            flag_time = es_st.flag_time - t0
+        if not es and st.emergency and flag_time is None:
             flag_time = snap.time_s - t0
-        rows.append([snap.time_s - t0, *st["cp_error"], st["cp_error_norm"], st["threshold"], _edge_distance(snap),
-                     float(st["emergency"]), float(bool(es_st.get("stopped"))), float(snap.fallen)])
+        rows.append([snap.time_s - t0, *st.cp_error, st.cp_error_norm, st.threshold, _edge_distance(snap),
+                     float(st.emergency), float(es_st.stopped), float(snap.fallen)])
         if snap.fallen:
             fell_at = snap.time_s - t0
             break
     sim_wall_s = time.perf_counter() - wall_t0  # simulating only: no set-up, no files, no plot
-    outcome = exp.outcome(system) if exp.outcome is not None else {}
+    outcome = exp.outcome(rig) if exp.outcome is not None else {}
     data = np.array(rows)
     t = data[:, 0]
     err = data[:, 3]
@@ -133,6 +138,6 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         name=name, variant=variant, es=es, verdict="fell" if fell_at is not None else "stood",
         flag_time_s=flag_time, peak_cp_error_m=float(err.max()), cp_error_at_flag_m=at_flag,
         edge_margin_at_flag_m=edge_at_flag, min_edge_margin_m=float(data[:, 5].min()),
-        below_threshold_after_revert_s=recovered, duration_s=float(t[-1]), outcome=outcome,
+        below_threshold_after_revert_s=recovered, duration_s=float(t[-1]), outcome=outcome, refused=tuple(refused),
         real_time_factor=(settle_s + float(t[-1])) / sim_wall_s,
         csv_path=None if csv_path is None else str(csv_path), png_path=None if png_path is None else str(png_path))

@@ -8,26 +8,52 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from app.service import OperatorService
+from app.service.local import LocalRobot
+from controller.kinematics import RobotKinematics
+from controller.loop import Snapshot
 from controller.rotations import matrix_to_rpy
-from controller.system import ControllerSystem
 from robot.names import joint_index
+from robot.plant import MujocoPlant
 
-#: (time after the start [s], command run inside the loop at that tick boundary)
+#: (time after the start [s], the planner's commands at that tick boundary: verbs of the operator service)
 Event = tuple[float, Callable[[], None]]
+
+
+@dataclass
+class Rig:
+    """What an experiment's planner works with: the operator service (its verbs are the only way to command
+    the robot), the latest snapshot, its own kinematic model; and the simulated plant, which only the
+    recognition stand-ins and the outcome measures read."""
+
+    service: OperatorService
+    robot: LocalRobot
+
+    @property
+    def snapshot(self) -> Snapshot:
+        return self.robot.loop.snapshot
+
+    @property
+    def kin(self) -> RobotKinematics:
+        return self.robot.system.kin
+
+    @property
+    def plant(self) -> MujocoPlant:
+        return self.robot.host.plant
 
 
 @dataclass(frozen=True)
 class Experiment:
-    """`script(system, variant)` gives the timed commands; `outcome(system)` measures the task at the end
+    """`script(rig, variant)` gives the timed commands; `outcome(rig)` measures the task at the end
     (valve angle, door angle, ...) from the simulation, for tests and the report."""
 
     scene: str
-    script: Callable[[ControllerSystem, str], list[Event]]
+    script: Callable[[Rig, str], list[Event]]
     duration_s: float
     description: str
     variants: tuple[str, ...] = ("default",)
     impedance: tuple[str, ...] = ()  # limbs whose ImpedanceController runs during the experiment
-    outcome: Callable[[ControllerSystem], dict[str, float]] | None = None
+    outcome: Callable[[Rig], dict[str, float]] | None = None
 
 
 @dataclass(frozen=True)
@@ -45,6 +71,7 @@ class ExperimentResult:
     duration_s: float
     outcome: dict[str, float] = field(default_factory=dict)
     real_time_factor: float = 0.0  # simulated time (settling included) / wall time spent simulating it
+    refused: tuple[str, ...] = ()  # planner commands the robot refused (when, why): e.g. after a motion stop
     csv_path: str | None = None
     png_path: str | None = None
 
@@ -53,22 +80,21 @@ class ExperimentResult:
         return f"verdict: {self.verdict} (flag at {flag}, peak CP error {self.peak_cp_error_m * 1e3:.1f} mm)"
 
 
-def pose_with(system: ControllerSystem, changes_deg: dict[str, float]) -> np.ndarray:
+def pose_with(rig: Rig, changes_deg: dict[str, float]) -> np.ndarray:
     """The SequencePlayer's current joint angles [rad] with `changes_deg` [deg] applied."""
-    q = np.array(system.loop.snapshot.q_seq_rad, dtype=float)
+    q = np.array(rig.snapshot.q_seq_rad, dtype=float)
     for name, deg in changes_deg.items():
         q[joint_index(name)] = math.radians(deg)
     return q
 
 
-def move_hands(system: ControllerSystem, limbs: tuple[str, ...], delta_world: np.ndarray, time_s: float) -> None:
+def move_hands(rig: Rig, limbs: tuple[str, ...], delta_world: np.ndarray, time_s: float) -> None:
     """setTargetPose: move each hand by `delta_world` [m] from where the plan has it now, orientation kept
     (hrpsys-style joint-space interpolation)."""
-    loop = system.loop
-    kin = system.kin
-    ref = loop.snapshot.reference
-    kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, loop.snapshot.q_seq_rad)
-    for limb in limbs:
-        p, R = kin.frame_pose(f"{limb}_end")
-        loop.call(lambda limb=limb, p=p, R=R: loop.chain["seq"].set_target_pose(
-            limb, p + delta_world, matrix_to_rpy(R), time_s))
+    kin = rig.kin
+    snap = rig.snapshot
+    ref = snap.reference
+    kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, snap.q_seq_rad)
+    targets = [(limb, *kin.frame_pose(f"{limb}_end")) for limb in limbs]
+    for limb, p, R in targets:
+        rig.service.set_target_pose(limb, p + delta_world, matrix_to_rpy(R), time_s)

@@ -14,10 +14,9 @@ import math
 import numpy as np
 import pinocchio as pin
 
-from app.experiments.common import Event, Experiment, pose_with
+from app.experiments.common import Event, Experiment, Rig, pose_with
 from controller.errors import InvalidCommand
 from controller.kinematics import RobotKinematics
-from controller.system import ControllerSystem
 from robot.generate import DOOR_FACE_X_M, DOOR_HINGE_Y_M, DOOR_KNOB_M
 from robot.names import JOINT_GROUPS, joint_index
 
@@ -98,10 +97,10 @@ def with_gripper(q_rad: np.ndarray, deg: float) -> np.ndarray:
     return q
 
 
-def grasp_posture(system: ControllerSystem, door_deg: float, back_off_m: float, q_rad: np.ndarray) -> np.ndarray:
+def grasp_posture(rig: Rig, door_deg: float, back_off_m: float, q_rad: np.ndarray) -> np.ndarray:
     """The posture holding the knob of the door at `door_deg`, or `back_off_m` behind it along the hand's axis."""
-    kin = system.kin
-    base = np.array(system.loop.snapshot.reference.base_pos_world)
+    kin = rig.kin
+    base = np.array(rig.snapshot.reference.base_pos_world)
     knob, axis = knob_world(door_deg)
     q = grasp_ik(kin, q_rad, base, knob, axis)
     if back_off_m > 0.0:
@@ -109,19 +108,19 @@ def grasp_posture(system: ControllerSystem, door_deg: float, back_off_m: float, 
     return q
 
 
-def reach(system: ControllerSystem, back_off_m: float, time_s: float) -> None:
+def reach(rig: Rig, back_off_m: float, time_s: float) -> None:
     """setJointAngles to the knob grasp (or `back_off_m` short of it), gripper open."""
-    q = pose_with(system, {GRIPPER: GRIPPER_OPEN_DEG})
+    q = pose_with(rig, {GRIPPER: GRIPPER_OPEN_DEG})
     q[np.array(JOINT_GROUPS[LIMB][:6])] = np.radians(GRASP_POSTURE_DEG)
-    q = grasp_posture(system, 0.0, back_off_m, q)
-    system.loop.chain["seq"].set_joint_angles(with_gripper(q, GRIPPER_OPEN_DEG), time_s)
+    q = grasp_posture(rig, 0.0, back_off_m, q)
+    rig.service.set_joint_angles(with_gripper(q, GRIPPER_OPEN_DEG), time_s)
 
 
-def move_along_arc(system: ControllerSystem, door_deg: float, time_s: float, chest_pitch_deg: float = 0.0) -> None:
+def move_along_arc(rig: Rig, door_deg: float, time_s: float, chest_pitch_deg: float = 0.0) -> None:
     """The planner's door motion: the hand through ARC_VIA_POINTS knob grasps from the closed door to
     `door_deg` while the waist bends forward to `chest_pitch_deg` (CHEST_JOINT1), played as a joint-angle
     sequence, gripper closed. A plan that leaves the arm's reach ends at its last reachable grasp."""
-    q = np.array(system.loop.snapshot.q_seq_rad, dtype=float)
+    q = np.array(rig.snapshot.q_seq_rad, dtype=float)
     chest = joint_index("CHEST_JOINT1")
     chest0 = q[chest]
     goals = []
@@ -129,33 +128,33 @@ def move_along_arc(system: ControllerSystem, door_deg: float, time_s: float, che
         f = k / ARC_VIA_POINTS
         q[chest] = chest0 + f * math.radians(chest_pitch_deg)
         try:
-            q = grasp_posture(system, f * door_deg, 0.0, q)
+            q = grasp_posture(rig, f * door_deg, 0.0, q)
         except InvalidCommand:
             break
         goals.append(with_gripper(q, GRIPPER_CLOSED_DEG))
-    system.loop.chain["seq"].set_joint_angles_sequence(goals, [time_s / ARC_VIA_POINTS] * len(goals))
+    rig.service.set_joint_angles_sequence(goals, [time_s / ARC_VIA_POINTS] * len(goals))
 
 
-def door_script(system: ControllerSystem, variant: str) -> list[Event]:
+def door_script(rig: Rig, variant: str) -> list[Event]:
     """Reach to just short of the knob (2 s), close in on it (1 s), close the gripper (0.6 s), start the
     ImpedanceController of the left hand, then move the hand along the door's arc: `pull` toward PULL_DEG in
     3 s, `push-plan` toward PUSH_DEG (against the door stop)."""
-    seq = system.loop.chain["seq"]
+    svc = rig.service
     door_deg, chest_deg = (PULL_DEG, 0.0) if variant == "pull" else (PUSH_DEG, PUSH_CHEST_PITCH_DEG)
     return [
-        (0.0, lambda: reach(system, APPROACH_M, 2.0)),
-        (2.2, lambda: reach(system, 0.0, 1.0)),
-        (3.4, lambda: seq.set_joint_angle(GRIPPER, math.radians(GRIPPER_CLOSED_DEG), 0.6)),
+        (0.0, lambda: reach(rig, APPROACH_M, 2.0)),
+        (2.2, lambda: reach(rig, 0.0, 1.0)),
+        (3.4, lambda: svc.set_some_joint_angles({GRIPPER: math.radians(GRIPPER_CLOSED_DEG)}, 0.6)),
         # the ImpedanceController starts once the gripper is closed on the knob: the hand then yields to the
         # door's reaction, not to the knob's contact while the jaws close
-        (4.1, lambda: system.loop.chain["ic"].start(LIMB)),
-        (4.5, lambda: move_along_arc(system, door_deg, 3.0, chest_deg)),
+        (4.1, lambda: svc.start_impedance(LIMB)),
+        (4.5, lambda: move_along_arc(rig, door_deg, 3.0, chest_deg)),
     ]
 
 
-def door_angle(system: ControllerSystem) -> dict[str, float]:
+def door_angle(rig: Rig) -> dict[str, float]:
     """The door angle [deg] measured in the simulation (0 closed, negative open toward the robot)."""
-    plant = system.loop.plant
+    plant = rig.plant
     adr = plant.model.sensor("door_angle").adr[0]
     return {"door_angle_deg": math.degrees(float(plant.data.sensordata[adr]))}
 

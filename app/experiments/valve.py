@@ -6,7 +6,7 @@ valve's true pose, standing in for the point-cloud torus fit), walks to a standi
 that recognition, then plans the manipulation from the recognition *plus the GUI disturbance* of the
 variant (Fig. 11 a-1: 131.13 mm forward and 32.92 mm up; b-1: 194.54 mm leftward): pre-grasp, reach to
 the rim, close the gripper, and a joint-angle sequence that carries the hand along the rim's arc, each
-pose solved with the robot's kinematics (`system.kin`). With the disturbance the hand meets the real
+pose solved with the robot's kinematics (`rig.kin`). With the disturbance the hand meets the real
 valve where the plan expects free space; the reaction force is what the EmergencyStopper has to catch.
 
 Why the left hand and this stance: HRP-2's arm has no forearm roll besides ARM_JOINT4 (the wrist's
@@ -35,12 +35,12 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
-from app.experiments.common import Event, Experiment
+from app.experiments.common import Event, Experiment, Rig
+from app.service.verbs import Footstep
 from controller.errors import InvalidCommand
 from controller.footsteps import FootstepParams
 from controller.gait_generator import GaitParams
 from controller.rotations import rpy_to_matrix
-from controller.system import ControllerSystem
 from robot.generate import (
     FINGER_PAD_DEPTH_M,
     FINGER_PAD_RADIUS_M,
@@ -90,10 +90,10 @@ class ValveRecognition:
     axis_world: np.ndarray
 
 
-def recognise_valve(system: ControllerSystem, disturbance_world_m=(0.0, 0.0, 0.0)) -> ValveRecognition:
+def recognise_valve(rig: Rig, disturbance_world_m=(0.0, 0.0, 0.0)) -> ValveRecognition:
     """The perception result: the simulated valve's pose (the stand-in for the point cloud) plus the GUI
     disturbance. Nothing else in this module reads the valve's true pose."""
-    data = system.loop.plant.data
+    data = rig.plant.data
     R_world_valve = data.body("valve").xmat.reshape(3, 3)
     centre = np.array(data.body("valve").xpos, dtype=float) + np.asarray(disturbance_world_m, dtype=float)
     return ValveRecognition(centre, VALVE_RING_RADIUS_M, -R_world_valve[:, 0].copy())
@@ -144,11 +144,11 @@ def hand_end_target(valve: ValveRecognition, psi_rad: float, backoff_m: float = 
     return p_end + R[:, 2] * backoff_m, R
 
 
-def arm_ik(system: ControllerSystem, q_seed_rad: np.ndarray, base_pos_world, base_rpy_rad, p_target_world,
+def arm_ik(rig: Rig, q_seed_rad: np.ndarray, base_pos_world, base_rpy_rad, p_target_world,
            R_target_world, max_iter: int = 300) -> np.ndarray:
-    """The planner's arm IK (HAND's six arm joints), step-limited damped least squares on system.kin;
+    """The planner's arm IK (HAND's six arm joints), step-limited damped least squares on rig.kin;
     raises InvalidCommand when the pose is out of reach."""
-    kin = system.kin
+    kin = rig.kin
     idx = np.array(JOINT_GROUPS[HAND][:6])
     cols = kin.idx_v[idx]
     fid = kin.model.getFrameId(f"{HAND}_end")
@@ -174,7 +174,7 @@ IK_SEEDS_DEG = tuple({f"{HAND_SIDE}_JOINT0": -20.0, f"{HAND_SIDE}_JOINT3": -80.0
                       f"{HAND_SIDE}_JOINT5": j5} for j5 in (-50.0, 50.0) for j4 in (-60.0, 0.0, 60.0))
 
 
-def solve_first(system: ControllerSystem, q_now_rad: np.ndarray, base_pos, base_rpy, p, R) -> np.ndarray:
+def solve_first(rig: Rig, q_now_rad: np.ndarray, base_pos, base_rpy, p, R) -> np.ndarray:
     """IK from the seeds in turn."""
     last = None
     for seed_deg in IK_SEEDS_DEG:
@@ -182,19 +182,19 @@ def solve_first(system: ControllerSystem, q_now_rad: np.ndarray, base_pos, base_
         for name, deg in seed_deg.items():
             q[joint_index(name)] = math.radians(deg)
         try:
-            return arm_ik(system, q, base_pos, base_rpy, p, R)
+            return arm_ik(rig, q, base_pos, base_rpy, p, R)
         except InvalidCommand as exc:
             last = exc
     raise last
 
 
-def backed_off(system: ControllerSystem, q_seed_rad, base_pos, base_rpy, valve: ValveRecognition, psi_rad: float,
+def backed_off(rig: Rig, q_seed_rad, base_pos, base_rpy, valve: ValveRecognition, psi_rad: float,
                backoff_m: float) -> np.ndarray:
     """The grasp pose backed off along the fingers by `backoff_m`, or by less (in 2 cm steps) where the arm
     cannot reach that far; the seed itself if none is reachable."""
     for d in np.arange(backoff_m, 0.0, -0.02):
         try:
-            return arm_ik(system, q_seed_rad, base_pos, base_rpy, *hand_end_target(valve, psi_rad, float(d)))
+            return arm_ik(rig, q_seed_rad, base_pos, base_rpy, *hand_end_target(valve, psi_rad, float(d)))
         except InvalidCommand:
             continue
     return np.array(q_seed_rad, dtype=float)
@@ -210,26 +210,26 @@ class ArmPlan:
     arc: list[np.ndarray]
 
 
-def plan_manipulation(system: ControllerSystem, valve: ValveRecognition) -> ArmPlan:
+def plan_manipulation(rig: Rig, valve: ValveRecognition) -> ArmPlan:
     """Reach, grasp and turn, solved from the reference posture now (after the walk). Arc poses beyond
     reach end the turn early (the planner keeps the reachable part)."""
-    snap = system.loop.snapshot
+    snap = rig.snapshot
     ref = snap.reference
     q_now = np.array(snap.q_seq_rad, dtype=float)
     base_pos, base_rpy = np.array(ref.base_pos_world), np.array(ref.base_rpy_rad)
-    kin = system.kin
+    kin = rig.kin
     grip = joint_index(f"{HAND_SIDE}_JOINT6")
     open_rad, closed_rad = kin.q_lower[grip], kin.q_upper[grip]
     psi0 = math.radians(ARC_PSI_DEG[0])
-    q_grasp = solve_first(system, q_now, base_pos, base_rpy, *hand_end_target(valve, psi0))
-    q_pre = backed_off(system, q_grasp, base_pos, base_rpy, valve, psi0, PRE_GRASP_BACKOFF_M)
-    q_ready = backed_off(system, q_pre, base_pos, base_rpy, valve, psi0, READY_BACKOFF_M)
+    q_grasp = solve_first(rig, q_now, base_pos, base_rpy, *hand_end_target(valve, psi0))
+    q_pre = backed_off(rig, q_grasp, base_pos, base_rpy, valve, psi0, PRE_GRASP_BACKOFF_M)
+    q_ready = backed_off(rig, q_pre, base_pos, base_rpy, valve, psi0, READY_BACKOFF_M)
     q_grasp[grip] = q_pre[grip] = q_ready[grip] = open_rad
     arc = []
     q = q_grasp.copy()
     for psi_deg in ARC_PSI_DEG[1:]:
         try:
-            q = arm_ik(system, q, base_pos, base_rpy, *hand_end_target(valve, math.radians(psi_deg)))
+            q = arm_ik(rig, q, base_pos, base_rpy, *hand_end_target(valve, math.radians(psi_deg)))
         except InvalidCommand:
             break
         q = q.copy()
@@ -238,11 +238,11 @@ def plan_manipulation(system: ControllerSystem, valve: ValveRecognition) -> ArmP
     return ArmPlan(q_ready, q_pre, q_grasp, arc)
 
 
-def approach_footsteps(system: ControllerSystem, valve: ValveRecognition) -> list[tuple]:
+def approach_footsteps(rig: Rig, valve: ValveRecognition) -> list[tuple]:
     """Footsteps (hrpsys setFootSteps) that put the feet mid-point where the valve centre is at
     STAND_VALVE_IN_FEET_M, feet parallel and facing +x, in WALK_CYCLES equal step cycles."""
-    gait = system.loop.chain["abc"].gait
-    p_r, p_l = gait.T_world_rfoot[:3, 3].copy(), gait.T_world_lfoot[:3, 3].copy()
+    gait = rig.snapshot.reference.gait  # where the AutoBalancer has the feet (standing still)
+    p_r, p_l = np.array(gait.p_rsole_world, dtype=float), np.array(gait.p_lsole_world, dtype=float)
     mid = (p_r + p_l) / 2
     goal = np.array([valve.centre_world[0] - STAND_VALVE_IN_FEET_M[0],
                      valve.centre_world[1] - STAND_VALVE_IN_FEET_M[1], mid[2]])
@@ -262,37 +262,34 @@ def walk_duration_s(steps: list[tuple]) -> float:
     return len(steps) * FootstepParams().step.step_time_s + GaitParams().final_double_support_s
 
 
-def valve_turn(system: ControllerSystem, variant: str) -> list[Event]:
+def valve_turn(rig: Rig, variant: str) -> list[Event]:
     """Walk up to the valve, reach the (disturbed) rim with the left hand, grip it, turn it 90 deg."""
-    loop = system.loop
-    seq, abc = loop.chain["seq"], loop.chain["abc"]
-    approach = recognise_valve(system)
-    target = recognise_valve(system, DISTURBANCE_WORLD_M[variant])
-    steps = approach_footsteps(system, approach)
+    svc = rig.service
+    approach = recognise_valve(rig)
+    target = recognise_valve(rig, DISTURBANCE_WORLD_M[variant])
+    steps = approach_footsteps(rig, approach)
     t = walk_duration_s(steps)
     plan: dict[str, ArmPlan] = {}
 
     def reach() -> None:
-        plan["arm"] = plan_manipulation(system, target)
-        seq.set_joint_angles(plan["arm"].ready, REACH_S)
+        plan["arm"] = plan_manipulation(rig, target)
+        svc.set_joint_angles(plan["arm"].ready, REACH_S)
 
     def turn() -> None:
         arc = plan["arm"].arc
         if arc:
-            seq.set_joint_angles_sequence_of_group(HAND, [q[list(JOINT_GROUPS[HAND])] for q in arc],
-                                                   [ARC_STEP_S] * len(arc))
+            svc.set_group_sequence(HAND, [q[list(JOINT_GROUPS[HAND])] for q in arc], [ARC_STEP_S] * len(arc))
 
     grip = f"{HAND_SIDE}_JOINT6"
     t_pre = t + REACH_S
     t_close = t_pre + PRE_GRASP_S + APPROACH_S
-    ic = loop.chain["ic"]
     return [
-        (0.0, lambda: abc.set_footsteps(steps)),
+        (0.0, lambda: svc.set_footsteps([Footstep(leg, tuple(map(float, pos)), rpy) for leg, pos, rpy in steps])),
         (t, reach),
-        (t_pre, lambda: seq.set_joint_angles(plan["arm"].pre_grasp, PRE_GRASP_S)),
-        (t_pre + PRE_GRASP_S, lambda: seq.set_joint_angles(plan["arm"].grasp, APPROACH_S)),
-        (t_close, lambda: seq.set_joint_angle(grip, float(system.kin.q_upper[joint_index(grip)]), CLOSE_S)),
-        (t_close + CLOSE_S, lambda: ic.start(HAND)),
+        (t_pre, lambda: svc.set_joint_angles(plan["arm"].pre_grasp, PRE_GRASP_S)),
+        (t_pre + PRE_GRASP_S, lambda: svc.set_joint_angles(plan["arm"].grasp, APPROACH_S)),
+        (t_close, lambda: svc.set_some_joint_angles({grip: float(rig.kin.q_upper[joint_index(grip)])}, CLOSE_S)),
+        (t_close + CLOSE_S, lambda: svc.start_impedance(HAND)),
         (t_close + CLOSE_S + HOLD_S, turn),
     ]
 
@@ -304,9 +301,9 @@ def valve_duration_s() -> float:
     return walk_s + manipulation_s + END_HOLD_S
 
 
-def valve_angle_deg(system: ControllerSystem) -> dict[str, float]:
+def valve_angle_deg(rig: Rig) -> dict[str, float]:
     """The task's outcome: the simulated valve angle [deg] (jointpos sensor `valve_angle`)."""
-    plant = system.loop.plant
+    plant = rig.plant
     adr = plant.model.sensor("valve_angle").adr[0]
     return {"valve_angle_deg": math.degrees(float(plant.data.sensordata[adr]))}
 

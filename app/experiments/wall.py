@@ -6,8 +6,7 @@ import math
 
 import numpy as np
 
-from app.experiments.common import Event, Experiment, move_hands, pose_with
-from controller.system import ControllerSystem
+from app.experiments.common import Event, Experiment, Rig, move_hands, pose_with
 from robot.generate import REACH_FORWARD_DEG, REACH_LEFT_DEG, REACH_LEFT_STRETCHED_DEG
 from robot.names import JOINT_GROUPS
 
@@ -15,12 +14,11 @@ from robot.names import JOINT_GROUPS
 LEFT_PUSH_VIA_POINTS = 10
 
 
-def wall_push_forward(system: ControllerSystem, variant: str) -> list[Event]:
+def wall_push_forward(rig: Rig, variant: str) -> list[Event]:
     """Fig. 9 (alpha): both hands 0.25 m forward in 4 s, into the wall in front."""
-    seq = system.loop.chain["seq"]
     return [
-        (0.0, lambda: seq.set_joint_angles(pose_with(system, REACH_FORWARD_DEG), 2.0)),
-        (3.0, lambda: move_hands(system, ("rarm", "larm"), np.array([0.25, 0.0, 0.0]), 4.0)),
+        (0.0, lambda: rig.service.set_joint_angles(pose_with(rig, REACH_FORWARD_DEG), 2.0)),
+        (3.0, lambda: move_hands(rig, ("rarm", "larm"), np.array([0.25, 0.0, 0.0]), 4.0)),
     ]
 
 
@@ -37,7 +35,7 @@ def left_arm_deg(phi_deg: float) -> dict[str, float]:
             "LARM_JOINT5": phi_deg}
 
 
-def left_push_plan(system: ControllerSystem, time_s: float) -> tuple[np.ndarray, list[float]]:
+def left_push_plan(rig: Rig, time_s: float) -> tuple[np.ndarray, list[float]]:
     """Fig. 9 (beta) as a planner gives it: larm joint angles (k, 7) that move the hand along a straight line
     from REACH_LEFT_DEG to the stretched arm, 0.25 m leftward, minimum-jerk spaced, `time_s` [s] in all."""
     k = LEFT_PUSH_VIA_POINTS
@@ -45,21 +43,20 @@ def left_push_plan(system: ControllerSystem, time_s: float) -> tuple[np.ndarray,
     r0 = math.cos(math.radians(phi0))  # wrist distance from the shoulder / 2 L
     s = minimum_jerk(np.arange(1, k + 1) / k)
     idx = np.array(JOINT_GROUPS["larm"])
-    goals = [pose_with(system, left_arm_deg(math.degrees(math.acos(min(1.0, r0 + (1.0 - r0) * si)))))[idx]
+    goals = [pose_with(rig, left_arm_deg(math.degrees(math.acos(min(1.0, r0 + (1.0 - r0) * si)))))[idx]
              for si in s]
     return np.array(goals), [time_s / k] * k
 
 
-def wall_push_left(system: ControllerSystem, variant: str) -> list[Event]:
+def wall_push_left(rig: Rig, variant: str) -> list[Event]:
     """Fig. 9 (beta): the left hand 0.25 m leftward in 2 s, into the wall at the left."""
-    seq = system.loop.chain["seq"]
 
     def push() -> None:
-        goals, times = left_push_plan(system, 2.0)
-        seq.set_joint_angles_sequence_of_group("larm", goals, times)
+        goals, times = left_push_plan(rig, 2.0)
+        rig.service.set_group_sequence("larm", goals, times)
 
     return [
-        (0.0, lambda: seq.set_joint_angles(pose_with(system, REACH_LEFT_DEG), 2.0)),
+        (0.0, lambda: rig.service.set_joint_angles(pose_with(rig, REACH_LEFT_DEG), 2.0)),
         (3.0, push),
     ]
 

@@ -4,15 +4,14 @@ from __future__ import annotations
 
 from fastapi import APIRouter
 
-from app.deps import RuntimeDep
+from app.deps import ServiceDep
+from app.errors import errors
 from app.schemas import ChainInfo
 
 router = APIRouter(prefix="/api", tags=["chain"])
 
 
-@router.get("/chain", response_model=ChainInfo, summary="Layer order and per-layer p50/p99 tick time [ms]")
-def chain(runtime: RuntimeDep) -> ChainInfo:
-    loop = runtime.loop
-    c = loop.chain
-    return ChainInfo(order=c.order(), chain=c.describe(), timing=c.timing(),
-                     tick_ms=loop.tick_timer.percentiles(), physics_ms=loop.physics_timer.percentiles())
+@router.get("/chain", response_model=ChainInfo, responses=errors(),
+            summary="Layer order and per-layer p50/p99 tick time [ms]")
+def chain(service: ServiceDep) -> ChainInfo:
+    return ChainInfo(**service.chain_timing())

@@ -1,40 +1,82 @@
-"""The emergency-stop experiments of [MLC] IV-C over HTTP: list them, run one in a fresh simulation.
+"""The emergency-stop experiments of [MLC] IV-C over HTTP: list them, run one in a fresh simulation, fetch
+its CSV and PNG.
 
-A run builds its own plant and controller (never the live ones) and steps it as fast as it can in
-FastAPI's threadpool (plain `def` endpoints), so the live control loop keeps its own thread. One run at a
-time: a second request while one runs gets a 409."""
+A run builds its own plant and controller in a process of its own (one per run: nothing of it stays in
+the console, and the live robot process is never touched). One run at a time (409 otherwise). The last
+results are kept in memory, their files downloadable by run id."""
 
 from __future__ import annotations
 
-import dataclasses
-import tempfile
+import itertools
+import multiprocessing
 import threading
-import time
-from pathlib import Path as FsPath
+from collections import OrderedDict
+from concurrent.futures import ProcessPoolExecutor
 from typing import Annotated
 
-from fastapi import APIRouter, Body, HTTPException, Path
+from fastapi import APIRouter, Body, Path, Request
+from fastapi.responses import Response
 
 from app import experiments
-from app.errors import BadRequest
-from app.routers.emergency import ES_PARAMS, composite_changes
-from app.runtime import jsonable
+from app.errors import errors
+from app.routers.emergency import ES_PARAMS, es_changes
 from app.schemas import ExperimentInfo, ExperimentList, ExperimentRequest, ExperimentResponse
+from app.service import InvalidArgument, NotFound, Refused
+from app.service.verbs import typed_changes
+from app.state import jsonable
 from controller.emergency_stopper import EmergencyStopperParams
 from controller.stabilizer import StabilizerParams
 
 router = APIRouter(prefix="/api/experiments", tags=["experiments"])
 
-_running = threading.Lock()
+KEEP_RESULTS = 16  # runs whose files stay downloadable
+_MEDIA = {"csv": "text/csv", "png": "image/png"}
 
 #: the params a fresh simulation starts from (ControllerSystem builds its layers with the defaults)
 _FRESH_PARAMS = {"es": EmergencyStopperParams(), "st": StabilizerParams()}
 
 
-def _run_params(grouped: dict[str, dict]) -> dict:
-    """The presented EmergencyStopper view of a run started from the defaults with `grouped` changes."""
-    owners = {layer: p.replaced(**grouped.get(layer, {})) for layer, p in _FRESH_PARAMS.items()}
-    return {name: getattr(owners[layer], param) for name, (layer, param) in ES_PARAMS.items()}
+class ExperimentRunner:
+    """Runs one experiment at a time, each in a new spawned process; keeps the last results."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._ids = itertools.count(1)
+        self.results: OrderedDict[int, dict] = OrderedDict()
+        self._pool: ProcessPoolExecutor | None = None
+
+    def _executor(self) -> ProcessPoolExecutor:
+        if self._pool is None:
+            self._pool = ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"),
+                                             max_tasks_per_child=1)
+        return self._pool
+
+    def run(self, name: str, es: bool, variant: str | None, params: dict, save: bool) -> tuple[int, dict]:
+        from app.experiments.worker import run_in_worker
+
+        if not self._lock.acquire(blocking=False):
+            raise Refused("state", "another experiment is running; try again when it has finished")
+        try:
+            out = self._executor().submit(run_in_worker, name, es, variant, params, save).result()
+        finally:
+            self._lock.release()
+        run_id = next(self._ids)
+        self.results[run_id] = out.pop("files")
+        while len(self.results) > KEEP_RESULTS:
+            self.results.popitem(last=False)
+        return run_id, out
+
+    def close(self) -> None:
+        if self._pool is not None:
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = None
+
+
+def _runner(request: Request) -> ExperimentRunner:
+    runner = getattr(request.app.state, "experiments", None)
+    if runner is None:
+        runner = request.app.state.experiments = ExperimentRunner()
+    return runner
 
 
 def _info(name: str, exp) -> ExperimentInfo:
@@ -48,30 +90,45 @@ def list_experiments() -> ExperimentList:
     return ExperimentList(experiments=[_info(n, e) for n, e in experiments.EXPERIMENTS.items()])
 
 
-@router.post("/{name}", response_model=ExperimentResponse,
-             summary="Run an experiment in a fresh simulation (not the live one) and return its verdict and figures",
-             responses={404: {"description": "unknown experiment (the valid names are listed)"},
-                        422: {"description": "unknown variant (the valid ones are listed) or invalid body"},
-                        409: {"description": "another experiment is running"}})
-def run(name: Annotated[str, Path(description="experiment name (GET /api/experiments)")],
-        req: Annotated[ExperimentRequest | None, Body()] = None) -> ExperimentResponse:
+@router.post("/{name}", response_model=ExperimentResponse, responses=errors(404, 409, 422),
+             summary="Run an experiment in a fresh simulation (its own process, not the live robot) and return "
+                     "its verdict and figures; with `save`, its CSV and PNG are downloadable by run id")
+def run(name: Annotated[str, Path(description="experiment name (GET /api/experiments)", max_length=64)],
+        request: Request, req: Annotated[ExperimentRequest | None, Body()] = None) -> ExperimentResponse:
     req = req or ExperimentRequest()
     table = experiments.EXPERIMENTS
     if name not in table:
-        raise HTTPException(status_code=404, detail=f"unknown experiment {name!r}; available: {', '.join(table)}")
+        raise NotFound(f"unknown experiment {name!r}; available: {', '.join(table)}")
     variants = table[name].variants
     if req.variant is not None and req.variant not in variants:
-        raise BadRequest("variant", f"unknown variant {req.variant!r} of {name}; available: {', '.join(variants)}")
-    grouped = composite_changes(_FRESH_PARAMS, ES_PARAMS, req.params, prefix="params.") if req.params else {}
-    if not _running.acquire(blocking=False):
-        raise HTTPException(status_code=409, detail="another experiment is running; try again when it has finished")
-    try:
-        out_dir = FsPath(tempfile.mkdtemp(prefix=f"hrp2-{name}-")) if req.save else None
-        t0 = time.perf_counter()
-        result = experiments.run_experiment(name, es=req.es, out_dir=out_dir, plot=req.save, variant=req.variant,
-                                            params=grouped or None)
-        wall = time.perf_counter() - t0
-    finally:
-        _running.release()
-    return ExperimentResponse(**{**jsonable(dataclasses.asdict(result)), "params": jsonable(_run_params(grouped)),
-                                 "wall_time_s": round(wall, 3)})
+        raise InvalidArgument("variant", f"unknown variant {req.variant!r} of {name}; available: {', '.join(variants)}")
+    grouped = {}
+    if req.params:
+        try:
+            by_layer = es_changes(req.params)
+        except InvalidArgument as exc:
+            raise InvalidArgument("params." + exc.field, exc.message) from None
+        presented = {field: n for n, (_, field) in ES_PARAMS.items()}
+        try:
+            grouped = {layer: typed_changes(_FRESH_PARAMS[layer], fields) for layer, fields in by_layer.items()}
+        except InvalidArgument as exc:
+            raise InvalidArgument("params." + presented.get(exc.field, exc.field), exc.message) from None
+    run_id, out = _runner(request).run(name, req.es, req.variant, grouped, req.save)
+    owners = {layer: p.replaced(**grouped.get(layer, {})) for layer, p in _FRESH_PARAMS.items()}
+    params = {n: getattr(owners[layer], field) for n, (layer, field) in ES_PARAMS.items()}
+    files = _runner(request).results.get(run_id, {})
+    return ExperimentResponse(**{**jsonable(out), "params": jsonable(params), "run_id": run_id,
+                                 "csv_url": f"/api/experiments/runs/{run_id}/csv" if "csv" in files else None,
+                                 "png_url": f"/api/experiments/runs/{run_id}/png" if "png" in files else None})
+
+
+@router.get("/runs/{run_id}/{kind}", responses={**errors(404), 200: {"content": {"text/csv": {}, "image/png": {}}}},
+            response_class=Response, summary="A saved run's CSV or PNG (the last runs are kept in memory)")
+def run_file(run_id: int, kind: Annotated[str, Path(json_schema_extra={"enum": list(_MEDIA)})],
+             request: Request) -> Response:
+    files = _runner(request).results.get(run_id)
+    if files is None or kind not in files:
+        kept = list(_runner(request).results)
+        raise NotFound(f"no {kind!r} of run {run_id}; runs kept: {kept} (only runs with save=true have files)")
+    return Response(content=files[kind], media_type=_MEDIA[kind],
+                    headers={"Content-Disposition": f'attachment; filename="experiment-{run_id}.{kind}"'})

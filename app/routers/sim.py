@@ -1,4 +1,5 @@
-"""Simulation controls: reset (optionally to another scene), push a body, list scenes."""
+"""Simulation controls: reset (optionally to another scene; a new robot process if the old one died),
+push a body, list scenes."""
 
 from __future__ import annotations
 
@@ -6,32 +7,25 @@ from typing import Annotated
 
 from fastapi import APIRouter, Body
 
-from app.deps import RuntimeDep
+from app.deps import ServiceDep
+from app.errors import errors
 from app.schemas import Ok, PushRequest, ResetRequest
-from app.validation import body_name, push_force, scene_name
 
 router = APIRouter(prefix="/api/sim", tags=["simulation"])
 
 
 @router.get("/scenes", summary="Scenes the simulation can be reset to")
-def scenes(runtime: RuntimeDep) -> dict[str, list[str] | str]:
-    return {"scenes": runtime.available_scenes(), "current": runtime.scene}
+def scenes(service: ServiceDep) -> dict[str, list[str] | str]:
+    return {"scenes": list(service.info.scenes), "current": service.info.scene}
 
 
-@router.post("/reset", response_model=Ok, summary="Restart the simulation (and the controller chain)")
-def reset(runtime: RuntimeDep, req: Annotated[ResetRequest | None, Body()] = None) -> Ok:
-    scene = None
-    if req is not None and req.scene is not None:
-        scene = scene_name(runtime, req.scene)
-    runtime.reset(scene)
-    return Ok(message=f"simulation reset (scene {runtime.scene!r})")
+@router.post("/reset", response_model=Ok, responses=errors(422),
+             summary="Restart the simulation and the controller chain (a new robot process if it had died)")
+def reset(service: ServiceDep, req: Annotated[ResetRequest | None, Body()] = None) -> Ok:
+    return Ok(message=service.reset(None if req is None else req.scene))
 
 
-@router.post("/push", response_model=Ok, summary="Apply a world-frame force at a body's COM for a while")
-def push(req: PushRequest, runtime: RuntimeDep) -> Ok:
-    body = body_name(runtime, req.body)
-    force = push_force(req.force)
-    duration = float(req.duration)
-    loop = runtime.loop
-    runtime.call(lambda: loop.plant.push(body, force, duration))
-    return Ok(message=f"pushing {body} for {duration:g} s")
+@router.post("/push", response_model=Ok, responses=errors(422),
+             summary="Apply a world-frame force at a body's COM for a while")
+def push(req: PushRequest, service: ServiceDep) -> Ok:
+    return Ok(message=service.push(req.body, req.force, req.duration))

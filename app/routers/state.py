@@ -1,36 +1,66 @@
-"""Read-only endpoints: the latest state, the console configuration, the data log."""
+"""Read-only endpoints: the latest state (schema generated from the layers' status), the loop's timing, the
+robot process's health, the console configuration, the data log."""
 
 from __future__ import annotations
 
-from typing import Any
+import csv
+import io
 
 from fastapi import APIRouter
-from fastapi.responses import PlainTextResponse
+from fastapi.responses import PlainTextResponse, Response
 
-from app.deps import RuntimeDep, SettingsDep
-from app.schemas import ConsoleConfig
-from robot.names import JOINT_NAMES
+from app.deps import ServiceDep, SettingsDep
+from app.errors import errors
+from app.schemas import ConsoleConfig, Health, LoopTimingResponse
+from app.state import state_model
+from controller.data_logger import csv_header
 
 router = APIRouter(prefix="/api", tags=["state"])
 
+StateDocument = state_model()
 
-@router.get("/state", summary="Latest snapshot: time, base, joints, COG/ZMP, emergency, layers")
-def get_state(runtime: RuntimeDep) -> dict[str, Any]:
-    return runtime.state()
+
+@router.get("/state", summary="Latest snapshot: time, base, joints, COG/ZMP, every stop, each layer's status",
+            response_model=StateDocument, responses=errors())
+def get_state(service: ServiceDep) -> Response:
+    # the document is built and encoded once per snapshot, whoever asks how often
+    return Response(content=service.state_json(), media_type="application/json")
+
+
+@router.get("/loop/timing", response_model=LoopTimingResponse, responses=errors(),
+            summary="How the control loop keeps its deadlines: tick start-lateness p50/p99/max [ms] over the "
+                    "last ticks, simulated / wall time of the last 1-s windows")
+def loop_timing(service: ServiceDep) -> LoopTimingResponse:
+    return LoopTimingResponse(**service.timing().to_dict())
+
+
+@router.get("/health", response_model=Health, summary="Whether the robot process runs, and why not")
+def health(service: ServiceDep) -> Health:
+    robot = service.robot
+    alive = robot.alive
+    return Health(robot_alive=alive, exit_reason=None if alive else robot.exit_reason, priority=robot.priority,
+                  scene=service.info.scene)
 
 
 @router.get("/config", response_model=ConsoleConfig, summary="What the operator page needs to know")
-def get_config(runtime: RuntimeDep,
-               settings: SettingsDep) -> ConsoleConfig:
+def get_config(service: ServiceDep, settings: SettingsDep) -> ConsoleConfig:
+    import math
+
+    info = service.info
     return ConsoleConfig(
-        viewer_port=settings.viewer_port,
-        joints=list(JOINT_NAMES),
-        joint_limits_deg={n: [round(v, 3) for v in runtime.joint_limits_deg(n)] for n in JOINT_NAMES},
-        scenes=runtime.available_scenes(),
-    )
+        viewer_port=settings.viewer_port, joints=list(info.joint_names),
+        joint_limits_deg={n: [round(math.degrees(lo), 3), round(math.degrees(hi), 3)]
+                          for n, lo, hi in zip(info.joint_names, info.q_lower_rad, info.q_upper_rad, strict=True)},
+        scenes=list(info.scenes))
 
 
-@router.get("/log.csv", response_class=PlainTextResponse, summary="DataLogger ring buffer as CSV")
-def get_log_csv(runtime: RuntimeDep) -> PlainTextResponse:
-    return PlainTextResponse(runtime.logger.to_csv(), media_type="text/csv",
+@router.get("/log.csv", response_class=PlainTextResponse, summary="DataLogger ring buffer as CSV",
+            responses=errors())
+def get_log_csv(service: ServiceDep) -> PlainTextResponse:
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(csv_header())
+    for row in service.log_rows().tolist():
+        w.writerow([f"{v:.6g}" for v in row])
+    return PlainTextResponse(out.getvalue(), media_type="text/csv",
                              headers={"Content-Disposition": 'attachment; filename="hrp2_log.csv"'})

@@ -1,23 +1,30 @@
-"""App test fixtures: a Runtime whose loop is not started, served through FastAPI's TestClient."""
+"""App test fixtures: the operator service on a robot in this process whose loop the test steps itself
+(`runtime.loop.run_for`), served through FastAPI's TestClient."""
 
 import pytest
 from fastapi.testclient import TestClient
 
-from app.deps import get_runtime
 from app.main import create_app
-from app.runtime import Runtime
+from app.service import OperatorService
+from app.service.local import LocalRobot
+from app.settings import Settings
 
 
 @pytest.fixture
 def runtime():
-    rt = Runtime(speed=None)
-    yield rt
-    rt.stop()
+    """The robot (a LocalRobot: same host and verbs as the robot process, stepped by the test)."""
+    robot = LocalRobot(speed=None)
+    yield robot
+    robot.stop()
 
 
 @pytest.fixture
-def client(runtime):
-    app = create_app()
-    app.dependency_overrides[get_runtime] = lambda: runtime
-    with TestClient(app) as c:
+def service(runtime):
+    return OperatorService(runtime)
+
+
+@pytest.fixture
+def client(service):
+    app = create_app(Settings(extra_hosts=("testserver",)), service=service)
+    with TestClient(app, headers={"content-type": "application/json"}) as c:
         yield c

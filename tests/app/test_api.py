@@ -48,17 +48,18 @@ def test_state_has_every_contract_field_with_the_right_types(client, runtime):
     assert s["speed"] is None
 
 
-def test_estop_freezes_the_command_even_when_a_motion_is_requested(client, runtime):
+def test_estop_freezes_the_command_and_a_motion_requested_meanwhile_is_refused_naming_it(client, runtime):
     step(runtime, 0.05)
     assert client.post("/api/estop").status_code == 200
     step(runtime, 0.01)
     frozen = q_cmd_deg(runtime)
+    planned = q_seq_deg(runtime)
     assert client.get("/api/state").json()["emergency"]["hard_stop"] is True
     r = client.post("/api/sequence/joint-angles", json={"angles_deg": {"RARM_JOINT0": -40.0}, "time": 0.5})
-    assert r.status_code == 200
+    assert r.status_code == 409 and r.json()["reason"] == "hard_stop" and "hard e-stop" in r.json()["detail"]
     step(runtime, 0.8)
     np.testing.assert_allclose(q_cmd_deg(runtime), frozen, atol=1e-9)
-    assert client.get("/api/state").json()["joints"]["RARM_JOINT0"]["seq_deg"] == pytest.approx(-40.0, abs=0.01)
+    np.testing.assert_allclose(q_seq_deg(runtime), planned, atol=1e-9)  # the plan holds too
 
 
 def test_release_unfreezes_and_releasing_twice_is_a_conflict(client, runtime):
@@ -123,16 +124,26 @@ def test_clear_stops_the_motion_where_it_is(client, runtime):
     assert client.get("/api/sequence/status").json() == {"interpolating": False}
     step(runtime, 0.5)
     assert q_cmd_deg(runtime)[RARM0] == pytest.approx(held, abs=0.05)
-    assert -60.0 < held < 15.0
+    # held where the minimum-jerk move from 15 to -60 deg was when cleared, 0.30-0.31 s into its 1 s
+    done = [10 * t**3 - 15 * t**4 + 6 * t**5 for t in (0.30, 0.31)]
+    assert 15.0 - 75.0 * done[1] - 0.05 < held < 15.0 - 75.0 * done[0] + 0.05
 
 
 BAD_INPUTS = [
     ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINTX": 1.0}, "time": 1.0},
      ["angles_deg", "RARM_JOINTX", "RARM_JOINT0", "LARM_JOINT6"]),
     ("/api/sequence/joint-angles", {"angles_deg": [0.0] * 29, "time": 1.0}, ["angles_deg", "30", "29"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": 200.0}, "time": 1.0},
+     ["RARM_JOINT0", "200", "range", "deg"]),
     ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": 500.0}, "time": 1.0},
-     ["RARM_JOINT0", "500", "range", "deg"]),
-    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}, "time": 0.0}, ["time", "greater than 0"]),
+     ["RARM_JOINT0", "360"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}, "time": 0.0},
+     ["time", "greater than or equal to 0.005"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}, "time": 5e-324},
+     ["time", "greater than or equal to 0.005"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": "-30"}, "time": 1.0}, ["RARM_JOINT0", "number"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": True}, "time": 1.0}, ["RARM_JOINT0", "number"]),
+    ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}, "time": "1"}, ["time", "number"]),
     ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}, "time": 4000},
      ["time", "3600"]),
     ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": -10.0}}, ["time", "required"]),
@@ -150,7 +161,7 @@ BAD_INPUTS = [
     ("/api/sim/push", {"body": "TAIL", "force": [10, 0, 0], "duration": 0.1}, ["body", "TAIL", "BODY"]),
     ("/api/sim/push", {"body": "BODY", "force": [3000, 0, 0], "duration": 0.1}, ["force", "2000"]),
     ("/api/sim/push", {"body": "BODY", "force": [10, 0, 0], "duration": 6}, ["duration", "5"]),
-    ("/api/sim/push", {"body": "BODY", "force": [10, 0, 0], "duration": 0}, ["duration", "greater than 0"]),
+    ("/api/sim/push", {"body": "BODY", "force": [10, 0, 0], "duration": 0}, ["duration", "greater than or equal"]),
 ]
 
 
@@ -198,7 +209,7 @@ def test_an_error_raised_inside_the_loop_is_a_500_and_the_loop_keeps_running(cli
 
     monkeypatch.setattr(loop.chain["seq"], "clear", broken)
     app = client.app
-    with TestClient(app, raise_server_exceptions=False) as c:
+    with TestClient(app, raise_server_exceptions=False, headers={"content-type": "application/json"}) as c:
         r = c.post("/api/sequence/clear")
     assert r.status_code == 500 and "boom" in r.json()["detail"]
     tick = loop.snapshot.tick

@@ -2,9 +2,9 @@
 simulation while the live control loop keeps running."""
 
 import csv
+import io
 import math
 import time
-from pathlib import Path
 
 import pytest
 
@@ -75,12 +75,13 @@ def test_bad_run_params_are_a_422_naming_the_field_and_range(client, params, wor
 
 def test_a_second_run_while_one_runs_is_a_conflict(client):
     name = next(iter(experiments.EXPERIMENTS))
-    assert experiments_router._running.acquire(blocking=False)
+    runner = client.app.fastapi.state.experiments = experiments_router.ExperimentRunner()
+    assert runner._lock.acquire(blocking=False)  # as a run in progress holds it
     try:
         r = client.post(f"/api/experiments/{name}")
         assert r.status_code == 409 and "running" in r.json()["detail"]
     finally:
-        experiments_router._running.release()
+        runner._lock.release()
 
 
 def test_the_experiment_endpoints_are_documented(client):
@@ -113,13 +114,15 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     else:
         assert body["cp_error_at_flag_m"] is None and body["edge_margin_at_flag_m"] is None
     assert isinstance(body["outcome"], dict)
-    for key in ("csv_path", "png_path"):
-        path = Path(body[key])
-        assert path.is_file() and path.stat().st_size > 0
+    # the files are the console's, downloadable; no path of the server is given away
+    assert "csv_path" not in body and "png_path" not in body
+    png = client.get(body["png_url"])
+    assert png.status_code == 200 and png.headers["content-type"] == "image/png" and png.content[:4] == b"\x89PNG"
+    csv_text = client.get(body["csv_url"])
+    assert csv_text.status_code == 200 and csv_text.headers["content-type"].startswith("text/csv")
     # the run used the threshold asked for; the live robot kept its parameters
     assert body["params"] == {**live_params, "threshold": 0.05}
-    with open(body["csv_path"], newline="") as fh:
-        rows = list(csv.DictReader(fh))
+    rows = list(csv.DictReader(io.StringIO(csv_text.text)))
     assert rows and {float(row["threshold_m"]) for row in rows} == {0.05}
     assert client.get("/api/emergency-stopper/params").json()["params"] == live_params
     # the live simulation was neither used nor stalled: same scene, still ticking, still standing
@@ -129,6 +132,4 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     assert not runtime.loop.snapshot.fallen
     print(f"\n{name}: {body['verdict']}, {body['wall_time_s']:.1f} s for the run; "
           f"live loop {ticks} ticks in {wall:.1f} s ({ticks * runtime.loop.dt_control_s / wall:.2f} x real time)")
-    for key in ("csv_path", "png_path"):
-        Path(body[key]).unlink()
-    Path(body["csv_path"]).parent.rmdir()
+    assert client.get(f"/api/experiments/runs/{body['run_id'] + 1}/csv").status_code == 404

@@ -1,55 +1,61 @@
-"""The viser view: one frame per body, poses follow the simulation, the E-STOP button engages the stop."""
+"""The viser view: one frame per body, poses follow the simulation, the E-STOP button goes through the
+operator service, the markers follow the controller (planned footsteps with their yaw), and the websocket
+refuses pages of other origins."""
+
+import math
 
 import numpy as np
 import pytest
 
-from app.runtime import Runtime
+from app.service import OperatorService
+from app.service.local import LocalRobot
 from app.viewer import Viewer
 
 
 @pytest.fixture
-def viewer():
-    rt = Runtime(speed=None)
-    v = Viewer(rt, host="127.0.0.1", port=0, rate_hz=50.0)
+def robot():
+    return LocalRobot(speed=None)
+
+
+@pytest.fixture
+def viewer(robot):
+    v = Viewer(OperatorService(robot), host="127.0.0.1", port=0, rate_hz=50.0)
     yield v
     v.stop()
 
 
-def test_every_body_gets_a_frame_placed_at_its_simulated_pose(viewer):
-    model = viewer.runtime.loop.plant.model
+def test_every_body_gets_a_frame_placed_at_its_simulated_pose(viewer, robot):
+    model = robot.host.plant.model
     assert len(viewer._frames) == model.nbody - 1
-    viewer.runtime.loop.run_for(0.1)
-    viewer._apply_poses(viewer.runtime.loop.snapshot.truth)
-    np.testing.assert_allclose(viewer._frames[0].position, viewer.runtime.loop.snapshot.truth.body_pos_world[1])
+    robot.run_for(0.1)
+    viewer._apply_poses(robot.loop.snapshot.truth)
+    np.testing.assert_allclose(viewer._frames[0].position, robot.loop.snapshot.truth.body_pos_world[1])
 
 
-def test_the_estop_and_release_buttons_go_through_the_loop(viewer):
-    loop = viewer.runtime.loop
-    viewer._command("engaged", lambda lp: lp.chain["hes"].engage())
-    loop.step()
-    assert loop.snapshot.emergency["hard_stop"] is True
-    viewer._command("released", lambda lp: lp.chain["hes"].release())
-    viewer._command("released", lambda lp: lp.chain["hes"].release())
+def test_the_estop_and_release_buttons_are_verbs_of_the_service(viewer, robot):
+    viewer._command("engaged", viewer.service.estop)
+    robot.step()
+    assert robot.loop.snapshot.safety.hard_stop is True
+    viewer._command("released", viewer.service.release_estop)
+    assert viewer._message.value == "released"
+    viewer._command("released", viewer.service.release_estop)
     assert "not engaged" in viewer._message.value
 
 
-def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snapshots(viewer):
-    from app.viewer import MAX_FOOTSTEPS
-
-    loop = viewer.runtime.loop
+def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snapshots(viewer, robot):
     assert viewer._cp_plot is not None and len(viewer._cp_plot.data) == 5
     assert set(viewer._markers) == {"cog", "zmp", "cp_ref", "cp_act", "support", "soles", "footsteps"}
     for _ in range(5):
-        loop.run_for(0.05)
-        snap = loop.snapshot
+        robot.run_for(0.05)
+        snap = robot.loop.snapshot
         viewer.apply_snapshot(snap)
         viewer._update_plot(snap)
-    snap = loop.snapshot
+    snap = robot.loop.snapshot
     m = viewer._markers
     np.testing.assert_allclose(m["cog"].position, snap.cog_world, atol=1e-6)
     st = snap.layers["st"]
-    np.testing.assert_allclose(m["cp_act"].position[:2], st["cp_act"], atol=1e-6)
-    np.testing.assert_allclose(m["cp_ref"].position[:2], st["cp_ref"], atol=1e-6)
+    np.testing.assert_allclose(m["cp_act"].position[:2], st.cp_act, atol=1e-6)
+    np.testing.assert_allclose(m["cp_ref"].position[:2], st.cp_ref, atol=1e-6)
     assert m["support"].visible and m["soles"].visible and not m["footsteps"].visible
     assert m["support"].points.shape == (8, 2, 3)
     # the support polygon (both feet down) surrounds the midpoint of the soles
@@ -59,19 +65,32 @@ def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snap
     assert pts[:, 0].min() < mid[0] < pts[:, 0].max() and pts[:, 1].min() < mid[1] < pts[:, 1].max()
     t, ex, ey, hi, lo = viewer._cp_plot.data
     assert len(t) >= 5 and np.all(np.diff(t) > 0) and t[-1] == pytest.approx(snap.time_s)  # + thread samples
-    assert ex[-1] == pytest.approx(1e3 * st["cp_error"][0]) and ey[-1] == pytest.approx(1e3 * st["cp_error"][1])
-    np.testing.assert_allclose(hi, 1e3 * st["threshold"])
+    assert ex[-1] == pytest.approx(1e3 * st.cp_error[0]) and ey[-1] == pytest.approx(1e3 * st.cp_error[1])
+    np.testing.assert_allclose(hi, 1e3 * st.threshold)
     np.testing.assert_allclose(lo, -hi)
-    handles = dict(m)
-    # planned footsteps from the AutoBalancer status, when it exposes them: same handles, now shown
-    import dataclasses
 
-    steps = [{"leg": "rleg", "pos": [0.1, -0.1, 0.0], "yaw": 0.0}, {"leg": "lleg", "pos": [0.2, 0.1, 0.0], "yaw": 0.1}]
-    layers = dict(snap.layers)
-    layers["abc"] = {**layers["abc"], "footsteps": steps}
-    viewer.apply_snapshot(dataclasses.replace(snap, layers=layers))
+
+def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewer, robot):
+    from app.viewer import MAX_FOOTSTEPS
+
+    handles = dict(viewer._markers)
+    robot.run_for(2.5)  # AutoBalancer blended in
+    viewer.service.go_pos(0.3, 0.0, math.radians(40.0))
+    robot.run_for(0.1)
+    snap = robot.loop.snapshot
+    planned = snap.layers["abc"].footsteps
+    assert len(planned) >= 2 and max(abs(f.rpy[2]) for f in planned) > math.radians(10.0)
+    viewer.apply_snapshot(snap)
+    m = viewer._markers
     assert m["footsteps"].visible and m["footsteps"].points.shape == (4 * MAX_FOOTSTEPS, 2, 3)
-    assert viewer._markers == handles and all(viewer._markers[k] is handles[k] for k in handles)
+    for k, f in enumerate(planned[:MAX_FOOTSTEPS]):
+        side = m["footsteps"].points[4 * k]  # the first edge of the k-th sole outline
+        drawn = math.atan2(side[1, 1] - side[0, 1], side[1, 0] - side[0, 0])
+        # an edge of a rectangle turned by the footstep's yaw: parallel or perpendicular to its x axis
+        off = (drawn - f.rpy[2]) % (math.pi / 2)
+        assert min(off, math.pi / 2 - off) < 1e-4, f"footstep {k}: drawn at {math.degrees(drawn):.1f} deg"
+        np.testing.assert_allclose(side[:, 2], f.pos[2] + 0.002, atol=1e-6)
+    assert all(viewer._markers[k] is handles[k] for k in handles)  # handles updated, never rebuilt
 
 
 def test_the_cp_history_keeps_a_time_window_and_clears_on_reset():
@@ -80,7 +99,7 @@ def test_the_cp_history_keeps_a_time_window_and_clears_on_reset():
     from app.viewer import CpErrorHistory
 
     h = CpErrorHistory(window_s=1.0)
-    st = {"cp_error": [0.01, -0.02], "threshold": 0.04}
+    st = SimpleNamespace(cp_error=(0.01, -0.02), threshold=0.04)
     for i in range(30):
         assert h.add(SimpleNamespace(time_s=0.1 * i, layers={"st": st}))
     t, ex, ey, hi, lo = h.data()
@@ -89,3 +108,21 @@ def test_the_cp_history_keeps_a_time_window_and_clears_on_reset():
     assert not h.add(SimpleNamespace(time_s=5.0, layers={}))
     h.add(SimpleNamespace(time_s=0.0, layers={"st": st}))
     assert len(h) == 1
+
+
+@pytest.mark.parametrize("origin, accepted", [("http://127.0.0.1:{port}", True), ("http://localhost:{port}", True),
+                                               ("http://evil.example", False), ("http://127.0.0.1:9", False),
+                                               ("null", False)])
+def test_the_websocket_accepts_only_the_viewers_own_origins(viewer, origin, accepted):
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    port = viewer.port
+    url = f"ws://127.0.0.1:{port}/"
+    try:
+        with connect(url, origin=origin.format(port=port), subprotocols=["viser-v1"], open_timeout=5):
+            ok = True
+    except InvalidStatus as exc:
+        assert exc.response.status_code == 403
+        ok = False
+    assert ok is accepted

@@ -1,0 +1,271 @@
+"""The operator service: the one door into the robot. HTTP routers, the viser view, the CLI, the experiments
+and the benchmarks call its named verbs; it checks each verb once, hands it to the robot (its own process,
+or this one) to run at a tick boundary, and returns the result or the service's own error."""
+
+from __future__ import annotations
+
+import json
+import math
+import threading
+from collections.abc import Mapping, Sequence
+from concurrent.futures import TimeoutError as FutureTimeout
+from typing import Any, Protocol
+
+import numpy as np
+
+from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError, Unavailable
+from app.service.host import EstopAck, Published
+from app.service.verbs import (
+    ChainTiming,
+    ClearSequence,
+    EnableLayers,
+    Footstep,
+    GetFootsteps,
+    GetParams,
+    GoPos,
+    GoVelocity,
+    Push,
+    ReleaseEstop,
+    ReleaseMotion,
+    Reset,
+    RobotInfo,
+    SequenceStatus,
+    SetFootsteps,
+    SetGroupSequence,
+    SetJointAngles,
+    SetJointAnglesSequence,
+    SetParams,
+    SetSomeJointAngles,
+    SetTargetPose,
+    StartImpedance,
+    StartLayer,
+    StopImpedance,
+    StopLayer,
+    StopMotion,
+    Verb,
+    WalkEmergencyStop,
+    WalkStop,
+)
+from controller.footsteps import StepParams
+from controller.layer import Params
+from controller.loop import Snapshot
+from controller.loop_timing import LoopTiming
+
+__all__ = ["InvalidArgument", "NotFound", "OperatorService", "Refused", "RobotBackend", "ServiceError",
+           "Unavailable"]
+
+VERB_TIMEOUT_S = 5.0  # [s] a verb not answered by then is reported (the loop may be stuck or gone)
+
+
+class RobotBackend(Protocol):
+    """Where the robot runs: app.service.process.RobotProcess (what users run) or local.LocalRobot."""
+
+    exit_reason: str | None
+    priority: str
+
+    @property
+    def alive(self) -> bool: ...
+    def submit(self, verb: Verb): ...
+    def estop(self, timeout_s: float = 1.0) -> EstopAck: ...
+    def latest(self) -> Published | None: ...
+    def info(self) -> RobotInfo: ...
+    def refresh_info(self, timeout_s: float = 10.0) -> RobotInfo: ...
+    def log_rows(self) -> np.ndarray: ...
+    def reset(self, scene: str | None = None, timeout_s: float = 30.0) -> RobotInfo: ...
+    def close(self, timeout_s: float = 10.0) -> dict | None: ...
+
+
+class OperatorService:
+    """The named verbs of the console, in SI units (m, s, rad, N)."""
+
+    def __init__(self, robot: RobotBackend) -> None:
+        self.robot = robot
+        self._info = robot.info()
+        self._state_lock = threading.Lock()
+        self._state_cache: tuple[tuple[int, int], dict, bytes] | None = None
+
+    def __repr__(self) -> str:
+        return f"OperatorService({self.robot!r})"
+
+    # ---- the door --------------------------------------------------------------------------------------
+    @property
+    def info(self) -> RobotInfo:
+        return self._info
+
+    def run(self, verb: Verb, timeout_s: float = VERB_TIMEOUT_S) -> Any:
+        """Check `verb` against the robot, run it at the next tick boundary, return its result."""
+        verb.check(self._info)
+        fut = self.robot.submit(verb)
+        try:
+            return fut.result(timeout=timeout_s)
+        except FutureTimeout:
+            raise Unavailable(f"the robot did not answer {verb.name} within {timeout_s:g} s") from None
+
+    # ---- safety ----------------------------------------------------------------------------------------
+    def estop(self) -> EstopAck:
+        """The hard e-stop, through its own channel: returns once the loop has engaged it."""
+        return self.robot.estop()
+
+    def release_estop(self) -> str:
+        return self.run(ReleaseEstop())
+
+    def stop_motion(self) -> str:
+        return self.run(StopMotion())
+
+    def release_motion(self) -> str:
+        return self.run(ReleaseMotion())
+
+    # ---- walking ---------------------------------------------------------------------------------------
+    def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> str:
+        return self.run(GoPos(x_m, y_m, theta_rad))
+
+    def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> str:
+        return self.run(GoVelocity(vx_m_s, vy_m_s, vtheta_rad_s))
+
+    def walk_stop(self) -> str:
+        return self.run(WalkStop())
+
+    def walk_emergency_stop(self) -> str:
+        return self.run(WalkEmergencyStop())
+
+    def set_footsteps(self, footsteps: Sequence[Footstep], step: StepParams | None = None) -> str:
+        return self.run(SetFootsteps(tuple(footsteps), step))
+
+    def footsteps(self) -> tuple[bool, tuple]:
+        """(walking, the footsteps not landed yet)."""
+        return self.run(GetFootsteps())
+
+    # ---- the sequence player ---------------------------------------------------------------------------
+    def set_joint_angles(self, q_rad: Sequence[float], time_s: float) -> str:
+        return self.run(SetJointAngles(tuple(float(v) for v in q_rad), float(time_s)))
+
+    def set_joint_angles_sequence(self, q_seq_rad: Sequence[Sequence[float]], times_s: Sequence[float]) -> str:
+        return self.run(SetJointAnglesSequence(tuple(tuple(float(v) for v in q) for q in q_seq_rad),
+                                               tuple(float(t) for t in times_s)))
+
+    def set_group_sequence(self, group: str, goals_rad: Sequence[Sequence[float]], times_s: Sequence[float]) -> str:
+        return self.run(SetGroupSequence(group, tuple(tuple(float(v) for v in g) for g in goals_rad),
+                                         tuple(float(t) for t in times_s)))
+
+    def set_some_joint_angles(self, angles_rad: Mapping[str, float], time_s: float) -> str:
+        return self.run(SetSomeJointAngles(tuple((n, float(v)) for n, v in angles_rad.items()), float(time_s)))
+
+    def set_target_pose(self, limb: str, pos_m: Sequence[float], rpy_rad: Sequence[float], time_s: float,
+                        frame: str | None = None) -> str:
+        return self.run(SetTargetPose(limb, tuple(map(float, pos_m)), tuple(map(float, rpy_rad)), float(time_s),
+                                      frame))
+
+    def clear_sequence(self) -> str:
+        return self.run(ClearSequence())
+
+    def is_interpolating(self) -> bool:
+        return self.run(SequenceStatus())
+
+    # ---- layers ------------------------------------------------------------------------------------------
+    def start_layer(self, layer: str) -> str:
+        return self.run(StartLayer(layer))
+
+    def stop_layer(self, layer: str) -> str:
+        return self.run(StopLayer(layer))
+
+    def enable_layers(self, enabled: Mapping[str, bool]) -> str:
+        return self.run(EnableLayers(tuple(enabled.items())))
+
+    def start_impedance(self, limb: str) -> str:
+        return self.run(StartImpedance(limb))
+
+    def stop_impedance(self, limb: str) -> str:
+        return self.run(StopImpedance(limb))
+
+    def params(self, *owners: str) -> dict[str, Params]:
+        """The current parameters of `owners` (layer names, "ic:<limb>"), or of every layer."""
+        unknown = [o for o in owners if o not in self._info.params]
+        if unknown:
+            raise NotFound(f"no parameters {unknown[0]!r}; valid: {', '.join(self._info.params)}")
+        return self.run(GetParams(tuple(owners)))
+
+    def set_params(self, changes: Mapping[str, Mapping[str, Any]], prefixes: Mapping[str, str] | None = None
+                   ) -> dict[str, Params]:
+        """Replace some fields of some owners' parameters, all or none, at one tick boundary; returns the new
+        parameters. Errors name the field (after the owner's prefix) and what is allowed."""
+        new = self.run(SetParams.of(self._params_now(changes), changes, prefixes))
+        self._info = _with_params(self._info, new)
+        return new
+
+    def _params_now(self, changes: Mapping[str, Any]) -> RobotInfo:
+        """The info with the current parameters of the owners about to change (another client may have
+        changed them since the info was taken)."""
+        owners = tuple(o for o in changes if o in self._info.params)
+        return _with_params(self._info, self.run(GetParams(owners))) if owners else self._info
+
+    # ---- the simulation --------------------------------------------------------------------------------
+    def push(self, body: str, force_n: Sequence[float], duration_s: float) -> str:
+        return self.run(Push(body, tuple(map(float, force_n)), float(duration_s)))
+
+    def reset(self, scene: str | None = None) -> str:
+        """Restart the simulation (a new robot process if the old one died)."""
+        if scene is not None:
+            Reset(scene).check(self._info)
+        self._info = self.robot.reset(scene)
+        with self._state_lock:
+            self._state_cache = None
+        return f"simulation reset (scene {self._info.scene!r})"
+
+    # ---- reading -------------------------------------------------------------------------------------------
+    def published(self) -> Published:
+        if not self.robot.alive:
+            raise Unavailable(f"{self.robot.exit_reason or 'the robot process is not running'}; "
+                              "POST /api/sim/reset starts a new one")
+        pub = self.robot.latest()
+        if pub is None:
+            raise Unavailable("the robot has not published a snapshot yet")
+        return pub
+
+    def snapshot(self) -> Snapshot:
+        return self.published().snapshot
+
+    def timing(self) -> LoopTiming:
+        return self.published().timing
+
+    def state(self) -> dict[str, Any]:
+        """The latest snapshot as the /api/state document (built once per snapshot)."""
+        return self._state()[0]
+
+    def state_json(self) -> bytes:
+        return self._state()[1]
+
+    def _state(self) -> tuple[dict, bytes]:
+        from app.state import state_document
+
+        pub = self.published()
+        key = (pub.generation, pub.seq)
+        cache = self._state_cache
+        if cache is not None and cache[0] == key:
+            return cache[1], cache[2]
+        with self._state_lock:
+            cache = self._state_cache
+            if cache is not None and cache[0] == key:
+                return cache[1], cache[2]
+            doc = state_document(pub)
+            body = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+            self._state_cache = (key, doc, body)
+            return doc, body
+
+    def chain_timing(self) -> dict:
+        return self.run(ChainTiming())
+
+    def log_rows(self) -> np.ndarray:
+        return self.robot.log_rows()
+
+    def close(self) -> dict | None:
+        return self.robot.close()
+
+
+def _with_params(info: RobotInfo, params: Mapping[str, Params]) -> RobotInfo:
+    import dataclasses
+
+    return dataclasses.replace(info, params={**info.params, **params})
+
+
+def degrees_to_radians(values: Sequence[float]) -> tuple[float, ...]:
+    return tuple(math.radians(float(v)) for v in values)

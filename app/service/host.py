@@ -1,0 +1,231 @@
+"""The robot side of the operator service: the MuJoCo plant, the controller, the data logger, and the one
+place verbs are applied to them (at a tick boundary, wherever the loop runs: the robot process, or a
+thread or a test in one process)."""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
+from app.service.verbs import RobotInfo, Verb
+from controller.data_logger import DataLogger
+from controller.errors import InvalidCommand, InvalidState
+from controller.layer import Params
+from controller.loop import Snapshot
+from controller.loop_timing import LoopTiming
+from controller.system import ControllerSystem
+from robot.names import JOINT_NAMES
+from robot.plant import MujocoPlant, available_scenes
+
+log = logging.getLogger(__name__)
+
+
+class RunStats:
+    """Counters kept over a whole run (updated in the loop thread, read after it stops)."""
+
+    def __init__(self) -> None:
+        self.ticks = 0
+        self.max_loop_ms = 0.0  # [ms] whole tick, chain + physics
+        self.fallen = False
+        self.faults: set[str] = set()
+
+    def update(self, snap: Snapshot) -> None:
+        self.ticks += 1
+        if snap.loop_ms > self.max_loop_ms:
+            self.max_loop_ms = float(snap.loop_ms)
+        if snap.fallen:
+            self.fallen = True
+        fault = snap.safety.fault
+        if fault and fault not in self.faults:
+            self.faults.add(fault)
+
+    def summary(self) -> dict[str, Any]:
+        return {"ticks": self.ticks, "max_loop_ms": self.max_loop_ms, "fallen": self.fallen,
+                "faults": sorted(self.faults)}
+
+
+@dataclass(frozen=True)
+class EstopAck:
+    """The hard e-stop engaged (or found engaged) in the loop: at which tick, and when (monotonic clock)."""
+
+    tick: int
+    sim_time_s: float
+    engaged_at_monotonic_s: float
+    already_engaged: bool
+
+
+@dataclass(frozen=True)
+class Published:
+    """What the robot side publishes after a tick: the snapshot and the loop's own figures, latest wins."""
+
+    seq: int  # increases with every publication of this robot process
+    generation: int  # increases with every reset (the chain and the scene may have changed)
+    snapshot: Snapshot
+    timing: LoopTiming
+    scene: str
+    speed: float | None
+    stats: dict[str, Any]
+    chain: str  # "kf -> rmfo -> ..."
+    published_at_monotonic_s: float
+    extras: dict[str, Any] = field(default_factory=dict)
+
+
+#: Owners of parameters: a layer name, or "ic:<limb>" for one hand's impedance.
+def _is_limb_owner(owner: str) -> bool:
+    return owner.startswith("ic:")
+
+
+class RobotHost:
+    """Owns the simulation and the control loop. Verbs reach them only through `apply`."""
+
+    def __init__(self, scene: str = "default", dt_control_s: float = 0.005, speed: float | None = 1.0,
+                 logger: DataLogger | None = None) -> None:
+        self.scene = scene
+        self.dt_control_s = dt_control_s
+        self.logger = logger if logger is not None else DataLogger(12000)
+        self.stats = RunStats()
+        self.generation = 0
+        self._seq = 0
+        self._timing: tuple[float, LoopTiming] | None = None
+        self.plant = MujocoPlant(scene)
+        self.system = ControllerSystem(self.plant, dt_control_s=dt_control_s, on_snapshot=self._on_snapshot)
+        self.loop.speed = speed
+
+    def __repr__(self) -> str:
+        return f"RobotHost(scene={self.scene!r}, speed={self.loop.speed}, generation={self.generation})"
+
+    @property
+    def loop(self):
+        return self.system.loop
+
+    def _on_snapshot(self, snap: Snapshot) -> None:
+        self.logger.record(snap)
+        self.stats.update(snap)
+
+    # ---- verbs ---------------------------------------------------------------------------------------
+    def apply(self, verb: Verb) -> Any:
+        """Run `verb` now (the caller is at a tick boundary); refuse it when it cannot take effect."""
+        if verb.motion:
+            self._refuse_motion(verb)
+        try:
+            return verb.run(self)
+        except ServiceError:
+            raise
+        except InvalidState as exc:
+            raise Refused("state", str(exc)) from None
+        except (InvalidCommand, ValueError) as exc:
+            raise InvalidArgument(verb.name, str(exc)) from None
+
+    def _refuse_motion(self, verb: Verb) -> None:
+        loop = self.loop
+        fall = loop.fall.reason if loop.fall is not None else None
+        if fall is not None:
+            raise Refused("fallen", f"{verb.name} refused: the robot has fallen ({fall}); reset the simulation")
+        if loop.hard_stop_engaged:
+            raise Refused("hard_stop", f"{verb.name} refused: the hard e-stop is engaged; release it first")
+        if verb.sequence:
+            co = loop.chain.layers.get("co")
+            if co is not None and co.enabled and co.in_collision:
+                pairs = ", ".join("-".join(p) for p in co.pairs[:2])
+                raise Refused("collision", f"{verb.name} refused: the CollisionDetector holds the posture "
+                                           f"({pairs}); wait until it has recovered")
+            es = loop.chain.layers.get("es")
+            if es is not None and es.enabled and es.stopped:
+                raise Refused("motion_stop", f"{verb.name} refused: the planned motion is stopped by the "
+                                             f"EmergencyStopper ({es.reason}); release the motion stop first")
+
+    def layer(self, name: str):
+        chain = self.loop.chain
+        if name not in chain:
+            raise NotFound(f"no layer {name!r} in the chain; present: {chain.order()}")
+        return chain[name]
+
+    # ---- the e-stop path -----------------------------------------------------------------------------
+    def engage_estop(self) -> EstopAck:
+        loop = self.loop
+        already = loop.hard_stop_engaged
+        if not already:
+            loop.safe_stop("operator")
+        return EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s),
+                        engaged_at_monotonic_s=time.monotonic(), already_engaged=already)
+
+    def release_estop(self) -> None:
+        loop = self.loop
+        if loop.fall is not None and loop.fall.reason is not None:
+            raise Refused("fallen", f"the robot has fallen ({loop.fall.reason}); only a reset recovers")
+        self.layer("hes").release()  # InvalidState (-> 409) when not engaged
+        loop.clear_fault()
+
+    # ---- parameters ------------------------------------------------------------------------------------
+    def param_owners(self) -> list[str]:
+        chain = self.loop.chain
+        owners = [n for n in chain.order() if isinstance(getattr(chain[n], "params", None), Params)]
+        if "ic" in chain:
+            owners += [f"ic:{limb}" for limb in chain["ic"].limbs]
+        return owners
+
+    def params(self, owner: str) -> Params:
+        if _is_limb_owner(owner):
+            return self.layer("ic").params[owner[3:]]
+        p = getattr(self.layer(owner), "params", None)
+        if not isinstance(p, Params):
+            raise NotFound(f"layer {owner!r} has no parameters; owners: {', '.join(self.param_owners())}")
+        return p
+
+    def set_params(self, owner: str, params: Params) -> None:
+        if _is_limb_owner(owner):
+            self.layer("ic").set_params(owner[3:], params)
+        else:
+            self.layer(owner).set_params(params)
+
+    # ---- the simulation -----------------------------------------------------------------------------------
+    def reset(self, scene: str | None = None) -> None:
+        """A new plant (in `scene`) and a fresh chain; the log and the statistics of the run go on."""
+        scene = self.scene if scene is None else scene
+        if scene not in available_scenes():
+            raise InvalidArgument("scene", f"unknown scene {scene!r}; available scenes: "
+                                           f"{', '.join(available_scenes())}")
+        plant = MujocoPlant(scene)
+        self.loop.replace_plant(plant)
+        self.plant = plant
+        self.scene = scene
+        self.generation += 1
+        self.logger.clear()
+        self.loop.lateness.clear()
+
+    def stop_loop(self) -> None:
+        self.loop.request_stop()
+
+    def info(self) -> RobotInfo:
+        kin = self.system.kin
+        m = self.plant.model
+        chain = self.loop.chain
+        ic = chain.layers.get("ic")
+        return RobotInfo(
+            scene=self.scene, scenes=tuple(available_scenes()),
+            bodies=tuple(m.body(i).name for i in range(1, m.nbody)), joint_names=tuple(JOINT_NAMES),
+            q_lower_rad=tuple(float(v) for v in np.asarray(kin.q_lower)),
+            q_upper_rad=tuple(float(v) for v in np.asarray(kin.q_upper)),
+            chain=tuple(chain.order()), params={o: self.params(o) for o in self.param_owners()},
+            impedance_limbs=tuple(ic.limbs) if ic is not None else (), dt_control_s=self.dt_control_s,
+            speed=self.loop.speed)
+
+    def timing(self, max_age_s: float = 0.2) -> LoopTiming:
+        """The loop's lateness figures, recomputed at most every `max_age_s` (a percentile over 12000 ticks
+        costs a few hundred microseconds)."""
+        now = time.monotonic()
+        if self._timing is None or now - self._timing[0] >= max_age_s:
+            self._timing = (now, self.loop.timing())
+        return self._timing[1]
+
+    def publish(self) -> Published:
+        self._seq += 1
+        loop = self.loop
+        return Published(seq=self._seq, generation=self.generation, snapshot=loop.snapshot, timing=self.timing(),
+                         scene=self.scene, speed=loop.speed, stats=self.stats.summary(),
+                         chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic())

@@ -1,0 +1,99 @@
+"""The robot in the console's own process, for tests, benchmarks and experiments: the same host and verbs
+as the robot process, stepped by the caller (`step`, `run_for`) or by a paced thread (`start`)."""
+
+from __future__ import annotations
+
+from concurrent.futures import Future
+
+import numpy as np
+
+from app.service.errors import ServiceError
+from app.service.host import EstopAck, Published, RobotHost
+from app.service.verbs import Reset, RobotInfo, Verb
+
+
+class LocalRobot:
+    """A RobotHost in this process. Without `start()`, verbs run at once (between the caller's ticks);
+    with it, they queue for the loop thread's next tick boundary."""
+
+    def __init__(self, scene: str = "default", speed: float | None = None, dt_control_s: float = 0.005) -> None:
+        self.host = RobotHost(scene, dt_control_s, speed)
+        self.exit_reason: str | None = None
+        self.priority = "default"
+        self._published: Published | None = None
+
+    def __repr__(self) -> str:
+        return f"LocalRobot({self.host!r}, running={self.loop.running})"
+
+    @property
+    def loop(self):
+        return self.host.loop
+
+    @property
+    def system(self):
+        return self.host.system
+
+    @property
+    def scene(self) -> str:
+        return self.host.scene
+
+    @property
+    def running(self) -> bool:
+        return self.loop.running
+
+    @property
+    def alive(self) -> bool:
+        return True
+
+    # ---- running ------------------------------------------------------------------------------------------
+    def start(self) -> None:
+        self.loop.start(self.loop.speed)
+
+    def stop(self) -> None:
+        self.loop.stop()
+
+    def step(self):
+        return self.loop.step()
+
+    def run_for(self, seconds: float):
+        return self.loop.run_for(seconds)
+
+    # ---- channels -----------------------------------------------------------------------------------------
+    def submit(self, verb: Verb) -> Future:
+        if self.loop.running:
+            return self.loop.submit(lambda: self.host.apply(verb))
+        fut: Future = Future()
+        try:
+            fut.set_result(self.host.apply(verb))
+        except ServiceError as exc:
+            fut.set_exception(exc)
+        return fut
+
+    def estop(self, timeout_s: float = 1.0) -> EstopAck:
+        if self.loop.running:
+            return self.loop.call(self.host.engage_estop, timeout_s=timeout_s)
+        return self.host.engage_estop()
+
+    def latest(self) -> Published:
+        snap = self.loop.snapshot
+        cached = self._published
+        if cached is None or cached.snapshot is not snap or cached.generation != self.host.generation:
+            cached = self._published = self.host.publish()
+        return cached
+
+    def info(self) -> RobotInfo:
+        return self.host.info()
+
+    def refresh_info(self, timeout_s: float = 10.0) -> RobotInfo:
+        return self.host.info()
+
+    def log_rows(self) -> np.ndarray:
+        return self.host.logger.rows()
+
+    def reset(self, scene: str | None = None, timeout_s: float = 30.0) -> RobotInfo:
+        self.submit(Reset(scene)).result(timeout=timeout_s)
+        return self.host.info()
+
+    def close(self, timeout_s: float = 10.0) -> dict:
+        self.stop()
+        return self.host.stats.summary()

@@ -1,0 +1,227 @@
+"""The /api/state document built from a published snapshot, and its response schema generated from the
+layers' frozen status dataclasses (units in the field descriptions), so the two cannot drift apart."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import types
+import typing
+from typing import Any, Literal, Union
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, create_model
+
+from app.service.host import Published
+from controller.layer import Status, plain
+from controller.rotations import matrix_to_rpy, quat_wxyz_to_matrix
+from robot.names import JOINT_NAMES
+
+
+def jsonable(value: Any) -> Any:
+    """Numpy arrays and scalars to lists and floats; NaN and infinities to None; dataclasses to dicts."""
+    if isinstance(value, dict):
+        return {str(k): jsonable(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [jsonable(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return jsonable(value.tolist())
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, (int, np.integer)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        f = float(value)
+        return f if math.isfinite(f) else None
+    if value is None or isinstance(value, str):
+        return value
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return jsonable(plain(value))
+    return str(value)
+
+
+def _deg(a) -> list[float]:
+    return [round(float(v), 4) for v in np.rad2deg(np.asarray(a, dtype=float))]
+
+
+def _xy(v) -> list[float]:
+    return [round(float(c), 6) for c in (v if v is not None else (0.0, 0.0))[:2]]
+
+
+def state_document(pub: Published) -> dict[str, Any]:
+    """The GET /api/state contract (see StateDocument for every field, its unit and meaning)."""
+    snap = pub.snapshot
+    truth = snap.truth
+    rpy_truth = matrix_to_rpy(quat_wxyz_to_matrix(np.asarray(truth.base_quat_wxyz, dtype=float)))
+    cmd, meas, seq = (_deg(snap.q_cmd_rad), _deg(snap.q_meas_rad), _deg(snap.q_seq_rad))
+    joints = {n: {"cmd_deg": cmd[i], "meas_deg": meas[i], "seq_deg": seq[i]} for i, n in enumerate(JOINT_NAMES)}
+    layers = snap.layers
+    abc, st, es = layers.get("abc"), layers.get("st"), layers.get("es")
+    safety = snap.safety
+    flag_rose_at = getattr(st, "flag_rise_time", None)
+    layer_docs = {}
+    for name, status in layers.items():
+        d = plain(status)
+        d["tick_ms"] = round(float(snap.layer_tick_ms.get(name, 0.0)), 5)
+        layer_docs[name] = d
+    return jsonable({
+        "time": round(float(snap.time_s), 6),
+        "tick": int(snap.tick),
+        "fallen": bool(snap.fallen or safety.fall is not None),
+        "base": {"pos": np.asarray(truth.base_pos_world).round(5), "rpy_deg": _deg(rpy_truth),
+                 "linvel": np.asarray(truth.base_linvel_world).round(5), "source": "simulation"},
+        "estimate": {"rpy_deg": _deg(snap.base_rpy_est_rad), "source": "kf"},
+        "joints": joints,
+        "cog": np.asarray(snap.cog_world).round(5),
+        "zmp": np.asarray(snap.zmp_world).round(5),
+        "walking": bool(getattr(abc, "walking", False)),
+        "support": str(getattr(abc, "support", "both")),
+        "capture_point": {"ref": _xy(getattr(st, "cp_ref", None)), "act": _xy(getattr(st, "cp_act", None)),
+                          "error": _xy(getattr(st, "cp_error", None)),
+                          "error_norm": round(float(getattr(st, "cp_error_norm", 0.0)), 6),
+                          "threshold": float(getattr(st, "threshold", 0.0))},
+        "emergency": {
+            "hard_stop": safety.hard_stop, "hard_stop_reason": safety.hard_stop_reason, "fault": safety.fault,
+            "fall": safety.fall,
+            "flag": bool(getattr(st, "emergency", False)),
+            "flag_rise_time": flag_rose_at,  # older name of flag_rose_at
+            "flag_rose_at": flag_rose_at,
+            "motion_stop": bool(getattr(es, "stopped", False)),
+            "motion_stop_reason": getattr(es, "reason", None),
+            "motion_stop_time": getattr(es, "flag_time", None),
+            "walking_stop": bool(getattr(abc, "walking_stop", False)),
+            "stabilizer_stop": st is not None and not st.active},
+        "layers": layer_docs,
+        "chain": pub.chain,
+        "speed": pub.speed,
+        "scene": pub.scene,
+        "loop_ms": round(float(snap.loop_ms), 4),
+        "loop": {"lateness_p99_ms": pub.timing.lateness_p99_ms, "lateness_max_ms": pub.timing.lateness_max_ms,
+                 "speed_last": pub.timing.speed_last},
+    })
+
+
+# ---- the response schema ------------------------------------------------------------------------------------
+class _Doc(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+def _annotation(tp: Any) -> Any:
+    """A dataclass field type as a pydantic annotation: nested status dataclasses become models."""
+    origin = typing.get_origin(tp)
+    if dataclasses.is_dataclass(tp):
+        return status_model(tp)
+    if origin is tuple:
+        args = typing.get_args(tp)
+        if len(args) == 2 and args[1] is Ellipsis:
+            return list[_annotation(args[0])]
+        return list[Union[tuple(_annotation(a) for a in set(args))]]  # noqa: UP007 - built at run time
+    if origin in (Union, types.UnionType):
+        return Union[tuple(_annotation(a) for a in typing.get_args(tp))]  # noqa: UP007
+    if origin is dict:
+        k, v = typing.get_args(tp)
+        return dict[k, _annotation(v)]
+    return tp
+
+
+_MODELS: dict[type, type[BaseModel]] = {}
+
+
+def status_model(cls: type) -> type[BaseModel]:
+    """A pydantic model of a status dataclass: same fields, the unit and meaning as the description."""
+    if cls in _MODELS:
+        return _MODELS[cls]
+    hints = typing.get_type_hints(cls)
+    fields = {}
+    for f in dataclasses.fields(cls):
+        unit = f.metadata.get("unit")
+        doc = f.metadata.get("doc", "")
+        desc = f"{doc} [{unit}]" if unit else doc
+        fields[f.name] = (_annotation(hints[f.name]), Field(description=desc))
+    model = create_model(cls.__name__, __base__=_Doc, __doc__=(cls.__doc__ or "").strip() or None, **fields)
+    _MODELS[cls] = model
+    return model
+
+
+def layer_model(cls: type[Status]) -> type[BaseModel]:
+    """A layer's status as it appears in /api/state: its fields plus the tick time."""
+    base = status_model(cls)
+    return create_model(f"{cls.__name__}InState", __base__=base,
+                        tick_ms=(float, Field(description="wall time of the layer's last tick [ms]")))
+
+
+def _layer_status_classes() -> dict[str, type[Status]]:
+    """Layer name -> its Status class, from the layers' own `status` annotations."""
+    from controller.system import layer_classes
+
+    out = {}
+    for name, cls in layer_classes().items():
+        ret = typing.get_type_hints(cls.status).get("return")
+        out[name] = ret if isinstance(ret, type) and issubclass(ret, Status) else Status
+    return out
+
+
+def state_model() -> type[BaseModel]:
+    """The StateDocument model: /api/state, field by field, with units."""
+    layers = create_model("Layers", __base__=_Doc, **{
+        name: (layer_model(cls) | None, Field(default=None, description=f"status of the '{name}' layer"))
+        for name, cls in _layer_status_classes().items()})
+    joint = create_model("JointState", __base__=_Doc,
+                         cmd_deg=(float, Field(description="command written to the servo [deg]")),
+                         meas_deg=(float, Field(description="encoder [deg]")),
+                         seq_deg=(float, Field(description="the planned stream (SequencePlayer output) [deg]")))
+    base = create_model("BaseState", __base__=_Doc,
+                        pos=(list[float], Field(description="BODY position, world [m] (simulator truth)")),
+                        rpy_deg=(list[float], Field(description="BODY roll, pitch, yaw [deg] (simulator truth)")),
+                        linvel=(list[float], Field(description="BODY velocity, world [m/s] (simulator truth)")),
+                        source=(Literal["simulation"], Field(description="where these come from")))
+    estimate = create_model("EstimateState", __base__=_Doc,
+                            rpy_deg=(list[float], Field(description="KalmanFilter attitude [deg]")),
+                            source=(Literal["kf"], Field(description="the estimating layer")))
+    cp = create_model("CapturePointState", __base__=_Doc,
+                      ref=(list[float], Field(description="reference capture point x, y [m]")),
+                      act=(list[float], Field(description="actual capture point x, y [m]")),
+                      error=(list[float], Field(description="ref - act [m]")),
+                      error_norm=(float, Field(description="|ref - act| [m]")),
+                      threshold=(float, Field(description="emergency flag threshold [m]")))
+    opt_float = float | None
+    emergency = create_model(
+        "EmergencyState", __base__=_Doc,
+        hard_stop=(bool, Field(description="the hard e-stop (HardEmergencyStopper) is engaged")),
+        hard_stop_reason=(str | None, Field(description="'operator', 'fault' or 'fallen'")),
+        fault=(str | None, Field(description="the last controller fault, until released")),
+        fall=(str | None, Field(description="why the fall detector says the robot fell (until a reset)")),
+        flag=(bool, Field(description="the Stabilizer's capture-point emergency flag")),
+        flag_rise_time=(opt_float, Field(description="deprecated name of flag_rose_at [s]")),
+        flag_rose_at=(opt_float, Field(description="simulated time the flag last rose [s]")),
+        motion_stop=(bool, Field(description="the EmergencyStopper holds the planned motion")),
+        motion_stop_reason=(str | None, Field(description="'capture_point' or 'operator'")),
+        motion_stop_time=(opt_float, Field(description="simulated time of the motion stop [s]")),
+        walking_stop=(bool, Field(description="the AutoBalancer's emergency walking stop is in force")),
+        stabilizer_stop=(bool, Field(description="the Stabilizer was stopped by the operator")))
+    loop = create_model("LoopState", __base__=_Doc,
+                        lateness_p99_ms=(float, Field(description="tick start-lateness p99 over the last ticks [ms]")),
+                        lateness_max_ms=(float, Field(description="tick start-lateness max [ms]")),
+                        speed_last=(opt_float, Field(description="simulated / wall time of the last 1-s window")))
+    return create_model(
+        "StateDocument", __base__=_Doc,
+        __doc__="The latest snapshot of the robot. Units: m, s, deg unless a field says otherwise.",
+        time=(float, Field(description="simulated time [s]")),
+        tick=(int, Field(description="control ticks since the (re)start")),
+        fallen=(bool, Field(description="the robot has fallen (simulator truth, or the fall detector)")),
+        base=(base, Field(description="BODY pose from the simulator (for display; the controller never reads it)")),
+        estimate=(estimate, Field(description="what the controller estimates")),
+        joints=(dict[str, joint], Field(description="per joint, JOINT_NAMES order")),
+        cog=(list[float], Field(description="estimated COG, world [m]")),
+        zmp=(list[float], Field(description="ZMP from the foot F/T sensors, world [m]")),
+        walking=(bool, Field(description="a walk is in progress")),
+        support=(str, Field(description="'both', 'rleg' or 'lleg'")),
+        capture_point=(cp, Field(description="the Stabilizer's capture points")),
+        emergency=(emergency, Field(description="every stop of [MLC] II-B")),
+        layers=(layers, Field(description="each layer's status, chain order")),
+        chain=(str, Field(description="the layer order, 'kf -> rmfo -> ...'")),
+        speed=(opt_float, Field(description="real-time factor asked for; null = as fast as possible")),
+        scene=(str, Field(description="the simulated scene")),
+        loop_ms=(float, Field(description="wall time of the last tick, chain + physics [ms]")),
+        loop=(loop, Field(description="how the loop keeps its deadlines")),
+    )

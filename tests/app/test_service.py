@@ -1,0 +1,79 @@
+"""The operator service on a robot in this process: verbs and a reset while the loop thread runs, refusals
+that name what is in the way, and the run statistics."""
+
+import time
+
+import numpy as np
+import pytest
+
+from app.service import InvalidArgument, OperatorService, Refused
+from app.service.local import LocalRobot
+from app.state import jsonable
+
+
+def wait_for(predicate, timeout_s=10.0):
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        assert time.monotonic() < deadline, "condition not reached in time"
+        time.sleep(0.005)
+
+
+def test_verbs_and_a_reset_go_through_while_the_loop_thread_runs():
+    robot = LocalRobot(speed=None)
+    service = OperatorService(robot)
+    robot.start()
+    try:
+        wait_for(lambda: service.snapshot().time_s > 0.2)
+        ack = service.estop()
+        assert ack.tick > 0 and not ack.already_engaged
+        wait_for(lambda: service.state()["emergency"]["hard_stop"])  # seen from the next snapshot on
+        service.reset()
+        assert robot.running
+        assert service.state()["emergency"]["hard_stop"] is False
+        assert service.snapshot().time_s < 0.2
+        wait_for(lambda: service.snapshot().time_s > 0.3)
+    finally:
+        robot.stop()
+    assert not robot.running
+    stats = robot.host.stats
+    assert stats.ticks > 40 and stats.faults == set() and stats.fallen is False
+
+
+def test_an_unknown_scene_is_rejected_listing_the_available_ones():
+    service = OperatorService(LocalRobot(speed=None))
+    with pytest.raises(InvalidArgument, match="default"):
+        service.reset("mars")
+
+
+def test_motion_verbs_are_refused_while_the_hard_estop_is_engaged_and_nothing_runs_on_release():
+    robot = LocalRobot(speed=None)
+    service = OperatorService(robot)
+    robot.run_for(0.1)
+    service.estop()
+    for verb in (lambda: service.go_velocity(0.1, 0.0, 0.0), lambda: service.go_pos(0.2, 0.0, 0.0),
+                 lambda: service.set_some_joint_angles({"RARM_JOINT0": -0.5}, 1.0)):
+        with pytest.raises(Refused, match="hard e-stop") as info:
+            verb()
+        assert info.value.reason == "hard_stop"
+    q_frozen = np.array(service.snapshot().q_seq_rad)
+    service.release_estop()
+    robot.run_for(1.0)
+    np.testing.assert_allclose(service.snapshot().q_seq_rad, q_frozen, atol=1e-12)  # nothing was queued
+
+
+def test_jsonable_turns_numpy_and_non_finite_values_into_plain_json():
+    assert jsonable({"a": np.array([1.0, np.nan]), "b": np.int64(3), "c": (np.bool_(True),)}) == {
+        "a": [1.0, None], "b": 3, "c": [True]}
+
+
+def test_the_services_errors_survive_pickling_across_the_process_boundary():
+    import pickle
+
+    from app.service import NotFound, Unavailable
+
+    for exc in (InvalidArgument("time", "must be > 0"), Refused("hard_stop", "refused: e-stop"),
+                NotFound("no layer 'x'"), Unavailable("gone")):
+        back = pickle.loads(pickle.dumps(exc))
+        assert type(back) is type(exc) and str(back) == str(exc)
+        assert getattr(back, "field", None) == getattr(exc, "field", None)
+        assert getattr(back, "reason", None) == getattr(exc, "reason", None)
