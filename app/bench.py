@@ -98,6 +98,25 @@ def _summed(samples: dict[str, np.ndarray], names: Sequence[str], n: int) -> np.
     return total
 
 
+#: Benchmarks of the console as users run it (HTTP and the robot in their own processes), not of the chain.
+CONSOLE_SCENARIOS = {
+    "load": "the console at real time under 20 pollers of /api/state at 10 Hz, 100 commands/s and an e-stop "
+            "pressed (and released) every second: tick start-lateness, /api/state and e-stop request times",
+}
+
+
+def run_load_bench(duration_s: float = 30.0, scene: str = "default") -> dict[str, Any]:
+    """The `load` scenario: a real console (`hrp2-console --headless --speed 1.0`) under load."""
+    from app.console_process import Console, run_load
+
+    console = Console("--speed", "1.0", "--scene", scene)
+    try:
+        report = run_load(console, duration_s, estop_every_s=1.0)
+    finally:
+        console.stop()
+    return {"scenario": "load", "scene": scene, **report}
+
+
 def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "default",
               layers: str | Sequence[str] | None = None) -> dict[str, Any]:
     """Run `scenario` for `duration_s` of simulated time, synchronously, and return the timing report.
@@ -107,6 +126,10 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     step's wall time less physics (`step_ms`: chain, snapshot, state estimation, logging), the loop's
     own share of it (`loop_overhead_ms`: step minus the sum of all layer timers), and the pass-through
     layers' timers."""
+    if scenario in CONSOLE_SCENARIOS:
+        if layers is not None:
+            raise ValueError(f"scenario {scenario!r} runs the whole console; --layers/--chain do not apply")
+        return run_load_bench(duration_s, scene)
     if scenario not in SCENARIOS:
         raise ValueError(f"unknown scenario {scenario!r}; valid scenarios: {', '.join(SCENARIOS)}")
     spec = SCENARIOS[scenario]

@@ -9,7 +9,7 @@ from typing import Any
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
 from app.service.errors import InvalidArgument, Refused, ServiceError
 from controller.errors import InvalidCommand, InvalidState
@@ -25,6 +25,8 @@ class ValidationItem(BaseModel):
 
 class ErrorBody(BaseModel):
     """Every error response of the API."""
+
+    model_config = ConfigDict(extra="forbid")
 
     detail: str = Field(description="what was wrong and what would have worked")
     field: str | None = Field(default=None, description="the offending field (422)")

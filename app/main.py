@@ -10,6 +10,7 @@ from fastapi.responses import FileResponse
 from fastapi.staticfiles import StaticFiles
 
 from app.errors import ErrorBody, install_error_handlers
+from app.hot_paths import HotPaths
 from app.routers import chain, emergency, experiments, impedance, layers, params, sequence, sim, state, walk
 from app.security import ConsoleGuard, allowed_hosts_for
 from app.service import OperatorService
@@ -41,7 +42,7 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
         return FileResponse(STATIC_DIR / "index.html")
 
     api.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
-    guarded = ConsoleGuard(api, allowed_hosts_for(settings.host, settings.extra_hosts))
+    guarded = ConsoleGuard(HotPaths(api), allowed_hosts_for(settings.host, settings.extra_hosts))
     guarded.fastapi = api
     return guarded
 

@@ -183,6 +183,9 @@ class ExperimentRequest(_Body):
                                                           "default: its first")
     save: bool = Field(default=False, description="also keep the CSV and the Fig. 10-style PNG (in the console's "
                                                   "memory; download them from csv_url / png_url)")
+    duration_s: float | None = Field(
+        default=None, gt=0.0, le=60.0,
+        description="stop the script after this many seconds [s] (default: the experiment's whole duration)")
     params: dict[str, Any] | None = Field(
         default=None, description="EmergencyStopper parameters for this run only, named and bounded as in "
                                   "PUT /api/emergency-stopper/params (t1, t2, recover_time [s], threshold [m], "

@@ -139,6 +139,14 @@ class ConsoleGuard:
                 if len(body) > self.max_body_bytes:
                     await _send_json(send, 413, f"the body is over the limit of {self.max_body_bytes} bytes")
                     return
+            if body.strip():
+                try:
+                    json.loads(body)
+                except RecursionError:
+                    await _send_json(send, 422, "body: JSON nested too deeply")
+                    return
+                except ValueError:
+                    pass  # FastAPI answers invalid JSON with a 422 that says where
             replayed = False
 
             async def receive_buffered():

@@ -4,6 +4,7 @@ layers' frozen status dataclasses (units in the field descriptions), so the two 
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import types
 import typing
@@ -41,7 +42,11 @@ def jsonable(value: Any) -> Any:
 
 
 def _deg(a) -> list[float]:
-    return [round(float(v), 4) for v in np.rad2deg(np.asarray(a, dtype=float))]
+    return [round(v, 4) for v in np.rad2deg(np.asarray(a, dtype=float)).tolist()]
+
+
+def _rounded(a, digits: int) -> list[float]:
+    return [round(v, digits) for v in np.asarray(a, dtype=float).tolist()]
 
 
 def _xy(v) -> list[float]:
@@ -49,7 +54,9 @@ def _xy(v) -> list[float]:
 
 
 def state_document(pub: Published) -> dict[str, Any]:
-    """The GET /api/state contract (see StateDocument for every field, its unit and meaning)."""
+    """The GET /api/state contract (see StateDocument for every field, its unit and meaning), in plain Python
+    types already (floats from tolist, statuses through `plain`): `state_json` encodes it without a walk over
+    every value unless a NaN or an infinity needs turning into null."""
     snap = pub.snapshot
     truth = snap.truth
     rpy_truth = matrix_to_rpy(quat_wxyz_to_matrix(np.asarray(truth.base_quat_wxyz, dtype=float)))
@@ -64,16 +71,16 @@ def state_document(pub: Published) -> dict[str, Any]:
         d = plain(status)
         d["tick_ms"] = round(float(snap.layer_tick_ms.get(name, 0.0)), 5)
         layer_docs[name] = d
-    return jsonable({
+    return {
         "time": round(float(snap.time_s), 6),
         "tick": int(snap.tick),
         "fallen": bool(snap.fallen or safety.fall is not None),
-        "base": {"pos": np.asarray(truth.base_pos_world).round(5), "rpy_deg": _deg(rpy_truth),
-                 "linvel": np.asarray(truth.base_linvel_world).round(5), "source": "simulation"},
+        "base": {"pos": _rounded(truth.base_pos_world, 5), "rpy_deg": _deg(rpy_truth),
+                 "linvel": _rounded(truth.base_linvel_world, 5), "source": "simulation"},
         "estimate": {"rpy_deg": _deg(snap.base_rpy_est_rad), "source": "kf"},
         "joints": joints,
-        "cog": np.asarray(snap.cog_world).round(5),
-        "zmp": np.asarray(snap.zmp_world).round(5),
+        "cog": _rounded(snap.cog_world, 5),
+        "zmp": _rounded(snap.zmp_world, 5),
         "walking": bool(getattr(abc, "walking", False)),
         "support": str(getattr(abc, "support", "both")),
         "capture_point": {"ref": _xy(getattr(st, "cp_ref", None)), "act": _xy(getattr(st, "cp_act", None)),
@@ -98,7 +105,18 @@ def state_document(pub: Published) -> dict[str, Any]:
         "loop_ms": round(float(snap.loop_ms), 4),
         "loop": {"lateness_p99_ms": pub.timing.lateness_p99_ms, "lateness_max_ms": pub.timing.lateness_max_ms,
                  "speed_last": pub.timing.speed_last},
-    })
+    }
+
+
+def state_json(pub: Published) -> tuple[dict[str, Any], bytes]:
+    """The state document and its JSON encoding (non-finite numbers as null)."""
+    doc = state_document(pub)
+    try:
+        body = json.dumps(doc, separators=(",", ":"), allow_nan=False)
+    except ValueError:  # a NaN or an infinity somewhere (a fault): the slow walk that nulls them
+        doc = jsonable(doc)
+        body = json.dumps(doc, separators=(",", ":"), allow_nan=False)
+    return doc, body.encode()
 
 
 # ---- the response schema ------------------------------------------------------------------------------------

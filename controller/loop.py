@@ -122,6 +122,7 @@ class ControlLoop:
         self.tick_timer = TickTimer()
         self.physics_timer = TickTimer()
         self.lateness = LatenessMeter()
+        self.nap_s = 0.0  # [s] run_paced waits for the next tick in naps this long (0: one sleep)
         self._fall_detector_factory = fall_detector_factory
         self._attach(plant)
 
@@ -317,8 +318,9 @@ class ControlLoop:
                   between_ticks: Callable[[], None] | None = None) -> None:
         """Tick until stop(): paced to wall time at `self.speed` (None: as fast as possible).
 
-        `wait(seconds)` sleeps until the next tick is due (default: an interruptible sleep); an owner may
-        wait on its command channels instead and handle what arrives, since nothing ticks meanwhile.
+        `wait(seconds)` sleeps until the next tick is due (default: an interruptible sleep), in naps of
+        `nap_s` if set; an owner may wait on its command channels instead and handle what arrives, since
+        nothing ticks meanwhile.
         `between_ticks()` runs at every tick boundary before the tick (commands, e-stop, publishing).
         The lateness of each tick's start against its schedule is measured (`timing()`)."""
         sleep = wait or self._stop_event.wait
@@ -338,7 +340,7 @@ class ControlLoop:
                 due = wall0 + (self.snapshot.time_s - sim0) / speed
                 delay = due - clock()
                 while delay > 0 and not self._stop_event.is_set():
-                    sleep(delay)
+                    sleep(min(delay, self.nap_s) if self.nap_s > 0.0 else delay)
                     delay = due - clock()
                 if self._stop_event.is_set():
                     break

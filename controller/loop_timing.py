@@ -58,10 +58,18 @@ class LatenessMeter:
             self._windows.append((sim_s - self._window_sim0) / (wall_s - self._window_wall0))
             self._window_wall0, self._window_sim0 = wall_s, sim_s
 
-    def summary(self) -> LoopTiming:
+    def summary(self, last_ticks: int | None = None, last_windows: int | None = None) -> LoopTiming:
+        """The figures over the kept ticks, or the `last_ticks` of them (and the `last_windows` 1-s windows)."""
         n = min(self._n, self._size)
         s = np.frombuffer(self._buf, dtype=float, count=n)
+        if last_ticks is not None and last_ticks < n:
+            end = self._n % self._size if self._n > self._size else n
+            idx = (np.arange(end - last_ticks, end)) % max(n, 1)
+            s = s[idx]
+            n = len(s)
         w = list(self._windows)
+        if last_windows is not None:
+            w = w[-last_windows:] if last_windows > 0 else []
         if n:
             p50, p99 = (float(v) for v in np.percentile(s, (50, 99)))
             mx, over = float(s.max()), int(np.count_nonzero(s > 1.0))

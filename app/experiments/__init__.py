@@ -60,10 +60,12 @@ def settled_below_after_s(t: np.ndarray, err: np.ndarray, threshold: float, t_fr
 
 def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, settle_s: float = 2.5,
                    plot: bool = True, variant: str | None = None, write_csv: bool = True,
-                   params: Mapping[str, Mapping[str, Any]] | None = None) -> ExperimentResult:
+                   params: Mapping[str, Mapping[str, Any]] | None = None,
+                   duration_s: float | None = None) -> ExperimentResult:
     """Run experiment `name` (variant `variant`, default its first) with or without the EmergencyStopper.
 
-    `params` changes layer parameters before the start, e.g. {"es": {"t1_s": 0.5}, "st": {"cp_threshold_m": 0.03}}.
+    `params` changes layer parameters before the start, e.g. {"es": {"t1_s": 0.5}, "st": {"cp_threshold_m": 0.03}};
+    `duration_s` ends the script early (default: the experiment's duration).
     """
     if name not in EXPERIMENTS:
         raise ValueError(f"unknown experiment {name!r}; available: {', '.join(EXPERIMENTS)}")
@@ -90,7 +92,8 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
     fell_at = None
     refused: list[str] = []
     t2 = service.params("es")["es"].t2_s
-    while loop.snapshot.time_s - t0 < exp.duration_s:
+    end_s = exp.duration_s if duration_s is None else min(exp.duration_s, duration_s)
+    while loop.snapshot.time_s - t0 < end_s:
         t_rel = loop.snapshot.time_s - t0
         while events and events[0][0] <= t_rel + 1e-9:
             try:

@@ -10,14 +10,15 @@ from pathlib import Path
 from typing import Any
 
 
-def run_in_worker(name: str, es: bool, variant: str | None, params: dict | None, save: bool) -> dict[str, Any]:
+def run_in_worker(name: str, es: bool, variant: str | None, params: dict | None, save: bool,
+                  duration_s: float | None = None) -> dict[str, Any]:
     """Runs in the worker process: the ExperimentResult as a dict, plus "csv" / "png" bytes when `save`."""
     from app.experiments import run_experiment
 
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix=f"hrp2-{name}-") as d:
         r = run_experiment(name, es=es, out_dir=Path(d) if save else None, plot=save, variant=variant,
-                           params=params or None)
+                           params=params or None, duration_s=duration_s)
         files = {}
         for key, path in (("csv", r.csv_path), ("png", r.png_path)):
             if path is not None:

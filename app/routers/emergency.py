@@ -9,6 +9,7 @@ from fastapi import APIRouter, Body
 
 from app.deps import ServiceDep
 from app.errors import errors
+from app.hot_paths import estop_reply
 from app.routers.params import params_document
 from app.schemas import EstopResponse, Ok
 from app.service import InvalidArgument
@@ -22,9 +23,8 @@ router = APIRouter(prefix="/api/estop", tags=["emergency"])
 async def engage(service: ServiceDep) -> EstopResponse:
     # on the event loop itself (no thread-pool hop that other requests could fill), through the robot's own
     # e-stop pipe; it answers once the loop has engaged it (a millisecond or so)
-    ack = service.estop()
-    return EstopResponse(message="hard e-stop engaged" if not ack.already_engaged else "hard e-stop already engaged",
-                         tick=ack.tick, sim_time_s=ack.sim_time_s)
+    # (app.hot_paths answers this path before FastAPI does; this route documents it and answers its errors)
+    return EstopResponse(**estop_reply(service.estop()))
 
 
 @router.post("/release", response_model=Ok, responses=errors(409),

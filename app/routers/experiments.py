@@ -51,13 +51,14 @@ class ExperimentRunner:
                                              max_tasks_per_child=1)
         return self._pool
 
-    def run(self, name: str, es: bool, variant: str | None, params: dict, save: bool) -> tuple[int, dict]:
+    def run(self, name: str, es: bool, variant: str | None, params: dict, save: bool,
+            duration_s: float | None = None) -> tuple[int, dict]:
         from app.experiments.worker import run_in_worker
 
         if not self._lock.acquire(blocking=False):
             raise Refused("state", "another experiment is running; try again when it has finished")
         try:
-            out = self._executor().submit(run_in_worker, name, es, variant, params, save).result()
+            out = self._executor().submit(run_in_worker, name, es, variant, params, save, duration_s).result()
         finally:
             self._lock.release()
         run_id = next(self._ids)
@@ -113,7 +114,7 @@ def run(name: Annotated[str, Path(description="experiment name (GET /api/experim
             grouped = {layer: typed_changes(_FRESH_PARAMS[layer], fields) for layer, fields in by_layer.items()}
         except InvalidArgument as exc:
             raise InvalidArgument("params." + presented.get(exc.field, exc.field), exc.message) from None
-    run_id, out = _runner(request).run(name, req.es, req.variant, grouped, req.save)
+    run_id, out = _runner(request).run(name, req.es, req.variant, grouped, req.save, req.duration_s)
     owners = {layer: p.replaced(**grouped.get(layer, {})) for layer, p in _FRESH_PARAMS.items()}
     params = {n: getattr(owners[layer], field) for n, (layer, field) in ES_PARAMS.items()}
     files = _runner(request).results.get(run_id, {})

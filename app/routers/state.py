@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import csv
 import io
+from typing import Annotated
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Query
 from fastapi.responses import PlainTextResponse, Response
 
 from app.deps import ServiceDep, SettingsDep
@@ -22,16 +23,20 @@ StateDocument = state_model()
 
 @router.get("/state", summary="Latest snapshot: time, base, joints, COG/ZMP, every stop, each layer's status",
             response_model=StateDocument, responses=errors())
-def get_state(service: ServiceDep) -> Response:
-    # the document is built and encoded once per snapshot, whoever asks how often
+async def get_state(service: ServiceDep) -> Response:
+    # (app.hot_paths answers this path before FastAPI does; this route documents it and answers its errors)
+    # the document is built and encoded once per snapshot (0.6 ms, 50 times a second at most)
     return Response(content=service.state_json(), media_type="application/json")
 
 
 @router.get("/loop/timing", response_model=LoopTimingResponse, responses=errors(),
             summary="How the control loop keeps its deadlines: tick start-lateness p50/p99/max [ms] over the "
                     "last ticks, simulated / wall time of the last 1-s windows")
-def loop_timing(service: ServiceDep) -> LoopTimingResponse:
-    return LoopTimingResponse(**service.timing().to_dict())
+def loop_timing(service: ServiceDep,
+                last_s: Annotated[float | None, Query(ge=0.005, le=3600.0, description="only the ticks of the "
+                                                      "last seconds (default: all kept, up to 60 s)")] = None
+                ) -> LoopTimingResponse:
+    return LoopTimingResponse(**service.timing(last_s).to_dict())
 
 
 @router.get("/health", response_model=Health, summary="Whether the robot process runs, and why not")

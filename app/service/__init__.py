@@ -4,7 +4,6 @@ or this one) to run at a tick boundary, and returns the result or the service's 
 
 from __future__ import annotations
 
-import json
 import math
 import threading
 from collections.abc import Mapping, Sequence
@@ -21,6 +20,7 @@ from app.service.verbs import (
     EnableLayers,
     Footstep,
     GetFootsteps,
+    GetLoopTiming,
     GetParams,
     GoPos,
     GoVelocity,
@@ -224,8 +224,11 @@ class OperatorService:
     def snapshot(self) -> Snapshot:
         return self.published().snapshot
 
-    def timing(self) -> LoopTiming:
-        return self.published().timing
+    def timing(self, last_s: float | None = None) -> LoopTiming:
+        """The loop's figures as last published, or computed now over the last `last_s` seconds."""
+        if last_s is None:
+            return self.published().timing
+        return self.run(GetLoopTiming(float(last_s)))
 
     def state(self) -> dict[str, Any]:
         """The latest snapshot as the /api/state document (built once per snapshot)."""
@@ -235,7 +238,7 @@ class OperatorService:
         return self._state()[1]
 
     def _state(self) -> tuple[dict, bytes]:
-        from app.state import state_document
+        from app.state import state_json
 
         pub = self.published()
         key = (pub.generation, pub.seq)
@@ -246,8 +249,7 @@ class OperatorService:
             cache = self._state_cache
             if cache is not None and cache[0] == key:
                 return cache[1], cache[2]
-            doc = state_document(pub)
-            body = json.dumps(doc, separators=(",", ":"), allow_nan=False).encode()
+            doc, body = state_json(pub)
             self._state_cache = (key, doc, body)
             return doc, body
 

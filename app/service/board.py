@@ -3,19 +3,53 @@ of readers, newest wins, never blocking the writer (a sequence lock: the reader 
 
 from __future__ import annotations
 
+import io
 import pickle
-import struct
 import time
 from multiprocessing import shared_memory
 from typing import Any
 
-_HEADER = struct.Struct("<qq")  # (generation counter: odd while writing, payload length [bytes])
+import numpy as np
+
+_HEADER_BYTES = 16  # int64 counter (odd while writing), int64 payload length [bytes]
 
 
 def attach(name: str) -> shared_memory.SharedMemory:
     """Open an existing segment. (A spawned child shares its parent's resource tracker, where Python 3.11
     registers every opener: the creator's unlink is the one that counts.)"""
     return shared_memory.SharedMemory(name=name)
+
+
+def _array(data: bytes, dtype: str, shape: tuple[int, ...]) -> np.ndarray:
+    """A read-only array over the pickled bytes (no copy)."""
+    return np.frombuffer(data, dtype=dtype).reshape(shape)
+
+
+def _dataclass(cls: type, values: tuple) -> Any:
+    """A (frozen) dataclass instance from its field values in declaration order, without running __init__."""
+    obj = object.__new__(cls)
+    for name, value in zip(cls.__dataclass_fields__, values, strict=True):
+        object.__setattr__(obj, name, value)
+    return obj
+
+
+class _Pickler(pickle.Pickler):
+    """Arrays as their bytes and dataclasses as their field values: a third cheaper than the default reduce
+    of a snapshot's ~30 small arrays and ~15 dataclasses (measured 0.34 -> 0.22 ms)."""
+
+    def reducer_override(self, obj):
+        t = type(obj)
+        if t is np.ndarray and obj.flags.c_contiguous:
+            return _array, (obj.tobytes(), obj.dtype.str, obj.shape)
+        if hasattr(t, "__dataclass_fields__"):
+            return _dataclass, (t, tuple(getattr(obj, name) for name in t.__dataclass_fields__))
+        return NotImplemented
+
+
+def dumps(value: Any) -> bytes:
+    out = io.BytesIO()
+    _Pickler(out, protocol=pickle.HIGHEST_PROTOCOL).dump(value)
+    return out.getvalue()
 
 
 class Board:
@@ -30,12 +64,16 @@ class Board:
         if name is None:
             self._shm = shared_memory.SharedMemory(create=True, size=size)
             self._owner = True
-            _HEADER.pack_into(self._shm.buf, 0, 0, 0)
         else:
             self._shm = attach(name)
             self._owner = False
+        # the header through an aligned int64 view: each of its stores is one 8-byte store, which a reader in
+        # another process sees whole (struct.pack_into writes byte by byte: a reader could see half of it)
+        self._header = np.ndarray((2,), dtype=np.int64, buffer=self._shm.buf)
+        if self._owner:
+            self._header[:] = 0
         self.name = self._shm.name
-        self.capacity = self._shm.size - _HEADER.size
+        self.capacity = self._shm.size - _HEADER_BYTES
         self._counter = 0
         self._last: tuple[int, Any] | None = None  # reader cache: (counter, value)
 
@@ -48,34 +86,36 @@ class Board:
     # ---- writer ----------------------------------------------------------------------------------------
     def put(self, value: Any) -> int:
         """Publish `value`; returns the payload size [bytes]."""
-        data = pickle.dumps(value, protocol=pickle.HIGHEST_PROTOCOL)
+        data = dumps(value)
         n = len(data)
         if n > self.capacity:
             raise ValueError(f"{n} bytes do not fit the board's {self.capacity}")
-        buf = self._shm.buf
-        counter = _HEADER.unpack_from(buf, 0)[0] + 1  # odd: writing
-        _HEADER.pack_into(buf, 0, counter, n)
-        buf[_HEADER.size:_HEADER.size + n] = data
-        _HEADER.pack_into(buf, 0, counter + 1, n)  # even: consistent
+        header = self._header
+        counter = int(header[0]) + 1
+        header[0] = counter  # odd: writing
+        header[1] = n
+        self._shm.buf[_HEADER_BYTES:_HEADER_BYTES + n] = data
+        header[0] = counter + 1  # even: consistent
         return n
 
     # ---- readers ---------------------------------------------------------------------------------------
     def version(self) -> int:
         """The counter: it changes with every put (a cheap "is there something new")."""
-        return _HEADER.unpack_from(self._shm.buf, 0)[0]
+        return int(self._header[0])
 
     def get(self, retries: int = 100) -> Any:
         """The last value put, or None before the first; cached while nothing new was put."""
-        buf = self._shm.buf
+        buf, header = self._shm.buf, self._header
         for _ in range(retries):
-            c1, n = _HEADER.unpack_from(buf, 0)
+            c1 = int(header[0])
             if c1 == 0:
                 return None
             if self._last is not None and self._last[0] == c1:
                 return self._last[1]
-            if c1 % 2 == 0:
-                data = bytes(buf[_HEADER.size:_HEADER.size + n])
-                c2 = _HEADER.unpack_from(buf, 0)[0]
+            n = int(header[1])
+            if c1 % 2 == 0 and 0 <= n <= self.capacity:
+                data = bytes(buf[_HEADER_BYTES:_HEADER_BYTES + n])
+                c2 = int(header[0])
                 if c1 == c2:
                     try:
                         value = pickle.loads(data)
@@ -88,6 +128,7 @@ class Board:
 
     def close(self) -> None:
         self._last = None
+        self._header = None  # release the view before the segment
         try:
             self._shm.close()
         finally:

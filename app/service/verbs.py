@@ -653,6 +653,22 @@ class ChainTiming(Verb):
 
 
 @dataclass(frozen=True)
+class GetLoopTiming(Verb):
+    """The loop's lateness figures over the last `last_s` seconds of ticks (and whole 1-s windows)."""
+
+    name = "get_loop_timing"
+    last_s: float = 60.0
+
+    def __post_init__(self) -> None:
+        _bounded("last_s", self.last_s, 0.005, 3600.0, "s")
+
+    def run(self, host: RobotHost):
+        loop = host.loop
+        ticks = max(1, int(round(self.last_s / loop.dt_control_s)))
+        return loop.lateness.summary(last_ticks=ticks, last_windows=int(self.last_s))
+
+
+@dataclass(frozen=True)
 class Shutdown(Verb):
     """Stop the loop after this boundary; the result is the run's summary."""
 

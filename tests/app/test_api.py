@@ -282,3 +282,34 @@ def test_motion_stop_freezes_the_planned_stream_and_release_brings_it_back(clien
     s = client.get("/api/state").json()
     assert s["emergency"]["motion_stop"] is False
     assert s["joints"]["RARM_JOINT0"]["cmd_deg"] == pytest.approx(-60.0, abs=0.1)
+
+
+def test_the_state_matches_its_published_schema_generated_from_the_layers_status(client, runtime):
+    from app.routers.state import StateDocument
+
+    step(runtime, 2.6)  # AutoBalancer and Stabilizer working
+    doc = client.get("/api/state").json()
+    StateDocument.model_validate(doc)  # extra="forbid": no field the schema does not describe
+    schema = client.get("/openapi.json").json()
+    ref = schema["paths"]["/api/state"]["get"]["responses"]["200"]["content"]["application/json"]["schema"]["$ref"]
+    components = schema["components"]["schemas"]
+    assert ref.endswith("/StateDocument")
+    st = components["StabilizerStatusInState"]["properties"]
+    assert "[m]" in st["cp_error"]["description"] and "[ms]" in st["tick_ms"]["description"]
+    assert set(doc["layers"]["st"]) == set(st)
+
+
+def test_every_422_the_api_sends_matches_the_error_schema_it_publishes(client):
+    from app.errors import ErrorBody
+
+    schema = client.get("/openapi.json").json()
+    published = schema["components"]["schemas"]["HTTPValidationError"]
+    assert published["properties"]["detail"]["type"] == "string"
+    for url, body in [("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINT0": "x"}, "time": 1.0}),
+                      ("/api/sequence/joint-angles", {"angles_deg": {"RARM_JOINTX": 1.0}, "time": 1.0}),
+                      ("/api/walk/go-pos", {"x": 9.0, "y": 0.0, "theta_deg": 0.0})]:
+        r = client.post(url, json=body)
+        assert r.status_code == 422
+        ErrorBody.model_validate(r.json())
+        ref = schema["paths"][url]["post"]["responses"]["422"]["content"]["application/json"]["schema"]["$ref"]
+        assert ref == "#/components/schemas/ErrorBody"

@@ -133,3 +133,30 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     print(f"\n{name}: {body['verdict']}, {body['wall_time_s']:.1f} s for the run; "
           f"live loop {ticks} ticks in {wall:.1f} s ({ticks * runtime.loop.dt_control_s / wall:.2f} x real time)")
     assert client.get(f"/api/experiments/runs/{body['run_id'] + 1}/csv").status_code == 404
+
+
+@pytest.mark.slow
+def test_thirty_runs_leave_the_console_no_bigger_and_no_folder_behind(client):
+    import glob
+    import tempfile
+
+    def rss_mb() -> float:
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * 4096 / 2**20
+
+    pattern = f"{tempfile.gettempdir()}/hrp2-*"
+    folders = set(glob.glob(pattern))
+    body = {"save": True, "duration_s": 0.5}
+    first = client.post("/api/experiments/wall-push-left", json=body)
+    assert first.status_code == 200, first.text
+    after_first = rss_mb()
+    for _ in range(29):
+        r = client.post("/api/experiments/wall-push-left", json=body)
+        assert r.status_code == 200, r.text
+        assert client.get(r.json()["png_url"]).status_code == 200
+    growth = rss_mb() - after_first
+    print(f"\nconsole memory after the first of 30 runs: {after_first:.0f} MB, growth over 29 more: {growth:.1f} MB")
+    assert growth < 20.0
+    assert set(glob.glob(pattern)) == folders  # every run's folder went with its worker
+    kept = client.app.fastapi.state.experiments.results
+    assert len(kept) == experiments_router.KEEP_RESULTS

@@ -77,3 +77,36 @@ def test_the_services_errors_survive_pickling_across_the_process_boundary():
         assert type(back) is type(exc) and str(back) == str(exc)
         assert getattr(back, "field", None) == getattr(exc, "field", None)
         assert getattr(back, "reason", None) == getattr(exc, "reason", None)
+
+
+def test_the_board_gives_every_reader_the_last_value_whole_while_the_writer_goes_on():
+    import threading
+
+    from app.service.board import Board
+
+    board = Board(size=1 << 16)
+    reader = Board(name=board.name)
+    assert reader.get() is None
+    stop = threading.Event()
+    seen: list[int] = []
+
+    def read():
+        while not stop.is_set():
+            value = reader.get()
+            if value is not None:
+                assert value["n"] == len(value["payload"])  # never a torn mix of two values
+                seen.append(value["n"])
+
+    threads = [threading.Thread(target=read) for _ in range(3)]
+    for th in threads:
+        th.start()
+    for n in range(1, 3000):
+        board.put({"n": n % 500, "payload": b"x" * (n % 500)})
+    stop.set()
+    for th in threads:
+        th.join()
+    assert seen and reader.get()["n"] == 2999 % 500
+    with pytest.raises(ValueError, match="do not fit"):
+        board.put(b"y" * (1 << 17))
+    reader.close()
+    board.close()

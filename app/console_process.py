@@ -1,0 +1,152 @@
+"""A real console in a subprocess (`hrp2-console --headless`, its robot in a process of its own) with a
+keep-alive HTTP client, and the load of many clients on it: for the load benchmark and the tests."""
+
+from __future__ import annotations
+
+import http.client
+import json
+import os
+import re
+import signal
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+class Console:
+    """`hrp2-console --headless --port 0 ARGS` until `stop()`; `port` is where its HTTP API listens."""
+
+    def __init__(self, *args: str, timeout_s: float = 90.0) -> None:
+        env = {**os.environ, "PYTHONUNBUFFERED": "1", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
+        self.proc = subprocess.Popen([sys.executable, "-m", "app.cli", "--headless", "--port", "0", *args],
+                                     cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        self.lines: list[str] = []
+        deadline = time.monotonic() + timeout_s
+        self.port = None
+        while self.port is None:
+            line = self.proc.stdout.readline()
+            if not line:
+                raise RuntimeError(f"the console exited before serving:\n{''.join(self.lines)}")
+            self.lines.append(line)
+            m = re.search(r"operator page\s+http://[^:]+:(\d+)/", line)
+            if m:
+                self.port = int(m.group(1))
+            if time.monotonic() > deadline:
+                self.proc.kill()
+                raise RuntimeError(f"the console did not start in {timeout_s} s:\n{''.join(self.lines)}")
+
+    def connection(self) -> http.client.HTTPConnection:
+        return http.client.HTTPConnection("127.0.0.1", self.port, timeout=10)
+
+    def request(self, method: str, path: str, body=None, headers=None, conn=None) -> tuple[int, dict | str]:
+        own = conn is None
+        conn = conn or self.connection()
+        data = body if isinstance(body, (bytes, str)) or body is None else json.dumps(body)
+        h = {"Content-Type": "application/json"} if method in ("POST", "PUT") else {}
+        h.update(headers or {})
+        conn.request(method, path, body=data, headers=h)
+        r = conn.getresponse()
+        raw = r.read()
+        if own:
+            conn.close()
+        try:
+            return r.status, json.loads(raw)
+        except ValueError:
+            return r.status, raw.decode(errors="replace")
+
+    def stop(self, sig: int = signal.SIGTERM, timeout_s: float = 30.0) -> tuple[int, str]:
+        """Send `sig`, wait; (exit code, everything it printed)."""
+        if self.proc.poll() is None:
+            self.proc.send_signal(sig)
+        try:
+            out, _ = self.proc.communicate(timeout=timeout_s)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            out, _ = self.proc.communicate()
+        return self.proc.returncode, "".join(self.lines) + (out or "")
+
+
+def _percentiles(values: list[float]) -> dict:
+    if not values:
+        return {"n": 0}
+    a = sorted(values)
+    return {"n": len(a), "p50_ms": round(a[len(a) // 2], 3), "p99_ms": round(a[min(len(a) - 1, int(0.99 * len(a)))], 3),
+            "max_ms": round(a[-1], 3)}
+
+
+def run_load(console: Console, duration_s: float, pollers: int = 20, poll_hz: float = 10.0,
+             commands_per_s: float = 100.0, commanders: int = 4, estop_every_s: float | None = None) -> dict:
+    """`pollers` clients GET /api/state at `poll_hz`; `commanders` send `commands_per_s` commands in all (joint
+    angles of the head and Stabilizer parameters, alternating); with `estop_every_s` an operator presses the
+    e-stop that often and releases it. Returns the request times [ms] and the loop's timing over the run."""
+    stop = threading.Event()
+    state_ms: list[float] = []
+    estop_ms: list[float] = []
+    errors: list[str] = []
+    counts = {"polls": 0, "commands": 0, "refused": 0}
+
+    def poller() -> None:
+        conn = console.connection()
+        next_t = time.monotonic()
+        while not stop.is_set():
+            t0 = time.perf_counter()
+            status, reply = console.request("GET", "/api/state", conn=conn)
+            state_ms.append((time.perf_counter() - t0) * 1e3)
+            if status != 200:
+                errors.append(f"state {status}: {reply}")
+            counts["polls"] += 1
+            next_t += 1.0 / poll_hz
+            time.sleep(max(0.0, next_t - time.monotonic()))
+        conn.close()
+
+    def commander(k: int) -> None:
+        conn = console.connection()
+        next_t = time.monotonic()
+        while not stop.is_set():
+            if k % 2:
+                status, reply = console.request("POST", "/api/sequence/joint-angles", conn=conn, body={
+                    "angles_deg": {"HEAD_JOINT0": 5.0 if k % 4 == 1 else -5.0}, "time": 0.5})
+            else:
+                status, reply = console.request("PUT", "/api/stabilizer/params", conn=conn,
+                                                body={"cp_threshold_m": 0.04 + 0.001 * (k % 3)})
+            if status == 409:
+                counts["refused"] += 1  # during an e-stop
+            elif status != 200:
+                errors.append(f"command {status}: {reply}")
+            counts["commands"] += 1
+            k += 1
+            next_t += commanders / commands_per_s
+            time.sleep(max(0.0, next_t - time.monotonic()))
+        conn.close()
+
+    def operator() -> None:
+        conn = console.connection()
+        while not stop.wait(estop_every_s):
+            t0 = time.perf_counter()
+            status, reply = console.request("POST", "/api/estop", conn=conn)
+            estop_ms.append((time.perf_counter() - t0) * 1e3)
+            if status != 200:
+                errors.append(f"estop {status}: {reply}")
+            time.sleep(0.1)
+            console.request("POST", "/api/estop/release", conn=conn)
+        conn.close()
+
+    threads = [threading.Thread(target=poller) for _ in range(pollers)]
+    threads += [threading.Thread(target=commander, args=(k,)) for k in range(commanders)]
+    if estop_every_s:
+        threads.append(threading.Thread(target=operator))
+    for th in threads:
+        th.start()
+    time.sleep(duration_s)
+    stop.set()
+    for th in threads:
+        th.join()
+    _, timing = console.request("GET", f"/api/loop/timing?last_s={max(1.0, duration_s - 1.0):g}")
+    return {"duration_s": duration_s, "polls_per_s": round(counts["polls"] / duration_s, 1),
+            "commands_per_s": round(counts["commands"] / duration_s, 1), "refused_during_estop": counts["refused"],
+            "state_request": _percentiles(state_ms), "estop_request_to_engaged": _percentiles(estop_ms),
+            "loop": timing, "errors": errors[:10]}

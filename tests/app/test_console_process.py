@@ -1,0 +1,122 @@
+"""The console as users run it (`hrp2-console --headless`: HTTP in one process, the robot in another),
+attacked the way a stranger would: bad requests on a kept-alive connection, foreign origins and hosts,
+huge bodies, signals, and pollers."""
+
+import signal
+import time
+
+import pytest
+
+from app.console_process import Console, run_load
+
+PARAM_PUTS = ["/api/stabilizer/params", "/api/auto-balancer/params", "/api/impedance/rarm/params",
+              "/api/emergency-stopper/params"]
+
+
+@pytest.fixture(scope="module")
+def console():
+    c = Console("--speed", "1.0")
+    yield c
+    c.stop()
+
+
+def wait_state(console, predicate, timeout_s=10.0):
+    deadline = time.monotonic() + timeout_s
+    while True:
+        status, state = console.request("GET", "/api/state")
+        if status == 200 and predicate(state):
+            return state
+        assert time.monotonic() < deadline, f"state not reached: {state}"
+        time.sleep(0.05)
+
+
+def test_a_bad_parameter_request_then_an_estop_on_the_same_connection_is_applied(console):
+    conn = console.connection()
+    huge = '{"k1": ' + "1" + "0" * 400 + "}"
+    status, body = console.request("PUT", "/api/stabilizer/params", body=huge, conn=conn)
+    assert status == 422 and body["field"] == "k1" and "finite" in body["detail"]
+    status, body = console.request("POST", "/api/estop", conn=conn)  # the same keep-alive connection
+    assert status == 200, body
+    wait_state(console, lambda s: s["emergency"]["hard_stop"])
+    status, _ = console.request("POST", "/api/estop/release", conn=conn)
+    assert status == 200
+    wait_state(console, lambda s: not s["emergency"]["hard_stop"])
+    conn.close()
+
+
+@pytest.mark.parametrize("path", PARAM_PUTS)
+def test_every_parameter_put_answers_a_huge_integer_with_a_422_naming_the_field(console, path):
+    field = {"/api/impedance/rarm/params": "k_p", "/api/emergency-stopper/params": "t1"}.get(path, "transition_time_s")
+    status, body = console.request("PUT", path, body=f'{{"{field}": 1{"0" * 400}}}')
+    assert status == 422, body
+    assert body["field"] == field and "finite" in body["detail"]
+
+
+@pytest.mark.parametrize(("method", "path", "headers", "expected"), [
+    ("POST", "/api/estop/release", {"Origin": "http://evil.example"}, 403),
+    ("POST", "/api/sim/reset", {"Origin": "http://evil.example"}, 403),
+    ("POST", "/api/motion/release", {"Content-Type": "text/plain"}, 415),
+    ("POST", "/api/stabilizer/stop", {"Content-Type": "application/x-www-form-urlencoded"}, 415),
+    ("POST", "/api/experiments/wall-push-left", {"Content-Type": "multipart/form-data; boundary=x"}, 415),
+    ("GET", "/api/state", {"Host": "evil.example"}, 421),
+    ("POST", "/api/estop", {"Host": "rebound.example:8000"}, 421),
+], ids=["origin-release", "origin-reset", "text-plain", "form", "multipart", "foreign-host", "rebinding-estop"])
+def test_cross_site_requests_and_foreign_hosts_are_refused(console, method, path, headers, expected):
+    status, body = console.request(method, path, headers=headers)
+    assert status == expected, body
+    state = wait_state(console, lambda s: True)
+    assert not state["emergency"]["stabilizer_stop"] and not state["emergency"]["hard_stop"]
+
+
+def test_an_estop_needs_no_json_body_and_any_page_of_this_host_may_send_it(console):
+    status, _ = console.request("POST", "/api/estop", headers={"Content-Type": "text/plain"})
+    assert status == 200
+    wait_state(console, lambda s: s["emergency"]["hard_stop"])
+    assert console.request("POST", "/api/estop/release")[0] == 200
+
+
+def test_a_10_mb_body_is_refused_with_413_and_no_tick_is_late_meanwhile(console):
+    t0 = time.monotonic()
+    status, body = console.request("PUT", "/api/stabilizer/params", body=b"{" + b" " * (10 * 1024 * 1024) + b"}")
+    elapsed = time.monotonic() - t0
+    assert status == 413, body
+    time.sleep(0.1)
+    status, timing = console.request("GET", f"/api/loop/timing?last_s={elapsed + 0.3:.3f}")
+    assert status == 200
+    assert timing["lateness_max_ms"] <= 10.0, timing
+
+
+def test_unexpected_input_shapes_are_422s_not_500s(console):
+    for path, body in [("/api/walk/go-pos", '{"x": "-30", "y": 0, "theta_deg": 0}'),
+                       ("/api/walk/go-pos", '{"x": true, "y": 0, "theta_deg": 0}'),
+                       ("/api/sequence/joint-angles", '{"angles_deg": {"RARM_JOINT0": 1}, "time": 5e-324}'),
+                       ("/api/sim/push", '[' * 5000 + ']' * 5000),
+                       ("/api/params", '{"st": {"k1": "a"}}'),
+                       ("/api/params", '{"nope": {"k1": 1}}')]:
+        status, reply = console.request("POST" if "params" not in path else "PUT", path, body=body)
+        assert status in (404, 422), (path, status, reply)
+        assert isinstance(reply["detail"], str)
+
+
+@pytest.mark.slow
+def test_twenty_pollers_and_a_hundred_commands_a_second_do_not_make_the_loop_late(console):
+    duration_s = 30.0
+    r = run_load(console, duration_s)
+    loop = r["loop"]
+    print(f"\n{r['polls_per_s']:.0f} polls/s, {r['commands_per_s']:.0f} commands/s: tick start-lateness "
+          f"p50 {loop['lateness_p50_ms']:.3f} p99 {loop['lateness_p99_ms']:.3f} max {loop['lateness_max_ms']:.3f} ms; "
+          f"slowest 1-s window {loop['speed_min']:.3f} x real time; /api/state p99 {r['state_request']['p99_ms']} ms")
+    assert not r["errors"]
+    assert r["polls_per_s"] > 0.8 * 20 * 10 and r["commands_per_s"] > 0.8 * 100
+    assert loop["lateness_p99_ms"] <= 5.0
+    assert loop["speed_min"] >= 0.9
+
+
+def test_sigterm_and_sigint_shut_the_console_down_cleanly_with_the_summary():
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        c = Console("--speed", "max")
+        assert c.request("GET", "/api/health")[1]["robot_alive"] is True
+        code, out = c.stop(sig)
+        assert f"{signal.Signals(sig).name} received" in out, out
+        assert "summary:" in out and "faults: none" in out and "fallen: false" in out
+        assert code == 0, out
