@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import http.client
 import json
+import multiprocessing
 import os
 import re
 import signal
@@ -78,6 +79,30 @@ def _percentiles(values: list[float]) -> dict:
             "max_ms": round(a[-1], 3)}
 
 
+def _operator(port: int, every_s: float, duration_s: float, results) -> None:
+    """Presses the e-stop every `every_s` (and releases it); the latency [ms] from sending the request to the
+    loop engaging it (the robot's own timestamp, on the same monotonic clock)."""
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+    latencies, errors = [], []
+    end = time.monotonic() + duration_s
+    time.sleep(every_s)
+    while time.monotonic() < end - 0.2:
+        sent = time.monotonic()
+        conn.request("POST", "/api/estop", body="", headers={"Content-Type": "application/json"})
+        r = conn.getresponse()
+        reply = json.loads(r.read())
+        if r.status == 200:
+            latencies.append((reply["engaged_at_monotonic_s"] - sent) * 1e3)
+        else:
+            errors.append(f"estop {r.status}: {reply}")
+        time.sleep(0.1)
+        conn.request("POST", "/api/estop/release", body="", headers={"Content-Type": "application/json"})
+        conn.getresponse().read()
+        time.sleep(max(0.0, every_s - 0.1))
+    conn.close()
+    results.put((latencies, errors))
+
+
 def run_load(console: Console, duration_s: float, pollers: int = 20, poll_hz: float = 10.0,
              commands_per_s: float = 100.0, commanders: int = 4, estop_every_s: float | None = None) -> dict:
     """`pollers` clients GET /api/state at `poll_hz`; `commanders` send `commands_per_s` commands in all (joint
@@ -123,28 +148,25 @@ def run_load(console: Console, duration_s: float, pollers: int = 20, poll_hz: fl
             time.sleep(max(0.0, next_t - time.monotonic()))
         conn.close()
 
-    def operator() -> None:
-        conn = console.connection()
-        while not stop.wait(estop_every_s):
-            t0 = time.perf_counter()
-            status, reply = console.request("POST", "/api/estop", conn=conn)
-            estop_ms.append((time.perf_counter() - t0) * 1e3)
-            if status != 200:
-                errors.append(f"estop {status}: {reply}")
-            time.sleep(0.1)
-            console.request("POST", "/api/estop/release", conn=conn)
-        conn.close()
-
     threads = [threading.Thread(target=poller) for _ in range(pollers)]
     threads += [threading.Thread(target=commander, args=(k,)) for k in range(commanders)]
-    if estop_every_s:
-        threads.append(threading.Thread(target=operator))
+    operator = None
+    if estop_every_s:  # the operator is a client of its own, as a person at another browser would be
+        ctx = multiprocessing.get_context("spawn")
+        results = ctx.Queue()
+        operator = ctx.Process(target=_operator, args=(console.port, estop_every_s, duration_s, results))
+        operator.start()
     for th in threads:
         th.start()
     time.sleep(duration_s)
     stop.set()
     for th in threads:
         th.join()
+    if operator is not None:
+        got_ms, got_errors = results.get(timeout=60.0)
+        operator.join(timeout=10.0)
+        estop_ms.extend(got_ms)
+        errors.extend(got_errors)
     _, timing = console.request("GET", f"/api/loop/timing?last_s={max(1.0, duration_s - 1.0):g}")
     return {"duration_s": duration_s, "polls_per_s": round(counts["polls"] / duration_s, 1),
             "commands_per_s": round(counts["commands"] / duration_s, 1), "refused_during_estop": counts["refused"],

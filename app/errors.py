@@ -119,15 +119,21 @@ def install_error_handlers(app: FastAPI) -> None:
 
 
 #: responses every route may give besides 200 (in OpenAPI, all with the one error body)
-COMMON_ERRORS = {500: {"model": ErrorBody, "description": "an unexpected error (the connection stays usable)"},
-                 503: {"model": ErrorBody, "description": "the robot process is not running or did not answer"}}
+COMMON_ERRORS = {
+    403: {"model": ErrorBody, "description": "a control request from a page of another origin"},
+    405: {"model": ErrorBody, "description": "a method the path does not have (the Allow header lists those it has)"},
+    413: {"model": ErrorBody, "description": "a body over 64 kB"},
+    415: {"model": ErrorBody, "description": "a control request not sent as application/json"},
+    421: {"model": ErrorBody, "description": "a Host header that is not the console's address"},
+    500: {"model": ErrorBody, "description": "an unexpected error (the connection stays usable)"},
+    503: {"model": ErrorBody, "description": "the robot process is not running or did not answer"}}
 
 
 def errors(*codes: int, **descriptions: str) -> dict[int, dict[str, Any]]:
     """OpenAPI `responses` for a route: the error codes it may answer, each with ErrorBody."""
     default = {404: "something named does not exist (the valid names are listed)",
-               409: "valid, but not now: `reason` says what is in the way",
-               413: "the body is larger than the limit",
+               409: "valid, but not now: `reason` says what is in the way (hard_stop, fallen, collision, "
+                    "motion_stop, reach, state)",
                422: "invalid field: `field` names it, `detail` says what is allowed"}
     out = dict(COMMON_ERRORS)
     for code in codes:

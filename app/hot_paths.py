@@ -6,6 +6,7 @@ anything unusual (no service, a service error) falls through to them."""
 from __future__ import annotations
 
 import json
+import re
 
 from app.service import OperatorService, ServiceError
 
@@ -21,7 +22,7 @@ async def _send(send, status: int, body: bytes) -> None:
 def estop_reply(ack) -> dict:
     """The POST /api/estop answer (app.schemas.EstopResponse) for the loop's acknowledgement."""
     return {"ok": True, "message": "hard e-stop already engaged" if ack.already_engaged else "hard e-stop engaged",
-            "tick": ack.tick, "sim_time_s": ack.sim_time_s}
+            "tick": ack.tick, "sim_time_s": ack.sim_time_s, "engaged_at_monotonic_s": ack.engaged_at_monotonic_s}
 
 
 class HotPaths:
@@ -29,9 +30,32 @@ class HotPaths:
 
     def __init__(self, api) -> None:
         self.api = api
+        self._methods: list | None = None  # [(path pattern, methods)] from the OpenAPI document
+
+    def allowed_methods(self, scope) -> set[str] | None:
+        """The methods the API documents for this path (None: a path it does not document, such as the page
+        and the static files)."""
+        if self._methods is None:
+            table = []
+            for template, ops in self.api.openapi().get("paths", {}).items():
+                pattern = re.compile("^" + re.sub(r"\\{[^/]+\\}", "[^/]+", re.escape(template)) + "$")
+                table.append((pattern, {m.upper() for m in ops}))
+            self._methods = table
+        path = scope["path"]
+        found = [methods for pattern, methods in self._methods if pattern.match(path)]
+        return set().union(*found) if found else None
 
     async def __call__(self, scope, receive, send) -> None:
         if scope["type"] == "http":
+            allowed = self.allowed_methods(scope)
+            if allowed is not None and scope["method"] not in allowed | ({"HEAD"} if "GET" in allowed else set()):
+                body = json.dumps({"detail": f"{scope['method']} is not a method of {scope['path']}; "
+                                             f"allowed: {', '.join(sorted(allowed))}"}).encode()
+                await send({"type": "http.response.start", "status": 405, "headers": [
+                    *_JSON, (b"content-length", str(len(body)).encode()),
+                    (b"allow", ", ".join(sorted(allowed)).encode())]})
+                await send({"type": "http.response.body", "body": body})
+                return
             service: OperatorService | None = getattr(self.api.state, "service", None)
             key = (scope["method"], scope["path"])
             if service is not None and key == ("GET", "/api/state"):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Annotated, Any, Literal
 
@@ -21,8 +22,12 @@ from app.service.verbs import (
     MIN_MOTION_TIME_S,
     TARGET_LIMBS,
 )
+from controller.footsteps import StepParams
+from robot.names import JOINT_NAMES, NUM_JOINTS
+from robot.plant import available_scenes
 
 LIMBS = TARGET_LIMBS
+MAX_PUSH_COMPONENT_N = math.floor(MAX_PUSH_FORCE_N / math.sqrt(3.0))  # [N] any such vector is within the magnitude
 MAX_GO_POS_DEG = round(math.degrees(MAX_GO_POS_RAD), 6)  # [deg] |theta| of goPos
 MAX_VELOCITY_DEG_S = round(math.degrees(MAX_VELOCITY_RAD_S), 6)  # [deg/s] |vtheta| of goVelocity
 
@@ -37,11 +42,17 @@ MotionTime = Field(description=f"interpolation time [s], in [{MIN_MOTION_TIME_S:
                    ge=MIN_MOTION_TIME_S, le=MAX_MOTION_TIME_S)
 
 
+JointName = Literal[JOINT_NAMES]  # type: ignore[valid-type]
+SceneName = Literal[available_scenes()]  # type: ignore[valid-type]
+Angle = Annotated[float, Field(ge=-360.0, le=360.0)]
+
+
 class JointAnglesRequest(_Body):
-    angles_deg: dict[str, Annotated[float, Field(ge=-360.0, le=360.0)]] | list[
-        Annotated[float, Field(ge=-360.0, le=360.0)]] = Field(
+    angles_deg: Annotated[dict[JointName, Angle], Field(min_length=1)] | Annotated[
+        list[Angle], Field(min_length=NUM_JOINTS, max_length=NUM_JOINTS)] = Field(
         description="{joint name: angle [deg]} for some joints, or a list of all 30 angles [deg] in "
-                    "JOINT_NAMES order", examples=[{"RARM_JOINT0": -30.0}])
+                    "JOINT_NAMES order; the joint ranges are checked against the model",
+        examples=[{"RARM_JOINT0": -30.0}])
     time: float = MotionTime
 
 
@@ -57,14 +68,15 @@ class TargetPoseRequest(_Body):
 
 
 class ResetRequest(_Body):
-    scene: str | None = Field(default=None, max_length=64,
-                              description="scene name (GET /api/sim/scenes); default: the current one")
+    scene: SceneName | None = Field(default=None, description="scene name (GET /api/sim/scenes); default: the "
+                                                               "current one")
 
 
 class PushRequest(_Body):
     body: str = Field(description="MuJoCo body name, e.g. BODY", examples=["BODY"], max_length=64)
-    force: list[Annotated[float, Field(ge=-MAX_PUSH_FORCE_N, le=MAX_PUSH_FORCE_N)]] = Field(
-        description=f"world-frame force [N], |force| <= {MAX_PUSH_FORCE_N:g}", min_length=3, max_length=3,
+    force: list[Annotated[float, Field(ge=-MAX_PUSH_COMPONENT_N, le=MAX_PUSH_COMPONENT_N)]] = Field(
+        description=f"world-frame force [N], each component within +-{MAX_PUSH_COMPONENT_N:g} N (so |force| <= "
+                    f"{MAX_PUSH_FORCE_N:g} N)", min_length=3, max_length=3,
         examples=[[100.0, 0.0, 0.0]])
     duration: float = Field(description=f"push duration [s], in [{MIN_MOTION_TIME_S:g}, {MAX_PUSH_DURATION_S:g}]",
                             ge=MIN_MOTION_TIME_S, le=MAX_PUSH_DURATION_S)
@@ -102,13 +114,24 @@ class FootstepItem(_Body):
                                          min_length=3, max_length=3)
 
 
-class StepRequest(_Body):
-    """Swing parameters; ranges are those of controller.footsteps.StepParams (checked against it)."""
+def _step_range(name: str, to_shown=float) -> dict:
+    """ge / le of a StepParams field, in the request's unit."""
+    meta = {f.name: f.metadata for f in dataclasses.fields(StepParams)}[name]
+    # rounded inward: a value the schema allows is one StepParams accepts
+    return {"ge": math.ceil(to_shown(meta["min"]) * 1e6) / 1e6, "le": math.floor(to_shown(meta["max"]) * 1e6) / 1e6}
 
-    step_height: float | None = Field(default=None, description="swing height [m] (default 0.05)")
-    step_time: float | None = Field(default=None, description="step duration [s] (default 1.0)")
-    toe_angle_deg: float | None = Field(default=None, description="toe-off angle [deg] (default 0)")
-    heel_angle_deg: float | None = Field(default=None, description="heel-contact angle [deg] (default 0)")
+
+class StepRequest(_Body):
+    """Swing parameters; the ranges are those of controller.footsteps.StepParams."""
+
+    step_height: float | None = Field(default=None, description="swing height [m] (default 0.05)",
+                                      **_step_range("step_height_m"))
+    step_time: float | None = Field(default=None, description="step duration [s] (default 1.0), rounded to whole "
+                                                              "control periods (5 ms)", **_step_range("step_time_s"))
+    toe_angle_deg: float | None = Field(default=None, description="toe-off angle [deg] (default 0)",
+                                        **_step_range("toe_angle_rad", math.degrees))
+    heel_angle_deg: float | None = Field(default=None, description="heel-contact angle [deg] (default 0)",
+                                         **_step_range("heel_angle_rad", math.degrees))
 
 
 class FootstepsRequest(_Body):
@@ -132,6 +155,8 @@ class Ok(BaseModel):
 class EstopResponse(Ok):
     tick: int = Field(description="the control tick at which the loop engaged it")
     sim_time_s: float = Field(description="simulated time then [s]")
+    engaged_at_monotonic_s: float = Field(description="when the loop engaged it, on the machine's monotonic clock "
+                                                      "(CLOCK_MONOTONIC, as Python's time.monotonic) [s]")
 
 
 class Health(BaseModel):

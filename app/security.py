@@ -141,7 +141,10 @@ class ConsoleGuard:
                     return
             if body.strip():
                 try:
-                    json.loads(body)
+                    json.loads(body.decode("utf-8"))
+                except UnicodeDecodeError as exc:
+                    await _send_json(send, 422, f"body: not UTF-8 ({exc.reason} at byte {exc.start})")
+                    return
                 except RecursionError:
                     await _send_json(send, 422, "body: JSON nested too deeply")
                     return

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from controller.errors import InvalidCommand
+from controller.errors import InvalidCommand, UnknownName, Unreachable
 from controller.rotations import rpy_to_matrix
 from robot.names import (
     END_EFFECTORS,
@@ -112,7 +112,7 @@ class RobotKinematics:
         target = pin.SE3(np.asarray(target_R, dtype=float), np.asarray(target_pos, dtype=float))
         if frame is not None:
             if not self.model.existFrame(frame):
-                raise InvalidCommand(f"unknown frame {frame!r}; e.g. BODY, CHEST_LINK1")
+                raise UnknownName(f"unknown frame {frame!r}; e.g. BODY, CHEST_LINK1")
             target = self.data.oMf[self.model.getFrameId(frame)] * target
         idx = np.array(JOINT_GROUPS[group])
         cols = self.idx_v[idx]
@@ -136,7 +136,7 @@ class RobotKinematics:
             q_rad[idx] = np.clip(q_rad[idx] + dq, self.q_lower[idx], self.q_upper[idx])
         if best_effort:
             return best_q
-        raise InvalidCommand(
+        raise Unreachable(
             f"setTargetPose: {group} cannot reach the target "
             f"(residual {np.linalg.norm(err[:3]) * 1e3:.1f} mm, "
             f"{np.rad2deg(np.linalg.norm(err[3:])):.2f} deg) within joint limits"

@@ -332,26 +332,31 @@ class ControlLoop:
         meter.speed_target = self.speed
         while not self._stop_event.is_set():
             speed = self.speed
-            if speed != anchored_speed:  # re-anchor the schedule at a new speed
-                wall0, sim0, anchored_speed = clock(), self.snapshot.time_s, speed
+            t_sim = self.snapshot.time_s
+            if speed != anchored_speed or t_sim < sim0:  # a new speed, or a reset: a new schedule
+                wall0, sim0, anchored_speed = clock(), t_sim, speed
                 meter.clear()
                 meter.speed_target = speed
             if speed is not None:
-                due = wall0 + (self.snapshot.time_s - sim0) / speed
+                due = wall0 + (t_sim - sim0) / speed
                 delay = due - clock()
-                while delay > 0 and not self._stop_event.is_set():
+                while delay > 0 and not self._stop_event.is_set() and self.snapshot.time_s == t_sim:
                     sleep(min(delay, self.nap_s) if self.nap_s > 0.0 else delay)
                     delay = due - clock()
                 if self._stop_event.is_set():
                     break
+                if self.snapshot.time_s != t_sim:
+                    continue  # reset while waiting: start the new schedule
                 lateness = -delay
                 if lateness > 0.25:  # far behind (debugger, suspended machine): re-anchor instead of racing
-                    wall0, sim0 = clock(), self.snapshot.time_s
+                    wall0, sim0 = clock(), t_sim
             else:
                 lateness = 0.0
             if between_ticks is not None:
                 between_ticks()
-            meter.add(lateness, clock(), self.snapshot.time_s)
+                if self.snapshot.time_s != t_sim:
+                    continue  # a reset at this boundary: not a tick of the old schedule
+            meter.add(lateness, clock(), t_sim)
             try:
                 self.step()
             except Exception as exc:  # noqa: BLE001 - the plant itself failed: report, hold, go on

@@ -15,6 +15,7 @@ from controller.hard_emergency_stopper import HardEmergencyStopper
 from controller.impedance_controller import ImpedanceController
 from controller.kalman_filter import AttitudeKalmanFilter, KalmanFilter
 from controller.kinematics import RobotKinematics
+from controller.layer import Params
 from controller.loop import ControlLoop, Plant, Snapshot
 from controller.remove_force_offset import RemoveForceOffset
 from controller.rotations import rpy_to_matrix
@@ -33,6 +34,22 @@ def layer_classes() -> dict[str, type]:
     classes = (KalmanFilter, RemoveForceOffset, SequencePlayer, EmergencyStopper, ImpedanceController, AutoBalancer,
                Stabilizer, CollisionDetector, HardEmergencyStopper, SoftErrorLimiter)
     return {cls.name: cls for cls in classes}
+
+
+def layer_params_classes() -> dict[str, type]:
+    """Layer name -> the Params class of its parameters, for the layers that have some (the hands'
+    impedance parameters are per limb, "ic:<limb>", and not listed here)."""
+    import inspect
+    import typing
+
+    out = {}
+    for name, cls in layer_classes().items():
+        if not hasattr(cls, "set_params") or len(inspect.signature(cls.set_params).parameters) != 2:
+            continue  # no parameters, or several sets of them (one per limb)
+        hint = typing.get_type_hints(cls.set_params).get("params")
+        if isinstance(hint, type) and issubclass(hint, Params):
+            out[name] = hint
+    return out
 
 
 def initial_reference(kin: RobotKinematics, q_rad: np.ndarray) -> Reference:

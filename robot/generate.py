@@ -301,6 +301,12 @@ def half_sitting_deg(params: dict | None = None) -> tuple[float, ...]:
     return (*hs["RLEG"], *hs["LLEG"], *hs["CHEST"], *hs["HEAD"], *hs["RARM"], *hs["LARM"])
 
 
+def joint_limits_deg(params: dict | None = None) -> dict[str, tuple[float, float]]:
+    """Each joint's (lower, upper) limit [deg], JOINT_NAMES order (as the model files state them)."""
+    joints = {j["name"]: j for j in (params or load_parameters())["joints"]}
+    return {name: (float(joints[name]["limit_deg"][0]), float(joints[name]["limit_deg"][1])) for name in JOINT_NAMES}
+
+
 def site_frames(params: dict) -> dict[str, tuple[str, tuple[float, float, float]]]:
     """Named frames: name -> (link, position in link [m]); the same in MJCF (sites) and URDF (fixed links)."""
     depth = params["feet"]["ankle_to_sole_m"]

@@ -10,7 +10,7 @@ from fastapi import APIRouter, Body
 from app.deps import ServiceDep
 from app.errors import errors
 from app.hot_paths import estop_reply
-from app.routers.params import params_document
+from app.routers.params import changes_json_schema, params_document
 from app.schemas import EstopResponse, Ok
 from app.service import InvalidArgument
 
@@ -100,7 +100,16 @@ def get_es_params(service: ServiceDep) -> dict[str, Any]:
     return es_document(service.params("es", "st"))
 
 
-@params_router.put("/params", responses=errors(404, 422),
+def _es_body() -> dict[str, Any]:
+    from controller.system import layer_params_classes
+
+    classes = layer_params_classes()
+    schema = changes_json_schema({name: (classes[layer], field) for name, (layer, field) in ES_PARAMS.items()},
+                                 "EmergencyStopperChanges")
+    return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
+
+
+@params_router.put("/params", responses=errors(404, 422), openapi_extra=_es_body(),
                    summary="Change some EmergencyStopper parameters (validated; each owning layer's params "
                            "replaced whole at a tick boundary, all or none)")
 def put_es_params(service: ServiceDep, changes: EsChangesBody) -> dict[str, Any]:

@@ -10,10 +10,10 @@ from fastapi import APIRouter, Path
 from app.deps import ServiceDep
 from app.errors import errors
 from app.routers.layers import ChangesBody
-from app.routers.params import params_document
+from app.routers.params import params_changes_body, params_document
 from app.schemas import Ok
 from app.service import NotFound
-from controller.impedance_controller import LIMBS
+from controller.impedance_controller import LIMBS, ImpedanceParams
 
 router = APIRouter(prefix="/api/impedance", tags=["impedance"])
 
@@ -34,7 +34,7 @@ def get_params(limb: LimbPath, service: ServiceDep) -> dict[str, Any]:
     return params_document(service.params(owner)[owner])
 
 
-@router.put("/{limb}/params", responses=errors(404, 422),
+@router.put("/{limb}/params", responses=errors(404, 422), openapi_extra=params_changes_body(ImpedanceParams),
             summary="Change some impedance parameters of one hand (validated, applied at a tick boundary)")
 def put_params(limb: LimbPath, service: ServiceDep, changes: ChangesBody) -> dict[str, Any]:
     owner = _owner(service, limb)

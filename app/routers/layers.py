@@ -9,7 +9,7 @@ from fastapi import APIRouter, Body
 
 from app.deps import ServiceDep
 from app.errors import errors
-from app.routers.params import params_document
+from app.routers.params import params_changes_body, params_document
 from app.schemas import Ok
 
 #: URL segment -> chain layer name (hrpsys component), with the label used in summaries.
@@ -23,7 +23,10 @@ ChangesBody = Annotated[dict[str, Any], Body(
 
 
 def _add_routes(router: APIRouter, segment: str, layer: str, label: str) -> None:
+    from controller.system import layer_params_classes
+
     base = f"/{segment}"
+    body = params_changes_body(layer_params_classes()[layer])
 
     def get_params(service: ServiceDep) -> dict[str, Any]:
         return params_document(service.params(layer)[layer])
@@ -42,7 +45,7 @@ def _add_routes(router: APIRouter, segment: str, layer: str, label: str) -> None
                          responses=errors(404))
     router.add_api_route(f"{base}/params", put_params, methods=["PUT"], name=f"{segment}-put-params",
                          summary=f"Change some {label} parameters (validated, applied at a tick boundary)",
-                         responses=errors(404, 422))
+                         responses=errors(404, 422), openapi_extra=body)
     router.add_api_route(f"{base}/start", start, methods=["POST"], response_model=Ok, name=f"{segment}-start",
                          summary=f"Start the {label} (blends in)", responses=errors(409))
     router.add_api_route(f"{base}/stop", stop, methods=["POST"], response_model=Ok, name=f"{segment}-stop",

@@ -13,7 +13,24 @@ from app.schemas import JointAnglesRequest, Ok, SequenceStatus, TargetPoseReques
 router = APIRouter(prefix="/api/sequence", tags=["sequence"])
 
 
-@router.post("/joint-angles", response_model=Ok, responses=errors(409, 422),
+def _joint_angles_body() -> dict:
+    """The body of /joint-angles with each joint's own range (from the model) rather than the +-360 deg the
+    request model checks first (the robot's limits are checked once, by the verb)."""
+    from robot.generate import joint_limits_deg
+
+    limits = joint_limits_deg()
+    per_joint = {n: {"type": "number", "minimum": lo, "maximum": hi, "description": f"{n} [deg]"}
+                 for n, (lo, hi) in limits.items()}
+    schema = JointAnglesRequest.model_json_schema()
+    schema["properties"]["angles_deg"] = {"description": schema["properties"]["angles_deg"].get("description", ""),
+                                          "anyOf": [{"type": "object", "properties": per_joint, "minProperties": 1,
+                                                     "additionalProperties": False},
+                                                    {"type": "array", "prefixItems": list(per_joint.values()),
+                                                     "minItems": len(per_joint), "maxItems": len(per_joint)}]}
+    return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
+
+
+@router.post("/joint-angles", response_model=Ok, responses=errors(409, 422), openapi_extra=_joint_angles_body(),
              summary="Interpolate to joint angles (all 30 as a list, or some by name) in `time` s")
 def joint_angles(req: JointAnglesRequest, service: ServiceDep) -> Ok:
     if isinstance(req.angles_deg, dict):

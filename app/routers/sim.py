@@ -25,7 +25,7 @@ def reset(service: ServiceDep, req: Annotated[ResetRequest | None, Body()] = Non
     return Ok(message=service.reset(None if req is None else req.scene))
 
 
-@router.post("/push", response_model=Ok, responses=errors(422),
+@router.post("/push", response_model=Ok, responses=errors(404, 422, e404="no such body (the valid ones are listed)"),
              summary="Apply a world-frame force at a body's COM for a while")
 def push(req: PushRequest, service: ServiceDep) -> Ok:
     return Ok(message=service.push(req.body, req.force, req.duration))

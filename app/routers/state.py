@@ -60,12 +60,12 @@ def get_config(service: ServiceDep, settings: SettingsDep) -> ConsoleConfig:
 
 
 @router.get("/log.csv", response_class=PlainTextResponse, summary="DataLogger ring buffer as CSV",
-            responses=errors())
+            responses={**errors(), 200: {"content": {"text/csv": {}}, "description": "the CSV"}})
 def get_log_csv(service: ServiceDep) -> PlainTextResponse:
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
     w.writerow(csv_header())
     for row in service.log_rows().tolist():
         w.writerow([f"{v:.6g}" for v in row])
-    return PlainTextResponse(out.getvalue(), media_type="text/csv",
+    return Response(out.getvalue(), media_type="text/csv; charset=utf-8",
                              headers={"Content-Disposition": 'attachment; filename="hrp2_log.csv"'})

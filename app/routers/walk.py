@@ -49,7 +49,9 @@ def set_footsteps(req: FootstepsRequest, service: ServiceDep) -> Ok:
     steps = [Footstep(f.leg, tuple(f.pos), tuple(math.radians(v) for v in f.rpy_deg)) for f in req.footsteps]
     sp = None
     if req.step is not None:
-        given = {"step_height_m": req.step.step_height, "step_time_s": req.step.step_time,
+        dt = service.info.dt_control_s
+        step_time = None if req.step.step_time is None else max(1, round(req.step.step_time / dt)) * dt
+        given = {"step_height_m": req.step.step_height, "step_time_s": step_time,
                  "toe_angle_rad": None if req.step.toe_angle_deg is None else math.radians(req.step.toe_angle_deg),
                  "heel_angle_rad": None if req.step.heel_angle_deg is None else math.radians(req.step.heel_angle_deg)}
         sp = step_params({k: v for k, v in given.items() if v is not None})

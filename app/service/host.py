@@ -14,7 +14,7 @@ import numpy as np
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
 from app.service.verbs import RobotInfo, Verb
 from controller.data_logger import DataLogger
-from controller.errors import InvalidCommand, InvalidState
+from controller.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
 from controller.layer import Params
 from controller.loop import Snapshot
 from controller.loop_timing import LoopTiming
@@ -118,6 +118,10 @@ class RobotHost:
             raise
         except InvalidState as exc:
             raise Refused("state", str(exc)) from None
+        except Unreachable as exc:
+            raise Refused("reach", str(exc)) from None
+        except UnknownName as exc:
+            raise NotFound(str(exc)) from None
         except (InvalidCommand, ValueError) as exc:
             raise InvalidArgument(verb.name, str(exc)) from None
 

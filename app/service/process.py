@@ -30,6 +30,7 @@ from controller.data_logger import DataLogger
 
 log = logging.getLogger(__name__)
 
+_SINGLE_THREADED = {"OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
 START_TIMEOUT_S = 90.0  # importing MuJoCo and pinocchio and building the chain, on a slow machine
 LOG_LENGTH = 12000  # DataLogger rows (60 s at 5 ms)
 
@@ -190,7 +191,18 @@ class RobotProcess:
         self._cmd, self._estop_conn = cmd_here, estop_here
         self.process = ctx.Process(target=robot_main, name="hrp2-robot",
                                    args=(cfg, cmd_there, estop_there, self.board.name, self._log_shm.name))
-        self.process.start()
+        # one BLAS/OpenMP thread in the robot: its matrices are tiny, and idle worker threads spin on the
+        # other core (measured 3-6 % of it) where the console answers requests
+        saved = {k: os.environ.get(k) for k in _SINGLE_THREADED}
+        os.environ.update(_SINGLE_THREADED)
+        try:
+            self.process.start()
+        finally:
+            for k, v in saved.items():
+                if v is None:
+                    os.environ.pop(k, None)
+                else:
+                    os.environ[k] = v
         cmd_there.close()
         estop_there.close()
         self.exit_reason = None

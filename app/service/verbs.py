@@ -608,7 +608,7 @@ class Push(Verb):
 
     def check(self, info: RobotInfo) -> None:
         if self.body not in info.bodies:
-            raise InvalidArgument("body", f"unknown body {self.body!r}; valid bodies: {', '.join(info.bodies)}")
+            raise NotFound(f"body: unknown body {self.body!r}; valid bodies: {', '.join(info.bodies)}")
 
     def run(self, host: RobotHost) -> str:
         host.plant.push(self.body, np.array(self.force_n), self.duration_s)

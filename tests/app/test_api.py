@@ -153,13 +153,8 @@ BAD_INPUTS = [
      ["limb", "rarm", "lleg"]),
     ("/api/sequence/target-pose", {"limb": "rarm", "pos": [0, 0], "rpy_deg": [0, 0, 0], "time": 1.0},
      ["pos", "3"]),
-    ("/api/sequence/target-pose", {"limb": "rarm", "frame": "NOPE", "pos": [0.3, -0.2, 0.0], "rpy_deg": [0, 0, 0],
-                                   "time": 1.0}, ["frame", "NOPE", "BODY"]),
-    ("/api/sequence/target-pose", {"limb": "rarm", "frame": "BODY", "pos": [3.0, 0.0, 0.0], "rpy_deg": [0, 0, 0],
-                                   "time": 1.0}, ["rarm", "cannot reach"]),
     ("/api/sim/reset", {"scene": "mars"}, ["scene", "mars", "default"]),
-    ("/api/sim/push", {"body": "TAIL", "force": [10, 0, 0], "duration": 0.1}, ["body", "TAIL", "BODY"]),
-    ("/api/sim/push", {"body": "BODY", "force": [3000, 0, 0], "duration": 0.1}, ["force", "2000"]),
+    ("/api/sim/push", {"body": "BODY", "force": [3000, 0, 0], "duration": 0.1}, ["force", "1154"]),
     ("/api/sim/push", {"body": "BODY", "force": [10, 0, 0], "duration": 6}, ["duration", "5"]),
     ("/api/sim/push", {"body": "BODY", "force": [10, 0, 0], "duration": 0}, ["duration", "greater than or equal"]),
 ]
@@ -181,6 +176,32 @@ def test_bad_input_gets_a_422_naming_the_field_and_changes_nothing(client, runti
     assert runtime.loop.snapshot.tick == tick + 60  # no reset happened
     np.testing.assert_allclose(q_seq_deg(runtime), before, atol=1e-6)
     assert client.get("/api/sequence/status").json() == {"interpolating": False}
+
+
+#: valid requests that name something that does not exist (404) or ask for what cannot be done (409)
+CANNOT_BE_DONE = [
+    ("/api/sequence/target-pose", {"limb": "rarm", "frame": "NOPE", "pos": [0.3, -0.2, 0.0], "rpy_deg": [0, 0, 0],
+                                   "time": 1.0}, 404, ["frame", "NOPE", "BODY"]),
+    ("/api/sequence/target-pose", {"limb": "rarm", "frame": "BODY", "pos": [3.0, 0.0, 0.0], "rpy_deg": [0, 0, 0],
+                                   "time": 1.0}, 409, ["rarm", "cannot reach"]),
+    ("/api/sim/push", {"body": "TAIL", "force": [10, 0, 0], "duration": 0.1}, 404, ["body", "TAIL", "BODY"]),
+]
+
+
+@pytest.mark.parametrize(("url", "body", "status", "words"), CANNOT_BE_DONE,
+                         ids=["unknown-frame", "out-of-reach", "unknown-body"])
+def test_a_valid_request_for_what_does_not_exist_or_cannot_be_done_says_so_and_changes_nothing(
+        client, runtime, url, body, status, words):
+    step(runtime, 0.02)
+    before = q_seq_deg(runtime)
+    r = client.post(url, json=body)
+    assert r.status_code == status, r.text
+    for w in words:
+        assert w in r.json()["detail"]
+    if status == 409:
+        assert r.json()["reason"] == "reach"
+    step(runtime, 0.3)
+    np.testing.assert_allclose(q_seq_deg(runtime), before, atol=1e-6)
 
 
 @pytest.mark.parametrize("bad", ["NaN", "Infinity", "-Infinity"])

@@ -89,7 +89,7 @@ BAD_INPUTS = [
      ["footsteps.0.pos.1", "finite"]),
     ("/api/walk/footsteps", {"footsteps": [{"leg": "rleg", "pos": [0, -0.095, 0]},
                                            {"leg": "lleg", "pos": [0.2, 0.095, 0]}], "step": {"step_time": 0}},
-     ["step.step_time", "0.05", "10"]),
+     ["step.step_time", "0.05"]),
     ("/api/walk/footsteps", {"footsteps": [{"leg": "rleg", "pos": [0, -0.095, 0]}],
                              "step": {"toe_angle_deg": 80}}, ["step.toe_angle_deg", "57.29"]),
     ("/api/walk/footsteps", {"footsteps": [{"leg": "rleg", "pos": [0, -0.095, 0]}], "step": {"bogus": 1}},
