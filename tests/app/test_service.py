@@ -110,3 +110,29 @@ def test_the_board_gives_every_reader_the_last_value_whole_while_the_writer_goes
         board.put(b"y" * (1 << 17))
     reader.close()
     board.close()
+
+
+def test_sequence_verbs_are_refused_while_the_collision_detector_holds_or_the_motion_is_stopped():
+    import math
+
+    from tests.scenarios.helpers import pose_deg
+
+    robot = LocalRobot(speed=None)
+    service = OperatorService(robot)
+    # 1. an arm motion through the torso: the CollisionDetector holds the posture, and says so
+    service.set_joint_angles([math.radians(v) for v in pose_deg(RARM_JOINT0=-20, RARM_JOINT1=0, RARM_JOINT2=80,
+                                                                 RARM_JOINT3=-120)], 3.0)
+    robot.loop.run_until(lambda s: s.layers["co"].collision, timeout_s=4.0)
+    with pytest.raises(Refused, match="CollisionDetector") as info:
+        service.set_some_joint_angles({"LARM_JOINT0": -0.3}, 1.0)
+    assert info.value.reason == "collision"
+    # 2. after a reset, the motion stopped by the operator: the plan is held, new motions are refused
+    service.reset()
+    robot.run_for(0.1)
+    service.stop_motion()
+    robot.run_for(0.05)
+    with pytest.raises(Refused, match="EmergencyStopper") as info:
+        service.set_some_joint_angles({"LARM_JOINT0": -0.3}, 1.0)
+    assert info.value.reason == "motion_stop"
+    service.release_motion()
+    assert "interpolating" in service.set_some_joint_angles({"LARM_JOINT0": -0.3}, 1.0)
