@@ -11,8 +11,8 @@ import numpy as np
 
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from controller.chain import CHAIN_ORDER
-from controller.loop import ControlLoop
+from controller.core.chain import CHAIN_ORDER
+from controller.core.loop import ControlLoop
 from robot.generate import half_sitting_deg
 from robot.names import JOINT_NAMES
 

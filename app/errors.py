@@ -12,7 +12,7 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.service.errors import InvalidArgument, Refused, ServiceError
-from controller.errors import InvalidCommand, InvalidState
+from controller.core.errors import InvalidCommand, InvalidState
 
 log = logging.getLogger(__name__)
 

@@ -22,7 +22,7 @@ from app.service.verbs import (
     MIN_MOTION_TIME_S,
     TARGET_LIMBS,
 )
-from controller.footsteps import StepParams
+from controller.walking.footsteps import StepParams
 from robot.names import JOINT_NAMES, NUM_JOINTS
 from robot.plant import available_scenes
 

@@ -14,8 +14,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
 from app.service.host import Published
-from controller.layer import Status, plain
-from controller.rotations import matrix_to_rpy, quat_wxyz_to_matrix
+from controller.core.layer import Status, plain
+from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
 from robot.names import JOINT_NAMES
 
 
@@ -170,7 +170,7 @@ def layer_model(cls: type[Status]) -> type[BaseModel]:
 
 def _layer_status_classes() -> dict[str, type[Status]]:
     """Layer name -> its Status class, from the layers' own `status` annotations."""
-    from controller.system import layer_classes
+    from controller.core.system import layer_classes
 
     out = {}
     for name, cls in layer_classes().items():

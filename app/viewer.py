@@ -18,7 +18,7 @@ import trimesh
 import viser
 
 from app.service import OperatorService, ServiceError
-from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
+from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
 from robot.plant import scene_path
 
 log = logging.getLogger(__name__)

@@ -491,36 +491,10 @@ def mjcf_scene(params: dict) -> str:
 
 
 # ------------------------------------------------------------------------ emergency-stop scenes [ES IV-C]
-# The robot stands at the origin facing +x in the `home` keyframe. Reference poses (home keyframe plus):
-#   REACH_FORWARD_DEG: both hands in front of the chest, elbows bent, palms forward (the start of the
-#     [ES Fig. 9 alpha] push, which stays within reach 0.25 m further on); hand sites (rarm_end,
-#     larm_end) at x = 0.300 / 0.309, y = -/+0.37, z = 1.00 m; the foremost hand geoms (fixed jaws)
-#     at about x = 0.35 m.
-#   REACH_LEFT_DEG: left hand at the side at shoulder height pointing left, upper arm 60 deg below the
-#     horizontal, elbow bent 120 deg in the vertical y-z plane (upper arm twisted 90 deg), wrist 60 deg: the
-#     start of the [ES Fig. 9 beta] push; larm_end at (0.040, 0.693, 1.211) m, the outermost geom (fixed
-#     jaw) at y = 0.725 m. REACH_LEFT_STRETCHED_DEG, the same arm stretched sideways, is the end of that push:
-#     larm_end 0.25 m further left at y = 0.943 m (the farthest the left hand reaches), the same x and z.
-# [ES] gives no wall distance. The front wall is 0.05 m beyond the foremost hand geom (contact after 0.05 m of
-# the 0.25 m push, 0.20 m pressed into the wall): at 0.10 m the robot ended tilted back on its heels, propped
-# by its hands, with the COG 2 cm inside the heel edge, and did not fall as the paper's robot did. The left
-# wall is 0.10 m beyond the left hand at the start of the push (0.15 m pressed into it). It used to start from
-# the stretched arm with the wall 0.10 m beyond it: the hand cannot go any further left from there (the
-# setTargetPose of the push fails, 0.23 m out of reach), so the wall was never touched.
-# tests/robot/test_model_files.py checks these numbers.
-
-REACH_FORWARD_DEG = {
-    "RARM_JOINT0": 42.0, "RARM_JOINT1": -10.0, "RARM_JOINT2": -18.6, "RARM_JOINT3": -122.1, "RARM_JOINT4": -19.8,
-    "RARM_JOINT5": -6.5,
-    "LARM_JOINT0": 42.0, "LARM_JOINT1": 10.0, "LARM_JOINT2": 18.6, "LARM_JOINT3": -122.1, "LARM_JOINT4": 19.8,
-    "LARM_JOINT5": -6.5,
-}
-REACH_LEFT_DEG = {"LARM_JOINT0": 0.0, "LARM_JOINT1": 30.0, "LARM_JOINT2": 90.0, "LARM_JOINT3": -120.0,
-                  "LARM_JOINT4": 0.0, "LARM_JOINT5": 60.0}
-REACH_LEFT_STRETCHED_DEG = {"LARM_JOINT0": 0.0, "LARM_JOINT1": 90.0, "LARM_JOINT2": 90.0, "LARM_JOINT3": 0.0,
-                            "LARM_JOINT4": 0.0, "LARM_JOINT5": 0.0}
-FRONT_REACH_CLEARANCE_M = 0.05
-LEFT_REACH_CLEARANCE_M = 0.10
+# The robot stands at the origin facing +x in the `home` keyframe. The walls are placed from the hands of
+# the experiments' reach poses (app/experiments/wall.py, where the poses and the reasoning live):
+# the front wall face 0.05 m beyond the foremost hand geom of REACH_FORWARD_DEG (x = 0.35 m), the left wall
+# face 0.10 m beyond the left hand of REACH_LEFT_DEG (y = 0.725 m). tests/robot/test_model_files.py checks it.
 
 WALL_FRICTION = (0.8, 0.005, 0.0001)
 WALL_THICKNESS_M = 0.1

@@ -9,7 +9,11 @@ import numpy as np
 
 
 def frozen_array(values, shape: tuple[int, ...] | None = None) -> np.ndarray:
-    """A float64 copy of `values` that cannot be written to."""
+    """A float64 copy of `values` that cannot be written to (`values` itself if it already is one: a read-only
+    float64 array owning its data)."""
+    if type(values) is np.ndarray and not values.flags.writeable and values.base is None \
+            and values.dtype == np.float64 and (shape is None or values.shape == shape):
+        return values
     a = np.array(values, dtype=float, copy=True)
     if shape is not None and a.shape != shape:
         raise ValueError(f"expected shape {shape}, got {a.shape}")

@@ -22,7 +22,7 @@ from app.experiments.common import Experiment, ExperimentResult, Rig
 from app.experiments.fig10 import plot_fig10
 from app.service import OperatorService, Refused
 from app.service.local import LocalRobot
-from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, distance_to_polygon_edge, support_polygon
+from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, distance_to_polygon_edge, support_polygon
 
 __all__ = ["EXPERIMENTS", "Experiment", "ExperimentResult", "run_experiment"]
 

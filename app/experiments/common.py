@@ -10,9 +10,9 @@ import numpy as np
 
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from controller.kinematics import RobotKinematics
-from controller.loop import Snapshot
-from controller.rotations import matrix_to_rpy
+from controller.core.loop import Snapshot
+from controller.kinematics.model import RobotKinematics
+from controller.kinematics.rotations import matrix_to_rpy
 from robot.names import joint_index
 from robot.plant import MujocoPlant
 

@@ -15,8 +15,8 @@ import numpy as np
 import pinocchio as pin
 
 from app.experiments.common import Event, Experiment, Rig, pose_with
-from controller.errors import InvalidCommand
-from controller.kinematics import RobotKinematics
+from controller.core.errors import InvalidCommand
+from controller.kinematics.model import RobotKinematics
 from robot.generate import DOOR_FACE_X_M, DOOR_HINGE_Y_M, DOOR_KNOB_M
 from robot.names import JOINT_GROUPS, joint_index
 

@@ -37,10 +37,10 @@ import pinocchio as pin
 
 from app.experiments.common import Event, Experiment, Rig
 from app.service.verbs import Footstep
-from controller.errors import InvalidCommand
-from controller.footsteps import FootstepParams
-from controller.gait_generator import GaitParams
-from controller.rotations import rpy_to_matrix
+from controller.core.errors import InvalidCommand
+from controller.kinematics.rotations import rpy_to_matrix
+from controller.walking.footsteps import FootstepParams
+from controller.walking.gait_generator import GaitParams
 from robot.generate import (
     FINGER_PAD_DEPTH_M,
     FINGER_PAD_RADIUS_M,

@@ -101,7 +101,7 @@ def get_es_params(service: ServiceDep) -> dict[str, Any]:
 
 
 def _es_body() -> dict[str, Any]:
-    from controller.system import layer_params_classes
+    from controller.core.system import layer_params_classes
 
     classes = layer_params_classes()
     schema = changes_json_schema({name: (classes[layer], field) for name, (layer, field) in ES_PARAMS.items()},

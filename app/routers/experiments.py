@@ -24,8 +24,8 @@ from app.schemas import ExperimentInfo, ExperimentList, ExperimentRequest, Exper
 from app.service import InvalidArgument, NotFound, Refused
 from app.service.verbs import typed_changes
 from app.state import jsonable
-from controller.emergency_stopper import EmergencyStopperParams
-from controller.stabilizer import StabilizerParams
+from controller.layers.emergency_stopper import EmergencyStopperParams
+from controller.layers.stabilizer import StabilizerParams
 
 router = APIRouter(prefix="/api/experiments", tags=["experiments"])
 

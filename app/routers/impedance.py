@@ -13,7 +13,7 @@ from app.routers.layers import ChangesBody
 from app.routers.params import params_changes_body, params_document
 from app.schemas import Ok
 from app.service import NotFound
-from controller.impedance_controller import LIMBS, ImpedanceParams
+from controller.layers.impedance_controller import LIMBS, ImpedanceParams
 
 router = APIRouter(prefix="/api/impedance", tags=["impedance"])
 

@@ -23,7 +23,7 @@ ChangesBody = Annotated[dict[str, Any], Body(
 
 
 def _add_routes(router: APIRouter, segment: str, layer: str, label: str) -> None:
-    from controller.system import layer_params_classes
+    from controller.core.system import layer_params_classes
 
     base = f"/{segment}"
     body = params_changes_body(layer_params_classes()[layer])

@@ -13,7 +13,7 @@ from app.deps import ServiceDep
 from app.errors import errors
 from app.service import InvalidArgument
 from app.state import jsonable
-from controller.layer import Params
+from controller.core.layer import Params
 
 _JSON_TYPES = {float: "number", int: "integer", bool: "boolean", str: "string"}
 
@@ -65,8 +65,8 @@ def get_all_params(service: ServiceDep) -> dict[str, dict[str, Any]]:
 
 def _all_owners() -> dict[str, type[Params]]:
     """Every parameter owner of the chain this console builds, and its Params class."""
-    from controller.impedance_controller import LIMBS, ImpedanceParams
-    from controller.system import layer_params_classes
+    from controller.core.system import layer_params_classes
+    from controller.layers.impedance_controller import LIMBS, ImpedanceParams
 
     return {**layer_params_classes(), **{f"ic:{limb}": ImpedanceParams for limb in LIMBS}}
 

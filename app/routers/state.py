@@ -13,8 +13,8 @@ from fastapi.responses import PlainTextResponse, Response
 from app.deps import ServiceDep, SettingsDep
 from app.errors import errors
 from app.schemas import ConsoleConfig, Health, LoopTimingResponse
+from app.service.data_logger import csv_header
 from app.state import state_model
-from controller.data_logger import csv_header
 
 router = APIRouter(prefix="/api", tags=["state"])
 

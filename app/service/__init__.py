@@ -46,10 +46,10 @@ from app.service.verbs import (
     WalkEmergencyStop,
     WalkStop,
 )
-from controller.footsteps import StepParams
-from controller.layer import Params
-from controller.loop import Snapshot
-from controller.loop_timing import LoopTiming
+from controller.core.layer import Params
+from controller.core.loop import Snapshot
+from controller.core.loop_timing import LoopTiming
+from controller.walking.footsteps import StepParams
 
 __all__ = ["InvalidArgument", "NotFound", "OperatorService", "Refused", "RobotBackend", "ServiceError",
            "Unavailable"]

@@ -11,14 +11,14 @@ from typing import Any
 
 import numpy as np
 
+from app.service.data_logger import DataLogger
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
 from app.service.verbs import RobotInfo, Verb
-from controller.data_logger import DataLogger
-from controller.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
-from controller.layer import Params
-from controller.loop import Snapshot
-from controller.loop_timing import LoopTiming
-from controller.system import ControllerSystem
+from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
+from controller.core.layer import Params
+from controller.core.loop import Snapshot
+from controller.core.loop_timing import LoopTiming
+from controller.core.system import ControllerSystem
 from robot.names import JOINT_NAMES
 from robot.plant import MujocoPlant, available_scenes
 

@@ -23,10 +23,10 @@ from typing import Any
 import numpy as np
 
 from app.service.board import Board, attach
+from app.service.data_logger import DataLogger
 from app.service.errors import ServiceError, Unavailable
 from app.service.host import EstopAck, Published, RobotHost
 from app.service.verbs import GetInfo, Reset, RobotInfo, Shutdown, Verb
-from controller.data_logger import DataLogger
 
 log = logging.getLogger(__name__)
 

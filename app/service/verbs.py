@@ -18,9 +18,9 @@ from typing import TYPE_CHECKING, Any, ClassVar
 import numpy as np
 
 from app.service.errors import InvalidArgument, NotFound
-from controller.errors import InvalidCommand
-from controller.footsteps import StepParams
-from controller.layer import Params
+from controller.core.errors import InvalidCommand
+from controller.core.layer import Params
+from controller.walking.footsteps import StepParams
 
 if TYPE_CHECKING:
     from app.service.host import RobotHost

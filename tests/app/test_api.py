@@ -5,9 +5,10 @@ import math
 import numpy as np
 import pytest
 
+from robot.generate import half_sitting_deg
 from robot.names import JOINT_NAMES, joint_index
 
-HALF_SITTING_DEG = [0, 0, -26, 50, -24, 0] * 2 + [0, 0, 0, 0] + [15, -10, 0, -30, 0, 0, 10] + [15, 10, 0, -30, 0, 0, 10]
+HALF_SITTING_DEG = list(half_sitting_deg())
 RARM0 = joint_index("RARM_JOINT0")
 
 
@@ -96,7 +97,7 @@ def test_joint_angles_by_list_move_the_commanded_joints(client, runtime):
 
 def rarm_in_body(runtime, q_rad):
     """rarm_end position [m] and rpy [deg] in the BODY frame for joint angles q_rad."""
-    from controller.rotations import matrix_to_rpy
+    from controller.kinematics.rotations import matrix_to_rpy
 
     kin = runtime.system.kin
     kin.update_rpy(np.zeros(3), np.zeros(3), np.asarray(q_rad))

@@ -5,8 +5,8 @@ import math
 
 import pytest
 
-from controller.emergency_stopper import EmergencyStopperParams
-from controller.stabilizer import EMERGENCY_MODES, StabilizerParams
+from controller.layers.emergency_stopper import EmergencyStopperParams
+from controller.layers.stabilizer import EMERGENCY_MODES, StabilizerParams
 
 URL = "/api/emergency-stopper/params"
 WARM_UP_S = 2.5  # AutoBalancer and Stabilizer blended in

@@ -2,7 +2,7 @@
 
 import pytest
 
-from controller.impedance_controller import LIMBS, ImpedanceParams
+from controller.layers.impedance_controller import LIMBS, ImpedanceParams
 
 
 def step(runtime, seconds):

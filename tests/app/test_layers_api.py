@@ -2,8 +2,8 @@
 
 import pytest
 
-from controller.auto_balancer import AutoBalancerParams
-from controller.stabilizer import StabilizerParams
+from controller.layers.auto_balancer import AutoBalancerParams
+from controller.layers.stabilizer import StabilizerParams
 
 
 def step(runtime, seconds):

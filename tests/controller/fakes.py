@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from controller.types import Estimate, TickContext
+from controller.core.types import Estimate, TickContext
 from robot.sensors import Sensors
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import robot.generate as gen
+from app.experiments import wall as wall_experiment
 from robot.names import MODEL_DIR
 from robot.plant import SCENES, MujocoPlant, available_scenes
 
@@ -103,7 +104,7 @@ def test_wall_faces_are_where_documented():
 
 def test_forward_reach_touches_the_front_wall_early_in_a_0_25_m_push():
     plant = MujocoPlant("wall")
-    m, d = _pose(plant, gen.REACH_FORWARD_DEG)
+    m, d = _pose(plant, wall_experiment.REACH_FORWARD_DEG)
     wall = m.geom("front_wall").id
     face_x = gen.FRONT_WALL_X_M
     for side in ("rarm", "larm"):
@@ -112,18 +113,19 @@ def test_forward_reach_touches_the_front_wall_early_in_a_0_25_m_push():
         geoms = _arm_geoms(m, side)
         assert all(_collides(m, g, wall) for g in geoms)
         gap = _min_distance(m, d, geoms, wall)
-        assert gap == pytest.approx(gen.FRONT_REACH_CLEARANCE_M, abs=0.02)  # contact after ~0.05 m of 0.25 m
+        # contact after ~0.05 m of the 0.25 m push
+        assert gap == pytest.approx(wall_experiment.FRONT_REACH_CLEARANCE_M, abs=0.02)
         hand_geoms = [g for g in geoms if m.body(m.geom_bodyid[g]).name.endswith(("LINK5", "LINK6"))]
         assert _min_distance(m, d, hand_geoms, wall) == pytest.approx(gap)  # the hand touches first
 
 
 def test_left_reach_touches_the_left_wall_early_in_a_0_25_m_push():
     plant = MujocoPlant("wall")
-    m, d = _pose(plant, gen.REACH_LEFT_DEG)
+    m, d = _pose(plant, wall_experiment.REACH_LEFT_DEG)
     wall = m.geom("left_wall").id
     assert 0.05 < gen.LEFT_WALL_Y_M - d.site("larm_end").xpos[1] < 0.25
     gap = _min_distance(m, d, _arm_geoms(m, "larm"), wall)
-    assert gap == pytest.approx(gen.LEFT_REACH_CLEARANCE_M, abs=0.02)
+    assert gap == pytest.approx(wall_experiment.LEFT_REACH_CLEARANCE_M, abs=0.02)
 
 
 @pytest.mark.parametrize("scene", ["wall", "valve", "door"])

@@ -168,7 +168,7 @@ def test_stereo_baseline_is_horizontal(mj):
 
 def test_the_controllers_sole_rectangles_match_the_model_sole_boxes():
     """The Stabilizer's support polygon is the simulated sole, not the mesh outline."""
-    from controller.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
+    from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
 
     m = mujoco.MjModel.from_xml_path(str(MJCF_ROBOT))
     for geom, rect in (("rleg_sole", HRP2_RIGHT_SOLE), ("lleg_sole", HRP2_LEFT_SOLE)):

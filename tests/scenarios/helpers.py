@@ -5,14 +5,12 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from controller.system import ControllerSystem
+from controller.core.system import ControllerSystem
+from robot.generate import half_sitting_deg
 from robot.names import JOINT_NAMES, joint_index
 from robot.plant import MujocoPlant
 
-HALF_SITTING_DEG = np.array(
-    [0, 0, -26, 50, -24, 0] * 2 + [0, 0, 0, 0] + [15, -10, 0, -30, 0, 0, 10] + [15, 10, 0, -30, 0, 0, 10],
-    dtype=float,
-)
+HALF_SITTING_DEG = np.array(half_sitting_deg(), dtype=float)
 
 
 def pose_deg(**changes: float) -> np.ndarray:

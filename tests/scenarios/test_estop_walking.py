@@ -15,8 +15,8 @@ import pytest
 
 from app.service import OperatorService, Refused
 from app.service.local import LocalRobot
-from controller.rotations import matrix_to_rpy, quat_wxyz_to_matrix
-from controller.stabilizer import StabilizerParams
+from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
+from controller.layers.stabilizer import StabilizerParams
 
 THRESHOLD_M = StabilizerParams().cp_threshold_m
 HOLD_S = 3.0

@@ -138,8 +138,8 @@ def test_standing_thirty_seconds_with_the_chain_does_not_drift():
 
 def test_set_target_pose_reaches_the_joint_angles_that_produced_the_pose():
     # hrpsys-notes 3.5 case 11: read LARM's end pose at two elbow angles, command those poses back
-    from controller.kinematics import RobotKinematics
-    from controller.rotations import matrix_to_rpy
+    from controller.kinematics.model import RobotKinematics
+    from controller.kinematics.rotations import matrix_to_rpy
 
     system = make_system()
     loop = system.loop

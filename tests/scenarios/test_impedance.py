@@ -57,7 +57,7 @@ def test_starting_and_stopping_never_jumps_a_joint_command_by_half_a_degree():
 def test_no_force_no_deviation_and_wrong_start_stop_are_invalid_states():
     import pytest
 
-    from controller.errors import InvalidState
+    from controller.core.errors import InvalidState
 
     system = make_system()
     loop = system.loop

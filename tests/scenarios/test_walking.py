@@ -4,7 +4,7 @@ turning, goVelocity, toe-heel footsteps; the body stays upright (|roll|, |pitch|
 import numpy as np
 import pytest
 
-from controller.footsteps import StepParams
+from controller.walking.footsteps import StepParams
 from tests.scenarios.helpers import make_system
 
 MAX_TILT_DEG = 5.0
@@ -126,7 +126,7 @@ def test_footsteps_with_toe_20_and_heel_10_degrees_walk_upright():
 
 
 def test_walking_commands_need_a_running_auto_balancer_and_say_so():
-    from controller.errors import InvalidState
+    from controller.core.errors import InvalidState
 
     w = Walker()
     w.call(lambda: w.abc.stop())

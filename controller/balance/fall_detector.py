@@ -1,0 +1,66 @@
+"""Fall detection from the robot's own sensors (KalmanFilter attitude, foot F/T sensors): the loop's
+trigger for the safe stop when the robot has fallen or left the ground."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from controller.core.layer import Params
+from robot.names import FORCE_SENSOR_NAMES
+
+_FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
+
+
+@dataclass(frozen=True)
+class FallDetectorParams(Params):
+    # A standing or walking HRP-2 tilts a few degrees; a robot past 30 deg cannot be caught by the ankles
+    # (its capture point is far outside any support polygon), so that is a fall.
+    max_tilt_deg: float = field(default=30.0, metadata={"unit": "deg", "min": 5.0, "max": 90.0})
+    # Feet carrying less than this share of the weight for unloaded_time_s: lying down, or lifted.
+    min_load_ratio: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 1.0})
+    unloaded_time_s: float = field(default=0.3, metadata={"unit": "s", "min": 0.0, "max": 10.0})
+
+
+class FallDetector:
+    """`update(rpy_rad, foot_fz_n, dt_s)` each tick; `reason` is None until a fall is detected, then the
+    first reason ("tilt ..." or "feet unloaded ..."), latched until `reset()`."""
+
+    def __init__(self, weight_n: float, params: FallDetectorParams | None = None) -> None:
+        self.params = params or FallDetectorParams()
+        self.weight_n = float(weight_n)
+        self.reason: str | None = None
+        self._unloaded_s = 0.0
+
+    @property
+    def fallen(self) -> bool:
+        return self.reason is not None
+
+    def update(self, roll_rad: float, pitch_rad: float, foot_fz_n: float, dt_s: float) -> str | None:
+        """Feed one tick of estimated attitude and the summed vertical force on the feet [N]; returns the
+        reason once fallen."""
+        if self.reason is not None:
+            return self.reason
+        p = self.params
+        # angle between BODY's z axis and the vertical for roll-pitch-yaw attitudes
+        tilt = math.degrees(math.acos(max(-1.0, min(1.0, math.cos(roll_rad) * math.cos(pitch_rad)))))
+        if tilt > p.max_tilt_deg:
+            self.reason = f"tilt {tilt:.0f} deg > {p.max_tilt_deg:g} deg (KalmanFilter attitude)"
+            return self.reason
+        if foot_fz_n < p.min_load_ratio * self.weight_n:
+            self._unloaded_s += dt_s
+            if self._unloaded_s >= p.unloaded_time_s:
+                self.reason = (f"feet unloaded: {foot_fz_n:.0f} N < {p.min_load_ratio:g} x weight for "
+                               f"{self._unloaded_s:.2f} s")
+        else:
+            self._unloaded_s = 0.0
+        return self.reason
+
+    def reset(self) -> None:
+        self.reason = None
+        self._unloaded_s = 0.0
+
+
+def foot_load_n(wrenches_ext_sensor) -> float:
+    """Summed vertical force [N] the feet's F/T sensors read (sensor frame z, after offset removal)."""
+    return float(wrenches_ext_sensor[_FEET[0]][2] + wrenches_ext_sensor[_FEET[1]][2])

@@ -1,0 +1,111 @@
+"""Actual COG and ZMP from encoders, the KalmanFilter attitude and the foot F/T sensors."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controller.core.types import Estimate, Reference, read_only
+from controller.kinematics.model import RobotKinematics
+from robot.names import FORCE_SENSOR_NAMES
+
+FOOT_SENSORS = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
+CONTACT_FZ_N = 20.0  # a foot carrying less than this is not in contact
+# the foot rows of the per-sensor arrays (a slice when they are adjacent: a view, no copy)
+_FEET = (slice(FOOT_SENSORS[0], FOOT_SENSORS[1] + 1) if FOOT_SENSORS[1] == FOOT_SENSORS[0] + 1
+         else list(FOOT_SENSORS))
+_EQUAL_WEIGHTS = np.array([0.5, 0.5])
+read_only(_EQUAL_WEIGHTS)
+
+
+def zmp_from_foot_wrenches(pos_world: np.ndarray, wrench_world: np.ndarray, z0: float,
+                           min_fz: float = CONTACT_FZ_N) -> np.ndarray | None:
+    """ZMP on the plane z = z0 from per-foot wrenches at the sensor origins (world axes).
+
+    pos_world (n, 3), wrench_world (n, 6) = [f, tau]; feet with fz < min_fz are ignored.
+    Returns None when no foot carries load.
+    """
+    num_x = num_y = fz_sum = 0.0
+    pos = pos_world.tolist() if isinstance(pos_world, np.ndarray) else pos_world
+    wrenches = wrench_world.tolist() if isinstance(wrench_world, np.ndarray) else wrench_world
+    for p, w in zip(pos, wrenches, strict=True):
+        f0, f1, f2, tau0, tau1 = w[0], w[1], w[2], w[3], w[4]
+        if f2 < min_fz:
+            continue
+        dz = p[2] - z0
+        num_x += p[0] * f2 - tau1 - dz * f0
+        num_y += p[1] * f2 + tau0 - dz * f1
+        fz_sum += f2
+    if fz_sum <= 0.0:
+        return None
+    return np.array([num_x / fz_sum, num_y / fz_sum, z0])
+
+
+class ActualStateEstimator:
+    """Places the measured robot in the world by anchoring the loaded soles where the reference puts them
+    (a support foot does not slip), then reads COG and ZMP off it. No simulator ground truth is used."""
+
+    def __init__(self, kinematics: RobotKinematics) -> None:
+        self.kin = kinematics
+        self.last_zmp = np.zeros(3)
+        self.base_pos_world = np.zeros(3)  # where the anchoring put BODY [m]
+        self._soles_key: tuple[bytes, bytes, bytes] | None = None  # the reference posture of _soles
+        self._soles: np.ndarray | None = None
+
+    def reference_soles(self, ref: Reference) -> np.ndarray:
+        """World positions of the two sole sensors in the reference posture, (2, 3), read-only.
+
+        Forward kinematics only when the reference posture changed (a standing reference does not)."""
+        key = (ref.base_pos_world.tobytes(), ref.base_rpy_rad.tobytes(), ref.q_rad.tobytes())
+        if key != self._soles_key:
+            self.kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
+            soles = np.array([self.kin.frame_pose(FORCE_SENSOR_NAMES[i])[0] for i in FOOT_SENSORS])
+            read_only(soles)
+            self._soles, self._soles_key = soles, key
+        return self._soles
+
+    def __call__(self, sensors, est: Estimate, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
+        if ref.gait is not None:  # the AutoBalancer says where the soles are meant to be
+            # hrpsys's actual foot-origin frame: the feet mid-point when both are meant to be down,
+            # otherwise the planned support foot (deterministic switches, no Fz chatter)
+            return self._with_gait(est, ref.gait)
+        # the soles weighted by their measured load (equal weights when hardly loaded). The two weighted
+        # sums stay numpy dot products: the same roundings as ever (numpy fuses the multiply-add)
+        ref_soles = self.reference_soles(ref)
+        meas_soles = est.sensor_pos_from_base[_FEET]
+        rows = est.wrenches_ext_world.tolist()
+        foot_wrenches = [rows[i] for i in FOOT_SENSORS]
+        fz0, fz1 = max(foot_wrenches[0][2], 0.0), max(foot_wrenches[1][2], 0.0)  # np.clip(fz, 0.0, None)
+        fz_sum = fz0 + fz1
+        w = np.array((fz0 / fz_sum, fz1 / fz_sum)) if fz_sum > 2 * CONTACT_FZ_N else _EQUAL_WEIGHTS
+        offset = w @ (ref_soles - meas_soles)
+        self.base_pos_world = offset
+        cog = est.com_from_base + offset
+        soles = meas_soles + offset
+        zmp = zmp_from_foot_wrenches(soles, foot_wrenches, float(w @ soles[:, 2]))
+        if zmp is not None:
+            self.last_zmp = zmp
+        return read_only(cog), read_only(self.last_zmp.copy())  # published in the snapshot as they are
+
+    def _with_gait(self, est: Estimate, gait) -> tuple[np.ndarray, np.ndarray]:
+        """__call__ with a gait reference, on Python floats (same maths)."""
+        (rx, ry, rz), (lx, ly, lz) = gait.p_rsole_world.tolist(), gait.p_lsole_world.tolist()  # planned
+        pos = est.sensor_pos_from_base.tolist()
+        (mrx, mry, mrz), (mlx, mly, mlz) = pos[FOOT_SENSORS[0]], pos[FOOT_SENSORS[1]]  # measured, from BODY
+        right_down, left_down = gait.contact
+        c0, c1 = (1.0 if right_down else 0.0), (1.0 if left_down else 0.0)
+        csum = c0 + c1
+        w0, w1 = (c0 / csum, c1 / csum) if csum > 0 else (0.5, 0.5)
+        # BODY offset: the weighted mean of planned minus measured soles (x, y, z written out)
+        ox = w0 * (rx - mrx) + w1 * (lx - mlx)
+        oy = w0 * (ry - mry) + w1 * (ly - mly)
+        oz = w0 * (rz - mrz) + w1 * (lz - mlz)
+        self.base_pos_world = np.array((ox, oy, oz))
+        cx, cy, cz = est.com_from_base.tolist()
+        cog = np.array((cx + ox, cy + oy, cz + oz))
+        soles = ((mrx + ox, mry + oy, mrz + oz), (mlx + ox, mly + oy, mlz + oz))
+        wrenches = est.wrenches_ext_world.tolist()
+        zmp = zmp_from_foot_wrenches(soles, (wrenches[FOOT_SENSORS[0]], wrenches[FOOT_SENSORS[1]]),
+                                     w0 * soles[0][2] + w1 * soles[1][2])
+        if zmp is not None:
+            self.last_zmp = zmp
+        return read_only(cog), read_only(self.last_zmp.copy())  # published in the snapshot as they are

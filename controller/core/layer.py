@@ -1,0 +1,142 @@
+"""The one shape every layer of the chain has: tick(ctx, ref) -> ref, params, status."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+from controller.core.errors import InvalidCommand
+from controller.core.types import Reference, TickContext
+
+
+@dataclass(frozen=True)
+class Params:
+    """Base of the per-layer frozen parameter dataclasses.
+
+    Subclasses declare fields with defaults and describe unit and range in `metadata`
+    (`field(default=2.5, metadata={"unit": "s", "min": 0.0})`); `validate()` checks them once.
+    """
+
+    def __post_init__(self) -> None:
+        self.validate()
+
+    def validate(self) -> None:
+        for f in dataclasses.fields(self):
+            value = getattr(self, f.name)
+            lo, hi = f.metadata.get("min"), f.metadata.get("max")
+            choices = f.metadata.get("choices")
+            if choices is not None and value not in choices:
+                raise InvalidCommand(f"{type(self).__name__}.{f.name}={value!r}; allowed: {list(choices)}")
+            if isinstance(value, bool) or not isinstance(value, (int, float)):
+                continue
+            if value != value:  # NaN
+                raise InvalidCommand(f"{type(self).__name__}.{f.name} is NaN")
+            if lo is not None and value < lo or hi is not None and value > hi:
+                raise InvalidCommand(
+                    f"{type(self).__name__}.{f.name}={value!r} [{f.metadata.get('unit', '')}] "
+                    f"out of range [{lo}, {hi}]"
+                )
+
+    def replaced(self, **changes: Any):
+        """A validated copy with `changes`; unknown names are rejected with the valid ones listed."""
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise InvalidCommand(f"unknown parameter(s) {unknown} for {type(self).__name__}; valid: {sorted(names)}")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+    def to_json(self) -> str:
+        return json.dumps(self.to_dict())
+
+    @classmethod
+    def describe(cls) -> list[dict[str, Any]]:
+        """Field name, default, unit, range: what a GUI or schema needs to render the parameters."""
+        out = []
+        for f in dataclasses.fields(cls):
+            out.append({"name": f.name, "default": f.default, **dict(f.metadata)})
+        return out
+
+
+def described(doc: str, unit: str | None = None) -> dict[str, str]:
+    """Field metadata of a Status dataclass: what the value is, and its unit ("m", "s", "rad", "N", ...)."""
+    return {"doc": doc} if unit is None else {"doc": doc, "unit": unit}
+
+
+def plain(value: Any) -> Any:
+    """A status value as JSON-shaped Python: dataclasses to dicts, tuples to lists (no deep copies of leaves)."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
+    if isinstance(value, (tuple, list)):
+        return [plain(v) for v in value]
+    return value
+
+
+@dataclass(frozen=True, slots=True)
+class Status:
+    """Base of the per-layer frozen status dataclasses a layer publishes each tick (in the snapshot).
+
+    Fields hold plain values (bool, int, float, str, None, tuples, nested Status) and declare what they
+    are in `metadata` (`field(metadata=described("capture-point error", "m"))`), so the app can generate
+    the response schema of /api/state from them without per-field code.
+    """
+
+    enabled: bool = field(metadata=described("the layer works; false: it passes its input through"))
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as plain dicts and lists, nested status dataclasses included."""
+        return plain(self)
+
+    @classmethod
+    def describe(cls) -> list[dict[str, Any]]:
+        """Field name, type, unit and description: what a schema generator needs."""
+        return [{"name": f.name, "type": f.type, **dict(f.metadata)} for f in dataclasses.fields(cls)]
+
+
+class SharedStatus:
+    """A piece of a status() dict rebuilt only when its key changes, so consecutive snapshots share one
+    object while it stays the same (every list a snapshot keeps is work for the garbage collector).
+    Readers of a snapshot must not modify it."""
+
+    __slots__ = ("_key", "_value")
+    _UNSET = object()
+
+    def __init__(self) -> None:
+        self._key: Any = SharedStatus._UNSET
+        self._value: Any = None
+
+    def get(self, key: Any, build: Callable[[], Any]) -> Any:
+        if key != self._key:
+            self._value = build()
+            self._key = key
+        return self._value
+
+
+class Layer:
+    """A stage of the real-time chain.
+
+    `tick` reads the measured state in `ctx` and the upstream reference and returns the reference for
+    the next layer. A disabled layer returns its input unchanged (hrpsys `qRef -> q`).
+    Commands are plain methods, called only by the loop at a tick boundary.
+    """
+
+    name: ClassVar[str] = "layer"
+    description: ClassVar[str] = ""
+
+    def __init__(self) -> None:
+        self.enabled = True
+
+    def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        raise NotImplementedError
+
+    def status(self) -> Status:
+        """The layer's frozen Status (a subclass per layer), published in every snapshot."""
+        return Status(enabled=self.enabled)
+
+    def reset(self, ctx: TickContext, ref: Reference) -> None:  # noqa: B027 - optional hook
+        """Re-initialise internal state from the current measured state and reference."""

@@ -1,0 +1,1 @@
+"""Interpolation: Hoff-Arbib minimum-jerk trajectories and the start/stop blend."""

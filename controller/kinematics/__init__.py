@@ -1,0 +1,1 @@
+"""Kinematics and IK: the robot model (pinocchio), closed-form leg IK, whole-body IK, rotations."""

@@ -1,0 +1,143 @@
+"""The controller's kinematic model of HRP-2 (pinocchio on the URDF): frames, COM, subtree masses, IK."""
+
+from __future__ import annotations
+
+import numpy as np
+import pinocchio as pin
+
+from controller.core.errors import InvalidCommand, UnknownName, Unreachable
+from controller.kinematics.rotations import rpy_to_matrix
+from robot.names import (
+    END_EFFECTORS,
+    FORCE_SENSOR_NAMES,
+    FORCE_SENSORS,
+    JOINT_GROUPS,
+    JOINT_NAMES,
+    URDF,
+)
+
+#: Which limb group each end effector moves.
+LIMB_OF_GROUP = {"rarm": "rarm", "larm": "larm", "rleg": "rleg", "lleg": "lleg"}
+
+
+class RobotKinematics:
+    """Pinocchio model with a free-flyer base; joint vectors are in JOINT_NAMES order.
+
+    The URDF carries the sensor and end-effector frames (same names and places as the MJCF sites)."""
+
+    def __init__(self, urdf_path=URDF) -> None:
+        self.model = pin.buildModelFromUrdf(str(urdf_path), pin.JointModelFreeFlyer())
+        self.data = self.model.createData()
+        self.total_mass = float(sum(i.mass for i in self.model.inertias))
+        self.idx_q = np.array([self.model.joints[self.model.getJointId(n)].idx_q for n in JOINT_NAMES])
+        self.idx_v = np.array([self.model.joints[self.model.getJointId(n)].idx_v for n in JOINT_NAMES])
+        self.q_lower = self.model.lowerPositionLimit[self.idx_q].copy()
+        self.q_upper = self.model.upperPositionLimit[self.idx_q].copy()
+        self.frame_ids = {name: self.model.getFrameId(name)
+                          for name in (*END_EFFECTORS.values(), *FORCE_SENSOR_NAMES, "BODY")}
+        self.sensor_frame_ids = np.array([self.frame_ids[s] for s in FORCE_SENSOR_NAMES])
+        # the joint whose subtree hangs below each sensor (pinocchio keeps subtree masses and COMs)
+        self._below_joint = {sensor: self.model.frames[self.model.getFrameId(link)].parentJoint
+                             for sensor, link in FORCE_SENSORS.items()}
+        self.q = pin.neutral(self.model)
+        self._neutral = pin.neutral(self.model)
+
+    # ---- configuration ------------------------------------------------------------------------
+    def configuration(self, base_pos_world, base_R_world, q_rad) -> np.ndarray:
+        q = self._neutral.copy()
+        q[:3] = base_pos_world
+        q[3:7] = pin.Quaternion(np.asarray(base_R_world)).coeffs()  # x, y, z, w
+        q[self.idx_q] = q_rad
+        return q
+
+    def update(self, base_pos_world, base_R_world, q_rad) -> None:
+        """Forward kinematics, frame placements and COM for this configuration."""
+        self.q = self.configuration(base_pos_world, base_R_world, q_rad)
+        pin.forwardKinematics(self.model, self.data, self.q)
+        pin.updateFramePlacements(self.model, self.data)
+        # from the placements just computed (same result as passing q, without a second forward pass)
+        pin.centerOfMass(self.model, self.data, pin.KinematicLevel.POSITION, True)  # True: subtree COMs too
+
+    def update_rpy(self, base_pos_world, base_rpy_rad, q_rad) -> None:
+        self.update(base_pos_world, rpy_to_matrix(base_rpy_rad), q_rad)
+
+    def update_joints_rpy(self, base_pos_world, base_rpy_rad, q_rad) -> None:
+        """update_rpy without the frame placements: joint placements and COMs only; read frames with
+        `frame_homogeneous` (the same placement updateFramePlacements computes, for the frames needed)."""
+        self.q = self.configuration(base_pos_world, rpy_to_matrix(base_rpy_rad), q_rad)
+        pin.forwardKinematics(self.model, self.data, self.q)
+        pin.centerOfMass(self.model, self.data, pin.KinematicLevel.POSITION, True)  # True: subtree COMs too
+
+    def frame_homogeneous(self, frame_id: int) -> np.ndarray:
+        """(4, 4) world <- frame after update_joints_rpy (the frame's placement is updated in data.oMf)."""
+        return pin.updateFramePlacement(self.model, self.data, frame_id).homogeneous
+
+    # ---- queries on the last update -------------------------------------------------------------
+    def com_world(self) -> np.ndarray:
+        return self.data.com[0].copy()
+
+    def frame_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """(position (3,), rotation (3,3)) of a frame in the world."""
+        fid = self.frame_ids.get(name)
+        if fid is None:
+            if not self.model.existFrame(name):
+                raise InvalidCommand(f"unknown frame {name!r}; known: {sorted(self.frame_ids)}")
+            fid = self.frame_ids[name] = self.model.getFrameId(name)
+        M = self.data.oMf[fid]
+        return M.translation.copy(), M.rotation.copy()
+
+    def mass_below(self, sensor: str) -> tuple[float, np.ndarray]:
+        """Mass [kg] and world COM [m] of the links below a force sensor."""
+        j = self._below_joint[sensor]
+        return float(self.data.mass[j]), self.data.com[j].copy()
+
+    # ---- inverse kinematics ---------------------------------------------------------------------
+    def limb_ik(self, group: str, q_init_rad, base_pos_world, base_rpy_rad, target_pos, target_R,
+                frame: str | None = None, max_iter: int = 50, pos_tol_m: float = 1e-4,
+                rot_tol_rad: float = 1e-3, best_effort: bool = False) -> np.ndarray:
+        """Move only `group`'s joints so its end effector reaches the target (hrpsys setTargetPose).
+
+        `frame` None: target in the world; otherwise in that link's frame (e.g. "BODY").
+        Damped least squares, joint limits enforced; raises InvalidCommand if it does not converge,
+        unless `best_effort`, which returns the closest posture it found. Afterwards only the joint
+        placements and the end-effector frame of the returned posture are up to date (not all frames).
+        """
+        if group not in LIMB_OF_GROUP:
+            raise InvalidCommand(
+                f"setTargetPose group {group!r} has no end effector; valid: {sorted(LIMB_OF_GROUP)}")
+        ee = END_EFFECTORS[LIMB_OF_GROUP[group]]
+        q_rad = np.array(q_init_rad, dtype=float)
+        base_R = rpy_to_matrix(base_rpy_rad)
+        self.update(base_pos_world, base_R, q_rad)
+        target = pin.SE3(np.asarray(target_R, dtype=float), np.asarray(target_pos, dtype=float))
+        if frame is not None:
+            if not self.model.existFrame(frame):
+                raise UnknownName(f"unknown frame {frame!r}; e.g. BODY, CHEST_LINK1")
+            target = self.data.oMf[self.model.getFrameId(frame)] * target
+        idx = np.array(JOINT_GROUPS[group])
+        cols = self.idx_v[idx]
+        fid = self.model.getFrameId(ee)
+        best_q, best_err = q_rad.copy(), np.inf  # the closest iterate, for best_effort
+        model, data = self.model, self.data
+        for _ in range(max_iter):
+            # one kinematic pass per iteration: joint placements and Jacobians, then the end-effector frame
+            self.q = self.configuration(base_pos_world, base_R, q_rad)
+            pin.computeJointJacobians(model, data, self.q)
+            M = pin.updateFramePlacement(model, data, fid)
+            err = pin.log6(M.actInv(target)).vector  # in the local frame
+            if np.linalg.norm(err[:3]) < pos_tol_m and np.linalg.norm(err[3:]) < rot_tol_rad:
+                return q_rad
+            err_norm = float(np.linalg.norm(err))
+            if err_norm < best_err:
+                best_q[:], best_err = q_rad, err_norm
+            J = pin.getFrameJacobian(model, data, fid, pin.LOCAL)[:, cols]
+            lam = 1e-4
+            dq = J.T @ np.linalg.solve(J @ J.T + lam * np.eye(6), err)
+            q_rad[idx] = np.clip(q_rad[idx] + dq, self.q_lower[idx], self.q_upper[idx])
+        if best_effort:
+            return best_q
+        raise Unreachable(
+            f"setTargetPose: {group} cannot reach the target "
+            f"(residual {np.linalg.norm(err[:3]) * 1e3:.1f} mm, "
+            f"{np.rad2deg(np.linalg.norm(err[3:])):.2f} deg) within joint limits"
+        )

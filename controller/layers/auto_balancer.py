@@ -1,0 +1,318 @@
+"""AutoBalancer layer ([MLC] III-C): footsteps and reference ZMP from the gait planner, COG by preview
+control (Eq. 5), COG offset against hand forces (Eq. 6), whole-body IK with feet, COG X-Y, base height
+and orientation; when not walking it keeps the COG over the feet while the upper body moves."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pinocchio as pin
+
+from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
+from controller.balance.hand_force_cog_offset import cog_offset_against_hand_forces
+from controller.core.constants import GRAVITY_M_S2
+from controller.core.errors import InvalidState
+from controller.core.layer import Layer, Params, Status, described
+from controller.core.types import GaitState, Reference, TickContext, read_only
+from controller.interpolation.hoff_arbib import hoff_arbib
+from controller.kinematics.fullbody_ik import FullbodyIK
+from controller.kinematics.model import RobotKinematics
+from controller.kinematics.rotations import rpy_to_rows
+from controller.walking.footsteps import StepParams
+from controller.walking.gait_generator import GaitGenerator, GaitParams
+from controller.walking.preview_control import PreviewController, PreviewControlParams
+from controller.walking.toe_heel import ToeHeelParams
+from robot.names import FORCE_SENSOR_NAMES
+
+HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
+REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this far inside the sole
+FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
+#: [N] a swing foot reading more has touched down (the Stabilizer's contact threshold)
+SWING_FOOT_LOADED_N = 25.0
+
+
+@dataclass(frozen=True)
+class AutoBalancerParams(Params):
+    transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
+    use_hand_force_offset: bool = field(default=True, metadata={"unit": "-"})
+    preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6})
+    preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0})
+
+
+@dataclass(frozen=True, slots=True)
+class FootstepStatus:
+    """A planned footstep not landed yet, world frame."""
+
+    leg: str = field(metadata=described("'rleg' or 'lleg'"))
+    pos: tuple[float, float, float] = field(metadata=described("sole position", "m"))
+    rpy: tuple[float, float, float] = field(metadata=described("sole roll, pitch, yaw", "rad"))
+    step_time_s: float = field(metadata=described("duration of the step", "s"))
+    step_height_m: float = field(metadata=described("swing height", "m"))
+
+
+@dataclass(frozen=True, slots=True)
+class AutoBalancerStatus(Status):
+    active: bool = field(metadata=described("the AutoBalancer is running (started)"))
+    weight: float = field(metadata=described("start/stop blend weight, 0..1", "-"))
+    walking: bool = field(metadata=described("a walk is in progress"))
+    support: str = field(metadata=described("support phase: 'both', 'rleg' or 'lleg'"))
+    walking_stop: bool = field(metadata=described("the emergency walking stop is in force (stepping in place)"))
+    has_ik_failed: bool = field(metadata=described("the whole-body IK could not reach its targets this tick"))
+    footsteps: tuple[FootstepStatus, ...] = field(metadata=described("the footsteps not landed yet"))
+
+
+class AutoBalancer(Layer):
+    """Overwrites the legs of the planned posture so the feet follow the gait and the COG follows the
+    preview controller; the upper body keeps the SequencePlayer's angles. Active from the start,
+    blended in over transition_time_s; `stop()` blends back to the plain plan."""
+
+    name = "abc"
+    description = "AutoBalancer: gait, preview-control COG, hand-force offset, whole-body IK"
+
+    def __init__(self, initial: Reference, dt_s: float, params: AutoBalancerParams | None = None,
+                 kinematics: RobotKinematics | None = None, active: bool = True) -> None:
+        super().__init__()
+        self.params = params or AutoBalancerParams()
+        self.dt_s = dt_s
+        self.kin = kinematics or RobotKinematics()
+        self.ik = FullbodyIK(self.kin)
+        self.total_mass = self.kin.total_mass
+        self.kin.update_rpy(initial.base_pos_world, initial.base_rpy_rad, initial.q_rad)
+        T_r, T_l = (_homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
+        # toe and heel edges of HRP-2's sole (the model's sole box), not HRP2-JSKNT's 0.137 / -0.10
+        toe_heel = ToeHeelParams(toe_offset_x_m=HRP2_RIGHT_SOLE.front_m, heel_offset_x_m=-HRP2_RIGHT_SOLE.rear_m)
+        self.gait = GaitGenerator(GaitParams(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l, toe_heel=toe_heel)
+        com = self.kin.com_world()
+        ground_z = 0.5 * (T_r[2, 3] + T_l[2, 3])
+        self.com_height_m = float(com[2] - ground_z)
+        self.preview = PreviewController(PreviewControlParams(
+            dt_s=dt_s, com_height_m=self.com_height_m, q=self.params.preview_q, r=self.params.preview_r))
+        self.preview.reset(self.gait.tick().zmp_world[:2])
+        self._hand_pos = np.zeros((2, 3))
+        self._hand_pos_stale = False  # True once a solve has moved the hands
+        self._hand_frame_ids = [self.kin.model.getFrameId(n) for n in ("rarm_end", "larm_end")]
+        # blend between the plain plan (0) and the balanced posture (1)
+        self.active = False
+        self._weight = 0.0
+        self._blend = None  # (Segment, elapsed)
+        self.has_ik_failed = False
+        self.last_gait: GaitState | None = None
+        self._footsteps_cache: tuple[list, int, list[dict]] | None = None
+        self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
+        self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
+        self._holding = False  # the hard e-stop holds the chain
+        if active:
+            self.start()
+
+    # ---- operations --------------------------------------------------------------------------
+    def start(self) -> None:
+        if self.active:
+            raise InvalidState("AutoBalancer is already active")
+        self.active = True
+        self._blend = [hoff_arbib(np.array([self._weight]), np.array([1.0]), self.params.transition_time_s), 0.0]
+
+    def stop(self) -> None:
+        if not self.active:
+            raise InvalidState("AutoBalancer is not active")
+        self.active = False
+        self._blend = [hoff_arbib(np.array([self._weight]), np.array([0.0]), self.params.transition_time_s), 0.0]
+
+    def set_params(self, params: AutoBalancerParams) -> None:
+        self.params = params
+
+    @property
+    def walking_stop(self) -> bool:
+        """The emergency walking stop is in force: asked for, and the robot still stepping in place."""
+        return self._walking_stop_requested and self.gait.walking
+
+    def _require_active(self, what: str) -> None:
+        if not self.active or self._blend is not None:
+            raise InvalidState(f"{what}: the AutoBalancer must be running (start it first)")
+
+    def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> int:
+        """hrpsys goPos relative to the current feet mid-coords; returns the number of footsteps."""
+        self._require_active("goPos")
+        if self.gait.walking:
+            raise InvalidState("goPos while walking: stop first (goStop) or use goVelocity")
+        self._walking_stop_requested = False
+        return len(self.gait.go_pos(x_m, y_m, theta_rad))
+
+    def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
+        self._require_active("goVelocity")
+        self._walking_stop_requested = False
+        self.gait.go_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
+
+    def go_stop(self) -> None:
+        self.gait.go_stop()
+
+    def emergency_stop_walking(self) -> None:
+        """Remaining footsteps replaced so the robot stops in place (manipulation is left alone)."""
+        self.gait.emergency_stop()
+        self._walking_stop_requested = True
+
+    def set_footsteps(self, footsteps: list[tuple], step_params: list[StepParams | None] | None = None) -> int:
+        """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
+        the current pose of that leg."""
+        self._require_active("setFootSteps")
+        if self.gait.walking:
+            raise InvalidState("setFootSteps while walking is not supported; wait for the steps to finish")
+        self._walking_stop_requested = False
+        return len(self.gait.set_footsteps(footsteps, step_params))
+
+    def remaining_footsteps(self) -> tuple[FootstepStatus, ...]:
+        return tuple(FootstepStatus(leg=f.leg, pos=(f.x, f.y, f.z), rpy=(f.roll, f.pitch, f.yaw),
+                                    step_time_s=f.step_time_s, step_height_m=f.step_height_m)
+                     for f in self.gait.remaining_footsteps())
+
+    # ---- pieces ----------------------------------------------------------------------------------
+    def _hand_force_offset(self, ref: Reference, cog_pc_xy: np.ndarray, zmp_z: float) -> np.ndarray:
+        if not self.params.use_hand_force_offset:
+            return cog_pc_xy
+        rows = ref.wrenches.tolist()
+        if not any(v for i in HANDS for v in rows[i][:3]):
+            return cog_pc_xy
+        f = ref.wrenches[list(HANDS), :3]
+        return cog_offset_against_hand_forces(cog_pc_xy, self.total_mass, self._hand_positions(), f, zmp_z,
+                                              GRAVITY_M_S2)
+
+    def _hand_positions(self) -> np.ndarray:
+        """World hand positions (2, 3) [m] in the last whole-body IK solution (zeros before the first).
+
+        Read when needed, before this tick's solve: until then the kinematic data is the last solve's."""
+        if self._hand_pos_stale:
+            model, data = self.kin.model, self.kin.data
+            for i, fid in enumerate(self._hand_frame_ids):
+                self._hand_pos[i] = pin.updateFramePlacement(model, data, fid).translation
+            self._hand_pos_stale = False
+        return self._hand_pos
+
+    # ---- tick ------------------------------------------------------------------------------------
+    def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        if not self.enabled:  # pass-through
+            self.last_gait = None
+            return ref
+        if ctx.hold and self._last_out is not None:
+            return self._hold()
+        if self._holding:
+            self._resume(ctx)
+        if self._blend is not None:
+            seg, elapsed = self._blend
+            elapsed = min(elapsed + ctx.dt_s, seg.duration_s)
+            self._weight = float(seg.sample(elapsed)[0][0])
+            self._blend = None if elapsed >= seg.duration_s else [seg, elapsed]
+        if self._weight <= 0.0 and not self.active:
+            self.last_gait = None
+            return ref
+        future = self.gait.zmp_preview(self.preview.preview_length)
+        cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
+        g = self.gait.tick()
+        zmp = g.zmp_world
+        cog_abc_xy = self._hand_force_offset(ref, cog_xy, zmp[2])
+        # BODY yaw follows the feet (mean of the two sole yaws); roll and pitch from the plan
+        (r00, _, _), (r10, _, _), _ = g.R_rfoot_world.tolist()
+        (l00, _, _), (l10, _, _), _ = g.R_lfoot_world.tolist()
+        yaw = math.atan2(r10 + l10, r00 + l00)
+        roll, pitch, yaw_in = ref.base_rpy_rad.tolist()
+        base_rpy = np.array((roll, pitch, yaw_in + yaw))
+        R_body = np.array(rpy_to_rows(roll, pitch, yaw_in + yaw))
+        rsole, lsole = (g.p_rfoot_world, g.R_rfoot_world), (g.p_lfoot_world, g.R_lfoot_world)
+        res = self.ik.solve(ref.q_rad, float(ref.base_pos_world[2]), R_body, cog_abc_xy, rsole, lsole)
+        self.has_ik_failed = not res.reachable
+        self._hand_pos_stale = True  # the hands moved with the solve: _hand_positions() reads them if needed
+        com_z = float(res.com_world[2])
+        cog_abc = cog_abc_xy.tolist() if isinstance(cog_abc_xy, np.ndarray) else cog_abc_xy
+        cog_pc = cog_xy.tolist() if isinstance(cog_xy, np.ndarray) else cog_xy
+        gait = GaitState(
+            walking=g.walking, support=g.support, contact=g.contact,
+            p_rsole_world=g.p_rfoot_world, R_rsole_world=g.R_rfoot_world,
+            p_lsole_world=g.p_lfoot_world, R_lsole_world=g.R_lfoot_world,
+            zmp_world=zmp, cog_world=np.array((cog_abc[0], cog_abc[1], com_z)),
+            cog_vel_world=np.array((cog_vel_xy[0], cog_vel_xy[1], 0.0)),
+            cog_pc_world=np.array((cog_pc[0], cog_pc[1], com_z)),
+            cog_acc_world=np.array((cog_acc_xy[0], cog_acc_xy[1], 0.0)),
+        )
+        self.last_gait = gait
+        w = self._weight
+        q = res.q_rad if w >= 1.0 else (1.0 - w) * ref.q_rad + w * res.q_rad
+        base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
+        zmp_base = R_body.T @ (zmp - base)
+        # all fresh arrays of this tick: frozen in place rather than copied
+        self._last_out = ref._with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
+                                         gait=gait)
+        return self._last_out
+
+    def _resume(self, ctx: TickContext) -> None:
+        """Released from the hard e-stop: the robot stood still, so the COG plan restarts from rest where it
+        is; a walk that was cut ends from there, on both feet if the robot tipped onto its swing foot."""
+        self._holding = False
+        self.preview.reset(self.preview.x[0].copy())
+        gait = self._last_out.gait if self._last_out is not None else None
+        if self.gait.walking and gait is not None and gait.support != "both":
+            swing = FEET[0] if gait.support == "lleg" else FEET[1]
+            loaded = float(ctx.estimate.wrenches_ext[swing][2]) > SWING_FOOT_LOADED_N
+            self.gait.stop_from_rest(self._rest_zmp_xy(gait if not loaded else None), swing_foot_loaded=loaded)
+
+    def _hold(self) -> Reference:
+        """A tick under the hard e-stop: the plan does not advance, and the last output is repeated with the
+        COG at rest. A walk is cut to a stop that starts from rest where the robot is frozen (the swing
+        foot goes down, the ZMP comes to the feet's middle), played after the release."""
+        if not self._holding:
+            self._holding = True
+            if self.gait.walking:
+                self._walking_stop_requested = True
+                self.gait.stop_from_rest(self._rest_zmp_xy(self._last_out.gait))
+            out = self._last_out
+            if out.gait is not None:
+                still = read_only(np.zeros(3))
+                out = out._replace({"gait": dataclasses.replace(out.gait, cog_vel_world=still, cog_acc_world=still)})
+            self._last_out = out
+            self.last_gait = out.gait
+        return self._last_out
+
+    def status(self) -> AutoBalancerStatus:
+        g = self.last_gait
+        return AutoBalancerStatus(enabled=self.enabled, active=self.active, weight=round(self._weight, 4),
+                                  walking=bool(g.walking) if g else False, support=g.support if g else "both",
+                                  walking_stop=self.walking_stop, has_ik_failed=self.has_ik_failed,
+                                  footsteps=self._status_footsteps() if self.gait.walking else ())
+
+    def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
+        """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes
+        (the list is shared between snapshots: readers must not modify it)."""
+        remaining = self.gait.remaining_footsteps()
+        # the remaining steps are a tail of the plan list, which the gait generator replaces (never
+        # mutates) on a new plan or replan: that list and the tail length identify the content
+        plan = self.gait._footsteps
+        cache = self._footsteps_cache
+        if cache is None or cache[0] is not plan or cache[1] != len(remaining):
+            cache = self._footsteps_cache = (plan, len(remaining), self.remaining_footsteps())
+        return cache[2]
+
+
+    def _rest_zmp_xy(self, gait: GaitState | None) -> tuple[float, float]:
+        """Where the ZMP of the robot frozen now is once at rest: under the planned COG, kept REST_ZMP_MARGIN_M
+        inside the support sole when on one foot."""
+        x, y = self.preview.x[0].tolist()
+        if gait is None or gait.support == "both":
+            return x, y
+        right = gait.support == "rleg"
+        p, R = (gait.p_rsole_world, gait.R_rsole_world) if right else (gait.p_lsole_world, gait.R_lsole_world)
+        sole = HRP2_RIGHT_SOLE if right else HRP2_LEFT_SOLE
+        c, s_ = float(R[0, 0]), float(R[1, 0])
+        n = math.hypot(c, s_)
+        c, s_ = c / n, s_ / n
+        dx, dy = x - float(p[0]), y - float(p[1])
+        u, v = c * dx + s_ * dy, -s_ * dx + c * dy  # in the sole frame
+        m = REST_ZMP_MARGIN_M
+        u = min(max(u, -sole.rear_m + m), sole.front_m - m)
+        v = min(max(v, -sole.right_m + m), sole.left_m - m)
+        return float(p[0]) + c * u - s_ * v, float(p[1]) + s_ * u + c * v
+
+
+def _homogeneous(p: np.ndarray, R: np.ndarray) -> np.ndarray:
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, p
+    return T

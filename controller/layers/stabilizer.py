@@ -1,0 +1,364 @@
+"""Stabilizer layer ([MLC] III-D): LIP state feedback (Eq. 7-8) on the actual COG, COG velocity and
+ZMP; QP force-moment distribution to the feet (Eq. 9-14); foot force-moment damping control (Eq. 3
+with m = 0); body attitude control; the capture-point error and the emergency flag ([MLC] III-E)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from controller.balance.capture_point import (
+    HRP2_LEFT_SOLE,
+    HRP2_RIGHT_SOLE,
+    FootRectangle,
+    point_in_convex_polygon,
+    shrink_polygon,
+    support_polygon,
+)
+from controller.balance.force_distribution import FootPolygon, ForceDistributionQP, alpha_from_zmp
+from controller.balance.hand_force_cog_offset import cog_offset_against_hand_forces
+from controller.balance.state_estimation import ActualStateEstimator
+from controller.core.constants import GRAVITY_M_S2
+from controller.core.errors import InvalidState
+from controller.core.layer import Layer, Params, Status, described
+from controller.core.types import Reference, TickContext
+from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, _leg_ik_floats
+from controller.kinematics.model import RobotKinematics
+from controller.kinematics.rotations import rpy_to_rows
+from robot.names import FORCE_SENSOR_NAMES
+
+FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
+HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
+HAND_FORCE_DEADBAND_N = 2.0
+EMERGENCY_MODES = ("cp_error", "cp_support", "none")
+# consecutive joint indices of each leg as slices (assignment through a slice is cheaper)
+_LEG_SLICES = {leg: (slice(int(i[0]), int(i[-1]) + 1) if np.array_equal(i, np.arange(i[0], i[-1] + 1)) else i)
+               for leg, i in LEG_INDICES.items()}
+
+
+@dataclass(frozen=True)
+class StabilizerParams(Params):
+    # LIP state feedback u = zmp_ref + k1 (cog_ref - cog) + k2 (cogvel_ref - cogvel) + k3 (zmp_ref - zmp):
+    # hrpsys's EEFM gains (pole placement for the LIP with a first-order ZMP lag, Kajita 2010) x 0.9
+    k1: float = field(default=-1.41429 * 0.9, metadata={"unit": "-", "min": -20.0, "max": 0.0})
+    k2: float = field(default=-0.404082 * 0.9, metadata={"unit": "s", "min": -5.0, "max": 0.0})
+    k3: float = field(default=-0.18 * 0.9, metadata={"unit": "-", "min": -2.0, "max": 0.0})
+    # foot moment damping control d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T. D is scheduled: soft
+    # standing (more push margin: 26 N s forward stands), stiff walking (D = 300 walking sideways
+    # drives the COP to the sole edge at each support switch and tips the robot over; 3000 walks)
+    rot_damping_gain: float = field(default=300.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
+    rot_damping_gain_walking: float = field(default=3000.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
+    rot_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
+    rot_limit_deg: float = field(default=10.0, metadata={"unit": "deg", "min": 0.0, "max": 30.0})
+    # foot vertical force difference control
+    z_damping_gain: float = field(default=35000.0, metadata={"unit": "N s/m", "min": 100.0, "max": 1e7})
+    z_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
+    z_limit_m: float = field(default=0.025, metadata={"unit": "m", "min": 0.0, "max": 0.1})
+    # body attitude control d(rpy)/dt = k (ref - act) - rpy / T. Off by default: when the robot tips
+    # about a foot edge the loop integrates that tilt into the hips and pushes it over (measured:
+    # a 40 N s sideways push falls with hrpsys's 0.5, stands with 0; forward 28 N s likewise)
+    body_attitude_gain: float = field(default=0.0, metadata={"unit": "1/s", "min": 0.0, "max": 20.0})
+    body_attitude_time_const_s: float = field(default=1e3, metadata={"unit": "s", "min": 0.01, "max": 1e6})
+    cogvel_cutoff_hz: float = field(default=4.0, metadata={"unit": "Hz", "min": 0.1, "max": 100.0})
+    contact_threshold_n: float = field(default=25.0, metadata={"unit": "N", "min": 0.0, "max": 500.0})
+    transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
+    # emergency flag: "cp_error" = |CP_ref - CP_act| > threshold ([MLC]); "cp_support" = actual CP
+    # outside the support polygon shrunk by cp_margin_m (later hrpsys); "none"
+    emergency_mode: str = field(default="cp_error", metadata={"choices": EMERGENCY_MODES})
+    cp_threshold_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.001, "max": 0.5})
+    cp_margin_m: float = field(default=0.03, metadata={"unit": "m", "min": 0.0, "max": 0.1})
+    estop_while_walking: bool = field(default=False, metadata={"unit": "-"})
+
+
+@dataclass(frozen=True, slots=True)
+class StabilizerStatus(Status):
+    active: bool = field(metadata=described("the Stabilizer is running (started)"))
+    weight: float = field(metadata=described("start/stop blend weight, 0..1", "-"))
+    cp_ref: tuple[float, float] = field(metadata=described("reference capture point x, y (world)", "m"))
+    cp_act: tuple[float, float] = field(metadata=described("actual capture point x, y (world, estimated)", "m"))
+    cp_error: tuple[float, float] = field(metadata=described("cp_ref - cp_act", "m"))
+    cp_error_norm: float = field(metadata=described("|cp_ref - cp_act|", "m"))
+    threshold: float = field(metadata=described("the emergency flag's threshold on |cp_error|", "m"))
+    emergency: bool = field(metadata=described("the capture-point emergency flag"))
+    flag_rise_time: float | None = field(metadata=described("simulated time the flag last rose", "s"))
+    d_foot_rpy_deg: tuple[tuple[float, float], tuple[float, float]] = field(metadata=described(
+        "foot damping control's roll, pitch of the right and the left sole", "deg"))
+    dz_diff_m: float = field(metadata=described("right minus left sole height offset of the force control", "m"))
+    new_zmp: tuple[float, float, float] = field(metadata=described("ZMP the feet are asked to realise (world)", "m"))
+
+
+def sigmoid_transition(s: float) -> float:
+    """Smooth start/stop weight for progress s in [0, 1]: hrpsys's 1 / (1 + exp(-9.19 (s - 0.5))),
+    rescaled to be exactly 0 at s = 0 and 1 at s = 1 (hrpsys's curve jumps by 1 % at both ends)."""
+    def raw(x: float) -> float:
+        return 1.0 / (1.0 + math.exp(-9.19 * (x - 0.5)))
+    lo, hi = raw(0.0), raw(1.0)
+    return (raw(min(1.0, max(0.0, s))) - lo) / (hi - lo)
+
+
+def _matmul3(A, B) -> tuple[tuple[float, float, float], ...]:
+    """A @ B for 3x3 matrices given as rows of floats."""
+    (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = B
+    return tuple((a0 * b00 + a1 * b10 + a2 * b20, a0 * b01 + a1 * b11 + a2 * b21, a0 * b02 + a1 * b12 + a2 * b22)
+                 for a0, a1, a2 in A)
+
+
+class Stabilizer(Layer):
+    """Modifies the legs of the AutoBalancer's posture so the measured ZMP and COG track the reference.
+
+    Without a gait reference (AutoBalancer stopped) it only estimates and passes the reference through.
+    """
+
+    name = "st"
+    description = "Stabilizer: LIP feedback, QP force distribution, foot damping, CP emergency flag"
+
+    def __init__(self, dt_s: float, params: StabilizerParams | None = None, active: bool = True,
+                 kinematics: RobotKinematics | None = None) -> None:
+        super().__init__()
+        self.params = params or StabilizerParams()
+        self.dt_s = dt_s
+        self.kin = kinematics or RobotKinematics()
+        self.estimator = ActualStateEstimator(self.kin)
+        self.total_mass = self.kin.total_mass
+        self.soles: tuple[FootRectangle, FootRectangle] = (HRP2_RIGHT_SOLE, HRP2_LEFT_SOLE)
+        self.d_foot_rpy = np.zeros((2, 2))  # (foot, [roll, pitch]) [rad]
+        self.dz_diff = 0.0  # right minus left sole height offset [m]
+        self.d_body_rp = np.zeros(2)  # [rad]
+        self._prev_cog: np.ndarray | None = None
+        self.act_cogvel = np.zeros(3)
+        self.active = False
+        self._transition = None  # (from_w, to_w, elapsed)
+        self.weight = 0.0
+        self.cp_ref = np.zeros(2)
+        self.cp_act = np.zeros(2)
+        self.cp_error = np.zeros(2)
+        self.emergency = False
+        self.flag_rise_time_s: float | None = None
+        self.new_zmp = np.zeros(3)
+        self.projected = False
+        self._qp: ForceDistributionQP | None = None
+        self._qp_key: tuple | None = None
+        self._qp_raw_key: tuple | None = None  # the unrounded key of the last call
+        self._last_out: Reference | None = None  # what the last working tick output (repeated while held)
+        if active:
+            self.start()
+
+    # ---- operations ------------------------------------------------------------------------
+    def start(self) -> None:
+        if self.active:
+            raise InvalidState("Stabilizer is already running")
+        self.active = True
+        self._transition = (self.weight, 1.0, 0.0)
+
+    def stop(self) -> None:
+        if not self.active:
+            raise InvalidState("Stabilizer is not running")
+        self.active = False
+        self._transition = (self.weight, 0.0, 0.0)
+
+    def set_params(self, params: StabilizerParams) -> None:
+        self.params = params
+
+    # ---- tick --------------------------------------------------------------------------------
+    def _advance_transition(self, dt: float) -> None:
+        if self._transition is None:
+            return
+        w0, w1, elapsed = self._transition
+        elapsed += dt
+        s = min(1.0, elapsed / self.params.transition_time_s)
+        self.weight = w0 + (w1 - w0) * sigmoid_transition(s) if s < 1.0 else w1
+        self._transition = None if s >= 1.0 else (w0, w1, elapsed)
+
+    def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        if not self.enabled:  # pass-through (no estimate either: the loop's state estimator runs)
+            self.emergency = False
+            return ref
+        p = self.params
+        dt = ctx.dt_s
+        est = ctx.estimate
+        self._advance_transition(dt)
+        # actual COG and ZMP (always: the operator and the emergency flag need them)
+        cog, zmp = self.estimator(ctx.sensors, est, ref)
+        if self._prev_cog is None:
+            self._prev_cog = cog
+        alpha = 1.0 - math.exp(-2.0 * math.pi * p.cogvel_cutoff_hz * dt)
+        cx, cy, cz = cog.tolist()
+        px, py, pz = self._prev_cog.tolist()
+        vx, vy, vz = self.act_cogvel.tolist()
+        vx = vx + alpha * ((cx - px) / dt - vx)
+        vy = vy + alpha * ((cy - py) / dt - vy)
+        vz = vz + alpha * ((cz - pz) / dt - vz)
+        self.act_cogvel = np.array((vx, vy, vz))
+        self._prev_cog = cog
+        est.cog_world, est.zmp_world, est.cog_vel_world = cog, zmp, self.act_cogvel
+        gait = ref.gait
+        if gait is None:
+            self.emergency = False
+            return ref
+        held = ctx.hold and self._last_out is not None
+        # capture points
+        zr = gait.zmp_world.tolist()
+        height = max(0.1, cz - zr[2])
+        omega = math.sqrt(GRAVITY_M_S2 / height)
+        gcx, gcy = gait.cog_world[:2].tolist()
+        gvx, gvy, gvz = gait.cog_vel_world.tolist()
+        cp_ref = (gcx + gvx / omega, gcy + gvy / omega)
+        cp_act = (cx + vx / omega, cy + vy / omega)
+        self.cp_ref = np.array(cp_ref)
+        self.cp_act = np.array(cp_act)
+        self.cp_error = np.array((cp_ref[0] - cp_act[0], cp_ref[1] - cp_act[1]))
+        wrenches = est.wrenches_ext_world.tolist()
+        w_r, w_l = wrenches[FEET[0]], wrenches[FEET[1]]
+        fz = (w_r[2], w_l[2])
+        contact_act = (fz[0] > p.contact_threshold_n, fz[1] > p.contact_threshold_n)
+        if held:  # the hard e-stop freezes the command: estimate only, integrate nothing, raise no flag
+            self.emergency = False
+            return self._last_out
+        self._update_emergency(ctx.time_s, gait, contact_act)
+        ctx.ports.cp_flag = self.emergency
+        if self.weight <= 0.0:
+            self._last_out = ref
+            return ref
+        w = self.weight
+        # LIP state feedback (Eq. 8): the ZMP the feet should realise. References as the paper says:
+        # p_G^pc (preview COG, before the hand-force offset) and p_zmp^abc. The actual side is the
+        # static balance point, the COG shifted by the measured hand forces (hrpsys does the same):
+        # with hands loaded the LIP's "COG" is where the ZMP would sit at rest.
+        sbp = self.static_balance_point(cog, est, zr[2]).tolist()
+        pc = gait.cog_pc_world.tolist()
+        zm = zmp.tolist()
+        act_vel = (vx, vy, vz)
+        gv = (gvx, gvy, gvz)
+        k1, k2, k3 = p.k1, p.k2, p.k3
+        nzx, nzy = (zr[j] + w * (k1 * (pc[j] - sbp[j]) + k2 * (gv[j] - act_vel[j]) + k3 * (zr[j] - zm[j]))
+                    for j in range(2))
+        # QP distribution (Eq. 9-14) over the feet meant to be in contact
+        soles_world = ((gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
+        contact = gait.contact
+        idx = [i for i in (0, 1) if contact[i]]
+        qp = self._force_qp(idx, soles_world)
+        p_r = gait.p_rsole_world.tolist()
+        p_l = gait.p_lsole_world.tolist()
+        if len(idx) == 2:
+            qp.set_alpha(alpha_from_zmp((nzx, nzy), p_r[:2], p_l[:2]))
+        forces = qp.solve(np.array((nzx, nzy)), self.total_mass * GRAVITY_M_S2)
+        zx, zy = forces.zmp_world_xy.tolist()
+        self.new_zmp = np.array((zx, zy, zr[2]))
+        self.projected = forces.projected
+        # foot moment damping (Eq. 3, m = 0) and force-difference control
+        tau_act = ((w_r[3], w_r[4]), (w_l[3], w_l[4]))
+        damping = p.rot_damping_gain_walking if gait.walking else p.rot_damping_gain
+        T_rot = p.rot_time_const_s
+        d_foot = self.d_foot_rpy.tolist()
+        n_xy = forces.n_xy_nm.tolist()
+        for k, i in enumerate(idx):
+            d = d_foot[i]
+            if contact_act[i]:
+                ta = tau_act[i]
+                tau_ref = (-n_xy[k][0], -n_xy[k][1])  # ground-reaction moment about the sole origin
+                rate = [(ta[j] - tau_ref[j]) / damping - d[j] / T_rot for j in range(2)]
+            else:
+                rate = [-d[j] / T_rot for j in range(2)]
+            d_foot[i] = [d[j] + rate[j] * dt for j in range(2)]
+        for i in range(2):
+            if i not in idx:
+                d = d_foot[i]
+                d_foot[i] = [d[j] - d[j] * dt / 0.08 for j in range(2)]  # swing foot: back to the plan quickly
+        lim = math.radians(p.rot_limit_deg)
+        d_foot = [[min(max(roll, -lim), lim), min(max(pitch, -lim), lim)] for roll, pitch in d_foot]  # np.clip
+        self.d_foot_rpy[:] = d_foot
+        if len(idx) == 2 and contact_act[0] and contact_act[1]:
+            fz_ref = forces.fz_n.tolist()
+            df_ref = fz_ref[0] - fz_ref[1]
+            df_act = fz[0] - fz[1]
+            self.dz_diff += ((df_act - df_ref) / p.z_damping_gain - self.dz_diff / p.z_time_const_s) * dt
+        else:
+            self.dz_diff -= self.dz_diff / p.z_time_const_s * dt
+        self.dz_diff = float(min(max(self.dz_diff, -2 * p.z_limit_m), 2 * p.z_limit_m))
+        # body attitude control
+        act_rp = est.base_rpy_rad[:2].tolist()
+        ref_rpy = ref.base_rpy_rad.tolist()
+        gain, T_body = p.body_attitude_gain, p.body_attitude_time_const_s
+        db = self.d_body_rp.tolist()
+        db = [min(max(db[j] + (gain * (ref_rpy[j] - act_rp[j]) - db[j] / T_body) * dt, -lim), lim) for j in range(2)]
+        self.d_body_rp[:] = db
+        # legs re-solved for the modified sole targets and BODY attitude
+        R_body = rpy_to_rows(ref_rpy[0] + w * db[0], ref_rpy[1] + w * db[1], ref_rpy[2] + w * 0.0)
+        base = ref.base_pos_world.tolist()
+        q = np.array(ref.q_rad, dtype=float)
+        dz = (0.5 * w * self.dz_diff, -0.5 * w * self.dz_diff)
+        for i, (geom, leg) in enumerate(((RLEG, "rleg"), (LLEG, "lleg"))):
+            pos = p_r if i == 0 else p_l
+            R = soles_world[i][1].tolist()
+            R_mod = _matmul3(rpy_to_rows(w * d_foot[i][0], w * d_foot[i][1], 0.0), R)
+            q[_LEG_SLICES[leg]], _ = _leg_ik_floats(geom, base, R_body, (pos[0], pos[1], pos[2] + dz[i]), R_mod)
+        self._last_out = ref._with_owned(q_rad=q)
+        return self._last_out
+
+    def _force_qp(self, idx: list[int], soles_world) -> ForceDistributionQP:
+        """The QP for the feet in contact, rebuilt only when they move (a support switch or a new step)."""
+        raw = tuple((i, *soles_world[i][0][:2].tolist(), float(soles_world[i][1][1, 0])) for i in idx)
+        if raw == self._qp_raw_key:  # the same soles as last tick (a standing foot): the same QP
+            return self._qp
+        self._qp_raw_key = raw
+        # np.round(x, 6) on floats: rint(x * 1e6) / 1e6 (Python's round(float) rounds half to even as rint)
+        key = tuple((i, round(x * 1e6) / 1e6, round(y * 1e6) / 1e6, round(r10, 6)) for i, x, y, r10 in raw)
+        if key != self._qp_key:
+            polygons = []
+            for i in idx:
+                pos, R = soles_world[i]
+                yaw = math.atan2(R[1, 0], R[0, 0])
+                polygons.append(FootPolygon(self.soles[i].corners_world((pos[0], pos[1], yaw)), pos[:2]))
+            self._qp = ForceDistributionQP(polygons)
+            self._qp_key = key
+        return self._qp
+
+    def static_balance_point(self, cog: np.ndarray, est, zmp_z: float) -> np.ndarray:
+        """COG (3,) moved to where the measured hand forces put the ZMP of a robot at rest [m]."""
+        rows = est.wrenches_ext_world.tolist()
+        if not any(abs(v) > HAND_FORCE_DEADBAND_N for i in HANDS for v in rows[i][:3]):  # np.any(abs(f) > band)
+            return cog
+        f_on = est.wrenches_ext_world[list(HANDS), :3]
+        if not abs(sum(rows[i][2] for i in HANDS)) < self.total_mass * GRAVITY_M_S2:
+            # hands carrying the robot's whole weight (or a sensor spike saying so): no balance point on
+            # the feet exists, so this tick balances the plain COG rather than faulting the loop
+            return cog
+        hands = est.sensor_pos_from_base[list(HANDS)] + self.estimator.base_pos_world
+        # Eq. 6 evaluated with the force on the robot is the static ZMP (see hand_force_cog_offset)
+        xy = cog_offset_against_hand_forces(cog[:2], self.total_mass, hands, -f_on, zmp_z, GRAVITY_M_S2)
+        return np.array([xy[0], xy[1], cog[2]])
+
+    def _update_emergency(self, time_s: float, gait, contact_act: np.ndarray) -> None:
+        p = self.params
+        settled = self.active and self._transition is None  # hrpsys: only in MODE_ST, transition done
+        if (p.emergency_mode == "none" or not settled or (gait.walking and not p.estop_while_walking)
+                or not any(contact_act)):
+            flag = False
+        elif p.emergency_mode == "cp_error":
+            ex, ey = self.cp_error.tolist()
+            flag = bool(math.hypot(ex, ey) > p.cp_threshold_m)
+        else:
+            feet = []
+            for i, (pos, R) in enumerate(((gait.p_rsole_world, gait.R_rsole_world),
+                                          (gait.p_lsole_world, gait.R_lsole_world))):
+                if contact_act[i]:
+                    feet.append(((pos[0], pos[1], math.atan2(R[1, 0], R[0, 0])), self.soles[i]))
+            poly = shrink_polygon(support_polygon(feet), p.cp_margin_m)
+            flag = poly.shape[0] < 3 or not point_in_convex_polygon(self.cp_act, poly)
+        if flag and not self.emergency:
+            self.flag_rise_time_s = time_s
+        self.emergency = flag
+
+    def status(self) -> StabilizerStatus:
+        ex, ey = cp_error = tuple(self.cp_error.tolist())
+        (r_roll, r_pitch), (l_roll, l_pitch) = self.d_foot_rpy.tolist()  # (foot, [roll, pitch]) [rad]
+        deg = math.degrees
+        return StabilizerStatus(
+            enabled=self.enabled, active=self.active, weight=round(self.weight, 4),
+            cp_ref=tuple(self.cp_ref.tolist()), cp_act=tuple(self.cp_act.tolist()), cp_error=cp_error,
+            cp_error_norm=math.hypot(ex, ey), threshold=self.params.cp_threshold_m, emergency=self.emergency,
+            flag_rise_time=self.flag_rise_time_s,
+            d_foot_rpy_deg=((deg(r_roll), deg(r_pitch)), (deg(l_roll), deg(l_pitch))), dz_diff_m=self.dz_diff,
+            new_zmp=tuple(self.new_zmp.tolist()))

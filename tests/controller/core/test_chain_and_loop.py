@@ -1,0 +1,182 @@
+"""The chain order and the fixed-rate loop: queue at tick boundaries, faults, pacing."""
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+
+from controller.core.chain import CHAIN_ORDER, Chain
+from controller.core.errors import InvalidCommand
+from controller.core.layer import Layer, Status
+from controller.core.loop import ControlLoop
+from controller.core.types import Reference
+from robot.sensors import GroundTruth
+from tests.controller.fakes import make_sensors
+
+
+class FakePlant:
+    """A plant whose joints follow the command after one physics step; time advances per step."""
+
+    dt_physics = 0.001
+
+    def __init__(self):
+        self.t = 0.0
+        self.q = np.zeros(30)
+        self.q_cmd = np.zeros(30)
+        self.writes = []
+
+    def read(self):
+        return make_sensors(q=self.q.copy(), t=self.t)
+
+    def write(self, q):
+        self.q_cmd = np.array(q)
+        self.writes.append(self.q_cmd)
+
+    def step(self, n=1):
+        self.t += n * self.dt_physics
+        self.q = self.q_cmd.copy()
+
+    def ground_truth(self):
+        return GroundTruth(self.t, np.array([0, 0, 0.65]), np.array([1.0, 0, 0, 0]), np.zeros(3), np.zeros(3),
+                           np.zeros(3), np.zeros((1, 3)), np.zeros((1, 4)))
+
+    def warnings(self):
+        return {}
+
+
+class Ramp(Layer):
+    """Source layer: joint 0 grows by `rate` rad per tick; can be told to fail."""
+
+    name = "seq"
+
+    def __init__(self, rate=0.001):
+        super().__init__()
+        self.x = 0.0
+        self.rate = rate
+        self.fail = False
+
+    def tick(self, ctx, ref):
+        if self.fail:
+            raise RuntimeError("boom")
+        self.x += self.rate
+        q = np.zeros(30)
+        q[0] = self.x
+        return ref.with_(q_rad=q)
+
+
+@dataclass(frozen=True, slots=True)
+class FreezeStatus(Status):
+    engaged: bool
+    reason: str | None
+
+
+class Freeze(Layer):
+    name = "hes"
+
+    def __init__(self):
+        super().__init__()
+        self.engaged = False
+        self.reason = None
+        self.q = None
+
+    def engage(self, q=None, reason="operator"):
+        self.engaged, self.q, self.reason = True, q, reason
+
+    def tick(self, ctx, ref):
+        ctx.ports.hold = self.engaged
+        return ref.with_(q_rad=self.q) if self.engaged else ref
+
+    def status(self):
+        return FreezeStatus(enabled=True, engaged=self.engaged, reason=self.reason)
+
+
+def make_loop(**kw):
+    plant = FakePlant()
+    layers = {}
+
+    def factory(sensors, dt):
+        layers["seq"], layers["hes"] = Ramp(), Freeze()
+        return Chain({"hes": layers["hes"], "seq": layers["seq"]})
+
+    return ControlLoop(plant, factory, dt_control_s=0.005, **kw), plant, layers
+
+
+def test_chain_runs_layers_in_the_declared_order_whatever_the_mapping_order():
+    chain = Chain({"hes": Freeze(), "seq": Ramp()})
+    assert chain.order() == ["seq", "hes"]
+    assert chain.describe() == "seq -> hes"
+    assert CHAIN_ORDER == ("kf", "rmfo", "seq", "es", "ic", "abc", "st", "co", "hes", "el")
+
+
+def test_chain_rejects_unknown_layer_names_listing_the_valid_ones():
+    with pytest.raises(InvalidCommand, match="kf"):
+        Chain({"xyz": Ramp()})
+
+
+def test_loop_steps_physics_by_whole_control_periods():
+    loop, plant, _ = make_loop()
+    loop.run_for(1.0)
+    assert loop.tick_count == 200
+    assert plant.t == pytest.approx(1.0)
+    assert loop.substeps == 5
+
+
+def test_control_period_must_be_a_multiple_of_the_physics_step():
+    with pytest.raises(InvalidCommand, match="multiple"):
+        ControlLoop(FakePlant(), lambda s, dt: Chain({}), dt_control_s=0.0045)
+
+
+def test_commands_run_between_ticks_and_return_results_or_errors():
+    loop, _, layers = make_loop()
+    assert loop.call(lambda: 42) == 42
+    with pytest.raises(ZeroDivisionError):
+        loop.call(lambda: 1 / 0)
+    loop.run_for(0.1)  # the loop survives a failing command
+    assert loop.tick_count == 20
+
+
+def test_a_failing_layer_is_a_reported_fault_that_holds_the_command_and_engages_the_estop():
+    loop, plant, layers = make_loop()
+    loop.run_for(0.05)
+    held = plant.writes[-1].copy()
+    layers["seq"].fail = True
+    snap = loop.run_for(0.05)
+    assert snap.fault is not None and "boom" in snap.fault
+    assert snap.safety.hard_stop is True
+    assert np.array_equal(plant.writes[-1], held)
+    layers["seq"].fail = False
+    loop.clear_fault()
+    snap = loop.run_for(0.05)
+    assert snap.fault is None
+    assert np.array_equal(plant.writes[-1], held)  # still frozen until the operator releases
+
+
+def test_snapshots_are_immutable():
+    loop, _, _ = make_loop()
+    snap = loop.run_for(0.01)
+    with pytest.raises(ValueError):
+        snap.q_cmd_rad[0] = 1.0
+    with pytest.raises(AttributeError):
+        snap.time_s = 3.0
+
+
+def test_paced_and_unpaced_runs_give_the_same_trajectory():
+    fast, fast_plant, _ = make_loop()
+    fast.run_for(0.5)
+    paced, paced_plant, _ = make_loop()
+    paced.start(speed=5.0)
+    t0 = time.perf_counter()
+    while paced.tick_count < 100 and time.perf_counter() - t0 < 10:
+        time.sleep(0.01)
+    paced.stop()
+    n = 100
+    assert paced.tick_count >= n
+    assert np.array_equal(np.array(paced_plant.writes[:n]), np.array(fast_plant.writes[:n]))
+    # pacing: 100 ticks = 0.5 s of sim time took about 0.1 s of wall time at 5x
+    assert paced.tick_count < 400
+
+
+def test_reference_from_arrays_validates_shapes():
+    with pytest.raises(ValueError):
+        Reference.from_arrays(np.zeros(29))

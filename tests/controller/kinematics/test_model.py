@@ -1,0 +1,39 @@
+"""RobotKinematics.limb_ik: reaches a reachable target; an unreachable one raises, or in best-effort mode
+returns the closest posture it found."""
+
+import numpy as np
+import pytest
+
+from controller.core.errors import InvalidCommand
+from controller.kinematics.model import RobotKinematics
+from robot.generate import half_sitting_deg
+
+HALF = np.deg2rad(half_sitting_deg())
+BASE = np.array([0.0, 0.0, 0.648702])
+
+
+def hand(kin, q):
+    kin.update_rpy(BASE, np.zeros(3), q)
+    return kin.frame_pose("rarm_end")
+
+
+def test_a_reachable_target_is_reached():
+    kin = RobotKinematics()
+    p0, R0 = hand(kin, HALF)
+    q = kin.limb_ik("rarm", HALF, BASE, np.zeros(3), p0 + [0.05, 0.0, 0.05], R0)
+    assert np.linalg.norm(hand(kin, q)[0] - (p0 + [0.05, 0.0, 0.05])) < 1e-4
+
+
+def test_an_unreachable_target_raises_or_gives_the_closest_posture_in_best_effort_mode():
+    kin = RobotKinematics()
+    forward = HALF.copy()
+    forward[16], forward[19] = np.deg2rad(-70), np.deg2rad(-40)  # right arm forward, elbow bent
+    p0, R0 = hand(kin, forward)
+    far = p0 + np.array([0.25, 0.0, 0.0])  # beyond the stretched arm (the ImpedanceController's case)
+    with pytest.raises(InvalidCommand, match="cannot reach"):
+        kin.limb_ik("rarm", forward, BASE, np.zeros(3), far, R0)
+    q = kin.limb_ik("rarm", forward, BASE, np.zeros(3), far, R0, best_effort=True)
+    assert np.all(q >= kin.q_lower - 1e-12) and np.all(q <= kin.q_upper + 1e-12)
+    closer = np.linalg.norm(hand(kin, q)[0] - far)
+    assert closer < np.linalg.norm(p0 - far) - 0.02  # closer than where it started (the last iterate need not be)
+    assert np.array_equal(np.delete(q, range(16, 23)), np.delete(forward, range(16, 23)))  # only the arm moved

@@ -1,0 +1,59 @@
+"""SoftErrorLimiter: position, velocity and tracking-error limits on the joint command."""
+
+import numpy as np
+
+from controller.core.types import Reference
+from controller.layers.soft_error_limiter import LimitedJoints, SoftErrorLimiter, SoftErrorLimiterParams, limit_command
+from tests.controller.fakes import make_ctx
+
+N = 30
+LO, HI = -np.ones(N), np.ones(N)
+
+
+def test_limit_command_clamps_position_then_step_then_error():
+    q_prev = np.zeros(N)
+    q = limit_command(np.full(N, 5.0), q_prev, np.zeros(N), LO, HI, max_step=0.01, max_error=1.0)
+    assert np.allclose(q, 0.01)
+    q = limit_command(np.full(N, 0.5), np.full(N, 0.5), np.zeros(N), LO, HI, max_step=1.0, max_error=0.2)
+    assert np.allclose(q, 0.2)
+
+
+def test_command_within_limits_passes_through_unchanged():
+    el = SoftErrorLimiter(LO, HI, np.zeros(N))
+    ref = Reference.from_arrays(np.full(N, 0.001))
+    out = el.tick(make_ctx(q=np.zeros(N)), ref)
+    assert out is ref
+    assert el.status().limited == LimitedJoints(position=(), velocity=(), error=())
+
+
+def test_out_of_range_command_is_clamped_and_reported_by_joint_name():
+    el = SoftErrorLimiter(LO, HI, np.full(N, 0.99), SoftErrorLimiterParams(error_limit_rad=3.0))
+    q = np.full(N, 0.99)
+    q[3] = 1.5
+    out = el.tick(make_ctx(q=np.full(N, 0.99)), Reference.from_arrays(q))
+    assert out.q_rad[3] == 1.0
+    assert "RLEG_JOINT3" in el.status().limited.position
+
+
+def test_velocity_is_limited_per_tick():
+    p = SoftErrorLimiterParams(velocity_limit_rad_s=2.0, error_limit_rad=3.0)
+    el = SoftErrorLimiter(LO, HI, np.zeros(N), p)
+    out = el.tick(make_ctx(q=np.zeros(N), dt=0.005), Reference.from_arrays(np.full(N, 0.5)))
+    assert np.allclose(out.q_rad, 2.0 * 0.005)
+    assert len(el.status().limited.velocity) == N
+
+
+def test_tracking_error_is_limited_around_the_encoder():
+    p = SoftErrorLimiterParams(velocity_limit_rad_s=20.0, error_limit_rad=0.1)
+    el = SoftErrorLimiter(LO, HI, np.zeros(N), p)
+    q_meas = np.zeros(N)
+    out = el.tick(make_ctx(q=q_meas, dt=0.1), Reference.from_arrays(np.full(N, 0.5)))
+    assert np.allclose(out.q_rad, 0.1)
+    assert "LARM_JOINT6" in el.status().limited.error
+
+
+def test_disabled_limiter_is_identity():
+    el = SoftErrorLimiter(LO, HI, np.zeros(N))
+    el.enabled = False
+    ref = Reference.from_arrays(np.full(N, 9.0))
+    assert el.tick(make_ctx(q=np.zeros(N)), ref) is ref

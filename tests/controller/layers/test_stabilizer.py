@@ -1,0 +1,133 @@
+"""Stabilizer: LIP feedback direction, transitions, the capture-point error and the emergency flag."""
+
+import numpy as np
+import pytest
+
+from controller.core.errors import InvalidState
+from controller.core.types import Estimate, GaitState, Reference, TickContext
+from controller.kinematics.model import RobotKinematics
+from controller.layers.stabilizer import Stabilizer, StabilizerParams, sigmoid_transition
+from robot.generate import half_sitting_deg
+from robot.sensors import Sensors
+
+HALF = np.deg2rad(half_sitting_deg())
+BASE = np.array([0.0, 0.0, 0.648702])
+KIN = RobotKinematics()
+
+
+def gait(cog_xy=(0.0095, 0.0), cog_vel_xy=(0.0, 0.0)):
+    KIN.update(BASE, np.eye(3), HALF)
+    (pr, Rr), (pl, Rl) = KIN.frame_pose("rleg_end"), KIN.frame_pose("lleg_end")
+    return GaitState(walking=False, support="both", contact=(True, True), p_rsole_world=pr, R_rsole_world=Rr,
+                     p_lsole_world=pl, R_lsole_world=Rl, zmp_world=np.array([0.0095, 0.0, 0.0]),
+                     cog_world=np.array([*cog_xy, 0.81]), cog_vel_world=np.array([*cog_vel_xy, 0.0]),
+                     cog_pc_world=np.array([*cog_xy, 0.81]))
+
+
+def standing_ctx(t=0.0):
+    """Sensors of the robot standing still in half-sitting: each foot carries half the weight."""
+    w = np.zeros((4, 6))
+    w[:2, 2] = 0.5 * (58.0 - 2 * 1.63877) * 9.80665
+    s = Sensors(t, HALF.copy(), np.zeros(30), w, np.zeros(3), np.array([0.0, 0.0, 9.80665]))
+    return TickContext(tick=0, time_s=t, dt_s=0.005, sensors=s, estimate=Estimate())
+
+
+def run_ticks(st, ref, n):
+    from controller.layers.remove_force_offset import RemoveForceOffset
+    rmfo = RemoveForceOffset(RobotKinematics())
+    out = None
+    for k in range(n):
+        ctx = standing_ctx(0.005 * k)
+        rmfo.tick(ctx, ref)
+        out = st.tick(ctx, ref)
+    return out
+
+
+def test_sigmoid_transition_goes_exactly_from_0_to_1_and_is_monotone():
+    assert sigmoid_transition(0.0) == 0.0 and sigmoid_transition(1.0) == pytest.approx(1.0, abs=1e-15)
+    assert sigmoid_transition(0.5) == pytest.approx(0.5)
+    s = [sigmoid_transition(x) for x in np.linspace(0, 1, 101)]
+    assert np.all(np.diff(s) > 0)
+
+
+def test_without_a_gait_reference_the_stabilizer_passes_the_reference_through():
+    st = Stabilizer(0.005)
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE)
+    assert run_ticks(st, ref, 3) is ref
+
+
+def test_a_disabled_stabilizer_passes_a_gait_reference_through_and_raises_no_flag():
+    st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+    st.enabled = False
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_xy=(0.2, 0.0)))
+    assert run_ticks(st, ref, 3) is ref
+    assert st.emergency is False
+
+
+def test_a_reference_cog_behind_the_actual_one_moves_the_feedback_zmp_backward():
+    # actual COG ~ above the ankles; reference 3 cm behind: u = zmp_ref + k1 (cog_ref - cog) with k1 < 0
+    st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_xy=(-0.02, 0.0)))
+    run_ticks(st, ref, 10)
+    assert st.new_zmp[0] > 0.0095 + 0.02  # the feet push the COG back toward the reference
+
+
+def test_capture_point_error_over_the_threshold_raises_the_flag_and_records_its_time():
+    st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05, transition_time_s=0.01))
+    calm = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
+    run_ticks(st, calm, 5)
+    assert not st.emergency and st.flag_rise_time_s is None
+    fast = calm.with_(gait=gait(cog_vel_xy=(0.3, 0.0)))  # reference CP 8.6 cm ahead of the actual one
+    run_ticks(st, fast, 5)
+    assert st.emergency
+    assert st.cp_error[0] == pytest.approx(0.3 / np.sqrt(9.80665 / 0.81), abs=0.01)
+    assert st.status().flag_rise_time is not None
+
+
+def test_support_polygon_mode_flags_only_a_capture_point_outside_the_shrunk_feet():
+    st = Stabilizer(0.005, StabilizerParams(emergency_mode="cp_support", cp_margin_m=0.03, transition_time_s=0.01))
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_vel_xy=(0.3, 0.0)))
+    run_ticks(st, ref, 5)
+    assert not st.emergency  # the reference moves, the actual CP is still over the feet
+
+
+def test_stopping_twice_is_an_invalid_state():
+    st = Stabilizer(0.005, active=False)
+    with pytest.raises(InvalidState):
+        st.stop()
+    st.start()
+    with pytest.raises(InvalidState):
+        st.start()
+
+
+def test_unknown_emergency_mode_is_rejected_listing_the_modes():
+    with pytest.raises(ValueError, match="cp_error"):
+        StabilizerParams(emergency_mode="tilt")
+
+
+def test_no_flag_while_the_stabilizer_is_still_blending_in():
+    st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05, transition_time_s=1.0))
+    fast = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_vel_xy=(0.3, 0.0)))
+    run_ticks(st, fast, 100)  # 0.5 s into a 1 s start
+    assert not st.emergency and st.flag_rise_time_s is None
+    run_ticks(st, fast, 120)
+    assert st.emergency
+
+
+def test_hand_forces_reading_more_than_the_robot_weight_fall_back_to_the_plain_cog_instead_of_raising():
+    from types import SimpleNamespace
+
+    st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
+    run_ticks(st, ref, 3)
+    cog = np.array([0.01, 0.0, 0.81])
+    wrenches = np.zeros((4, 6))
+    est = SimpleNamespace(wrenches_ext_world=wrenches,
+                          sensor_pos_from_base=np.array([[0, -0.1, -0.65], [0, 0.1, -0.65], [0.3, -0.3, 0.2],
+                                                         [0.3, 0.3, 0.2]]))
+    wrenches[2, 2] = -50.0  # a 50 N pull down at the right hand moves the balance point toward it
+    assert st.static_balance_point(cog, est, 0.0)[0] > cog[0] + 0.01
+    wrenches[2, 2] = 700.0  # a spike: more upward force than the robot weighs (58 kg * g = 569 N)
+    assert np.array_equal(st.static_balance_point(cog, est, 0.0), cog)
+    wrenches[2, 2] = -700.0
+    assert np.array_equal(st.static_balance_point(cog, est, 0.0), cog)

@@ -1,0 +1,188 @@
+"""Gait generator: hrpsys testGaitGenerator checks (per-tick jumps, step times), ZMP in the support polygon, landing."""
+
+import math
+import time
+
+import numpy as np
+import pytest
+
+from controller.core.errors import InvalidCommand
+from controller.walking.footsteps import Footstep
+from controller.walking.gait_generator import GaitGenerator, GaitParams
+
+DT = 0.005
+SOLE_HALF_X, SOLE_HALF_Y = 0.2172 / 2, 0.138 / 2  # HRP-2 sole, taken as centred on the sole frame [m]
+MAX_ZMP_JUMP_M, MAX_FOOT_JUMP_M, MAX_FOOT_ROT_JUMP_RAD = 0.020, 0.010, math.radians(1.0)  # hrpsys thresholds
+
+
+def run(gg, commands=None, max_ticks=20000):
+    """Tick until the walk ends; `commands` maps a tick to a callable run before it."""
+    samples = []
+    commands = commands or {}
+    for k in range(max_ticks):
+        if k in commands:
+            commands[k](gg)
+        if not gg.walking:
+            break
+        samples.append(gg.tick())
+    assert not gg.walking
+    return samples
+
+
+def sole_corners(p, R):
+    local = np.array([[SOLE_HALF_X, SOLE_HALF_Y, 0], [SOLE_HALF_X, -SOLE_HALF_Y, 0],
+                      [-SOLE_HALF_X, -SOLE_HALF_Y, 0], [-SOLE_HALF_X, SOLE_HALF_Y, 0]])
+    return (p + local @ R.T)[:, :2]
+
+
+def cross2(a, b):
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def convex_hull(points):
+    pts = sorted(map(tuple, points))
+    def half(seq):
+        out = []
+        for q in seq:
+            while len(out) >= 2 and cross2(np.subtract(out[-1], out[-2]), np.subtract(q, out[-2])) <= 0:
+                out.pop()
+            out.append(q)
+        return out
+    lower, upper = half(pts), half(reversed(pts))
+    return np.array(lower[:-1] + upper[:-1])  # counter-clockwise
+
+
+def inside(point, hull, tol=1e-9):
+    edges = np.roll(hull, -1, axis=0) - hull
+    return bool(np.all(cross2(edges, point[:2] - hull) >= -tol))
+
+
+def rot_angle(Ra, Rb):
+    return math.acos(np.clip((np.trace(Ra.T @ Rb) - 1.0) / 2.0, -1.0, 1.0))
+
+
+def check_walk(gg, samples, footsteps):
+    """All the per-plan checks, returns nothing; `footsteps` is the final plan."""
+    zmp = np.array([s.zmp_world for s in samples])
+    assert np.max(np.linalg.norm(np.diff(zmp, axis=0), axis=1)) < MAX_ZMP_JUMP_M
+    for p_key, R_key in (("p_rfoot_world", "R_rfoot_world"), ("p_lfoot_world", "R_lfoot_world")):
+        p = np.array([getattr(s, p_key) for s in samples])
+        assert np.max(np.linalg.norm(np.diff(p, axis=0), axis=1)) < MAX_FOOT_JUMP_M
+        R = [getattr(s, R_key) for s in samples]
+        assert max(rot_angle(a, b) for a, b in zip(R[:-1], R[1:], strict=True)) < MAX_FOOT_ROT_JUMP_RAD
+    # executed step times equal the input step times
+    index = np.array([s.footstep_index for s in samples])
+    counts = np.bincount(index, minlength=len(footsteps) + 1)
+    expected = [f.step_time_s for f in footsteps] + [gg.params.final_double_support_s]
+    assert np.allclose(counts * DT, expected, atol=1e-5)
+    # ZMP in the convex hull of the soles on the ground
+    for s in samples:
+        corners = []
+        if s.contact[0]:
+            corners.append(sole_corners(s.p_rfoot_world, s.R_rfoot_world))
+        if s.contact[1]:
+            corners.append(sole_corners(s.p_lfoot_world, s.R_lfoot_world))
+        assert inside(s.zmp_world, convex_hull(np.vstack(corners))), s
+    # every step: swing peak at the step height, landing exactly on the footstep
+    for k, f in enumerate(footsteps[1:], start=1):
+        ticks = [s for s in samples if s.footstep_index == k]
+        key = "rfoot" if f.leg == "rleg" else "lfoot"
+        z = np.array([getattr(s, f"p_{key}_world")[2] for s in ticks])
+        assert z.max() == pytest.approx(f.z + f.step_height_m, abs=1e-9)
+        assert np.allclose(getattr(ticks[-1], f"p_{key}_world"), f.position, atol=1e-12)
+        assert np.allclose(getattr(ticks[-1], f"R_{key}_world"), f.T_world_foot[:3, :3], atol=1e-12)
+    # start and end: both feet down, ZMP at the feet mid
+    for s in (samples[0], samples[-1]):
+        assert s.support == "both"
+        assert np.allclose(s.zmp_world, 0.5 * (s.p_rfoot_world + s.p_lfoot_world), atol=2e-3)
+    assert np.allclose(samples[-1].zmp_world, 0.5 * (samples[-1].p_rfoot_world + samples[-1].p_lfoot_world))
+
+
+@pytest.mark.parametrize("orbit_type", ["cycloid", "rectangle"])
+def test_go_pos_0_2_0_1_20deg_passes_the_hrpsys_checks(orbit_type):
+    gg = GaitGenerator(GaitParams(orbit_type=orbit_type), DT)
+    steps = gg.go_pos(0.2, 0.1, math.radians(20.0))
+    check_walk(gg, run(gg), steps)
+
+
+def test_go_pos_x_0_3_passes_the_hrpsys_checks_and_ends_on_the_goal():
+    gg = GaitGenerator(dt_s=DT)
+    steps = gg.go_pos(0.3, 0.0, 0.0)
+    check_walk(gg, run(gg), steps)
+    assert gg.T_world_rfoot[:3, 3] == pytest.approx([0.3, -0.095, 0.0], abs=1e-12)
+    assert gg.T_world_lfoot[:3, 3] == pytest.approx([0.3, 0.095, 0.0], abs=1e-12)
+    assert gg.tick().walking is False
+
+
+def test_set_footsteps_plan_passes_the_hrpsys_checks():
+    gg = GaitGenerator(dt_s=DT)
+    steps = gg.set_footsteps([("rleg", [0, -0.095, 0], [0, 0, 0]), ("lleg", [0, 0.095, 0], [0, 0, 0]),
+                              ("rleg", [0.1, -0.095, 0], [0, 0, 0]), ("lleg", [0.2, 0.095, 0], [0, 0, 0]),
+                              ("rleg", [0.2, -0.095, 0], [0, 0, 0])])
+    check_walk(gg, run(gg), steps)
+
+
+def test_go_velocity_with_updates_and_go_stop_passes_the_hrpsys_checks():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_velocity(0.1, 0.05, math.radians(10.0))
+    commands = {700: lambda g: g.go_velocity(0.0, 0.0, math.radians(10.0)),
+                1500: lambda g: g.go_velocity(0.1, 0.0, 0.0),
+                2450: lambda g: g.go_stop()}
+    samples = run(gg, commands)
+    steps = gg.footsteps
+    assert steps[-1].step_time_s == 1.0 and len(steps) <= 2450 // 200 + 3  # nothing planned after the stop
+    check_walk(gg, samples, steps)
+    last = {f.leg: f for f in steps}
+    assert last["lleg"].yaw == pytest.approx(last["rleg"].yaw, abs=1e-12)  # aligned
+
+
+def test_emergency_stop_mid_walk_ends_with_steps_in_place():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_pos(1.0, 0.0, 0.0)
+    samples = run(gg, {450: lambda g: g.emergency_stop()})
+    steps = gg.footsteps
+    assert [f.step_height_m for f in steps[-3:]] == [0.0, 0.0, 0.0]
+    assert len(steps) == 3 + 3  # node 0, the step in progress and the next, 3 in place
+    check_walk(gg, samples, steps)
+
+
+def test_the_zmp_preview_is_the_future_of_the_per_tick_zmp():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_pos(0.2, 0.0, 0.0)
+    n = 320
+    previews, zmps = [], []
+    while gg.walking:
+        previews.append(np.array(gg.zmp_preview(n)))
+        zmps.append(gg.tick().zmp_world)
+    zmps = np.array(zmps)
+    padded = np.vstack([zmps, np.repeat(zmps[-1:], n, axis=0)])
+    for k in range(0, len(zmps), 37):
+        assert np.array_equal(previews[k], padded[k:k + n])
+    assert gg.zmp_preview().shape == (320, 3)
+
+
+def test_the_average_tick_with_preview_costs_under_0_1_ms():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_velocity(0.1, 0.0, 0.0)
+    ticks = 0
+    t0 = time.perf_counter()
+    for _ in range(3000):  # 15 s of walking, with a replan at every mid-step
+        gg.zmp_preview()
+        gg.tick()
+        ticks += 1
+    elapsed = time.perf_counter() - t0
+    assert elapsed / ticks < 1e-4
+
+
+def test_a_step_time_that_is_not_a_whole_number_of_ticks_is_rejected():
+    gg = GaitGenerator(dt_s=0.004)
+    first = Footstep("rleg", 0.0, -0.095, step_height_m=0.0, step_time_s=1.0021)
+    with pytest.raises(InvalidCommand, match="whole number of ticks"):
+        gg.plan([first])
+    assert not gg.walking
+
+
+def test_footsteps_0_must_be_the_current_support_foot():
+    gg = GaitGenerator(dt_s=DT)
+    with pytest.raises(InvalidCommand, match="current rleg pose"):
+        gg.plan([Footstep("rleg", 0.1, -0.095, step_height_m=0.0)])
