@@ -17,7 +17,7 @@ from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidState
 from controller.core.layer import Layer, Params, Status, described
 from controller.core.types import GaitState, Reference, TickContext, read_only
-from controller.interpolation.hoff_arbib import hoff_arbib
+from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rpy_to_rows
@@ -97,7 +97,7 @@ class AutoBalancer(Layer):
         # blend between the plain plan (0) and the balanced posture (1)
         self.active = False
         self._weight = 0.0
-        self._blend = None  # (Segment, elapsed)
+        self._blend: Transition | None = None  # start / stop blend of the weight
         self.has_ik_failed = False
         self.last_gait: GaitState | None = None
         self._footsteps_cache: tuple[list, int, list[dict]] | None = None
@@ -112,13 +112,13 @@ class AutoBalancer(Layer):
         if self.active:
             raise InvalidState("AutoBalancer is already active")
         self.active = True
-        self._blend = [hoff_arbib(np.array([self._weight]), np.array([1.0]), self.params.transition_time_s), 0.0]
+        self._blend = Transition(self._weight, 1.0, self.params.transition_time_s, "min_jerk")
 
     def stop(self) -> None:
         if not self.active:
             raise InvalidState("AutoBalancer is not active")
         self.active = False
-        self._blend = [hoff_arbib(np.array([self._weight]), np.array([0.0]), self.params.transition_time_s), 0.0]
+        self._blend = Transition(self._weight, 0.0, self.params.transition_time_s, "min_jerk")
 
     def set_params(self, params: AutoBalancerParams) -> None:
         self.params = params
@@ -199,10 +199,9 @@ class AutoBalancer(Layer):
         if self._holding:
             self._resume(ctx)
         if self._blend is not None:
-            seg, elapsed = self._blend
-            elapsed = min(elapsed + ctx.dt_s, seg.duration_s)
-            self._weight = float(seg.sample(elapsed)[0][0])
-            self._blend = None if elapsed >= seg.duration_s else [seg, elapsed]
+            self._weight = self._blend.step(ctx.dt_s)
+            if self._blend.done:
+                self._blend = None
         if self._weight <= 0.0 and not self.active:
             self.last_gait = None
             return ref

@@ -12,9 +12,9 @@ import pinocchio as pin
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, SharedStatus, Status, described
 from controller.core.types import Reference, TickContext
+from controller.interpolation.blend import Transition
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import cross3
-from controller.layers.stabilizer import sigmoid_transition
 from robot.names import FORCE_SENSOR_NAMES, JOINT_GROUPS
 
 LIMBS = {"rarm": ("rhsensor", "rarm_end"), "larm": ("lhsensor", "larm_end")}
@@ -85,7 +85,7 @@ class _Limb:
         self.joints = np.array(JOINT_GROUPS[name][:-1])
         self.active = False
         self.weight = 0.0
-        self.transition: tuple[float, float, float] | None = None  # (from, to, elapsed)
+        self.transition: Transition | None = None  # start / stop blend of the weight
         self.imp = ImpedanceState()
         self.q: np.ndarray | None = None  # last IK solution (arm joints)
         self.status_part = SharedStatus()  # its part of ImpedanceController.status()
@@ -122,14 +122,14 @@ class ImpedanceController(Layer):
             raise InvalidState(f"impedance control of {limb} is already active")
         lb.active = True
         lb.imp = ImpedanceState()
-        lb.transition = (lb.weight, 1.0, 0.0)
+        lb.transition = Transition(lb.weight, 1.0, self.params[limb].transition_time_s, "sigmoid")
 
     def stop(self, limb: str) -> None:
         lb = self._limb(limb)
         if not lb.active:
             raise InvalidState(f"impedance control of {limb} is not active")
         lb.active = False
-        lb.transition = (lb.weight, 0.0, 0.0)
+        lb.transition = Transition(lb.weight, 0.0, self.params[limb].transition_time_s, "sigmoid")
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         if not self.enabled:
@@ -150,11 +150,9 @@ class ImpedanceController(Layer):
                 continue
             p = self.params[lb.name]
             if lb.transition is not None:
-                w0, w1, el = lb.transition
-                el += ctx.dt_s
-                s = min(1.0, el / p.transition_time_s)
-                lb.weight = w0 + (w1 - w0) * sigmoid_transition(s)
-                lb.transition = None if s >= 1.0 else (w0, w1, el)
+                lb.weight = lb.transition.step(ctx.dt_s)
+                if lb.transition.done:
+                    lb.transition = None
             # the planned hand pose (spring centre) and the measured-minus-planned wrench at the hand
             frame_id, sensor_id = self._frame_ids[lb.name]
             T_ee = kin.frame_homogeneous(frame_id)

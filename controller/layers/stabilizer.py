@@ -24,6 +24,7 @@ from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidState
 from controller.core.layer import Layer, Params, Status, described
 from controller.core.types import Reference, TickContext
+from controller.interpolation.blend import Transition
 from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, _leg_ik_floats
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rpy_to_rows
@@ -89,15 +90,6 @@ class StabilizerStatus(Status):
     new_zmp: tuple[float, float, float] = field(metadata=described("ZMP the feet are asked to realise (world)", "m"))
 
 
-def sigmoid_transition(s: float) -> float:
-    """Smooth start/stop weight for progress s in [0, 1]: hrpsys's 1 / (1 + exp(-9.19 (s - 0.5))),
-    rescaled to be exactly 0 at s = 0 and 1 at s = 1 (hrpsys's curve jumps by 1 % at both ends)."""
-    def raw(x: float) -> float:
-        return 1.0 / (1.0 + math.exp(-9.19 * (x - 0.5)))
-    lo, hi = raw(0.0), raw(1.0)
-    return (raw(min(1.0, max(0.0, s))) - lo) / (hi - lo)
-
-
 def _matmul3(A, B) -> tuple[tuple[float, float, float], ...]:
     """A @ B for 3x3 matrices given as rows of floats."""
     (b00, b01, b02), (b10, b11, b12), (b20, b21, b22) = B
@@ -129,7 +121,7 @@ class Stabilizer(Layer):
         self._prev_cog: np.ndarray | None = None
         self.act_cogvel = np.zeros(3)
         self.active = False
-        self._transition = None  # (from_w, to_w, elapsed)
+        self._transition: Transition | None = None  # start / stop blend of the weight
         self.weight = 0.0
         self.cp_ref = np.zeros(2)
         self.cp_act = np.zeros(2)
@@ -150,13 +142,13 @@ class Stabilizer(Layer):
         if self.active:
             raise InvalidState("Stabilizer is already running")
         self.active = True
-        self._transition = (self.weight, 1.0, 0.0)
+        self._transition = Transition(self.weight, 1.0, self.params.transition_time_s, "sigmoid")
 
     def stop(self) -> None:
         if not self.active:
             raise InvalidState("Stabilizer is not running")
         self.active = False
-        self._transition = (self.weight, 0.0, 0.0)
+        self._transition = Transition(self.weight, 0.0, self.params.transition_time_s, "sigmoid")
 
     def set_params(self, params: StabilizerParams) -> None:
         self.params = params
@@ -165,11 +157,9 @@ class Stabilizer(Layer):
     def _advance_transition(self, dt: float) -> None:
         if self._transition is None:
             return
-        w0, w1, elapsed = self._transition
-        elapsed += dt
-        s = min(1.0, elapsed / self.params.transition_time_s)
-        self.weight = w0 + (w1 - w0) * sigmoid_transition(s) if s < 1.0 else w1
-        self._transition = None if s >= 1.0 else (w0, w1, elapsed)
+        self.weight = self._transition.step(dt)
+        if self._transition.done:
+            self._transition = None
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         if not self.enabled:  # pass-through (no estimate either: the loop's state estimator runs)

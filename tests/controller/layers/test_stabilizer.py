@@ -5,8 +5,9 @@ import pytest
 
 from controller.core.errors import InvalidState
 from controller.core.types import Estimate, GaitState, Reference, TickContext
+from controller.interpolation.blend import sigmoid_ratio as sigmoid_transition
 from controller.kinematics.model import RobotKinematics
-from controller.layers.stabilizer import Stabilizer, StabilizerParams, sigmoid_transition
+from controller.layers.stabilizer import Stabilizer, StabilizerParams
 from robot.generate import half_sitting_deg
 from robot.sensors import Sensors
 
