@@ -185,7 +185,7 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         "tick_ms": _percentiles(tick_ms),
         "physics_ms": _percentiles(physics_ms),
         "layers": {name: _percentiles(layer_ms[name]) for name in working},
-        "fallen": bool(snap.fallen),
+        "fallen": bool(robot.host.observation.fallen),
         "fault": snap.fault,
     }
     if selected is not None:

@@ -163,6 +163,7 @@ def run(argv: Sequence[str]) -> int:
     from app.service import OperatorService, ServiceError
     from app.service.process import RobotConfig, RobotProcess
     from app.settings import Settings
+    from robot.sensors import is_fallen
 
     # many request threads share this interpreter: hand the GIL over every 0.5 ms rather than 5 ms, so the
     # event loop answers (an e-stop, a state poll) without waiting behind a busy request thread
@@ -229,7 +230,7 @@ def run(argv: Sequence[str]) -> int:
     snap = last.snapshot if last is not None else None
     dt = robot.config.dt_control_s
     sim_s = summary["ticks"] * dt
-    fallen = summary["fallen"] or bool(snap is not None and snap.fallen)
+    fallen = summary["fallen"] or bool(last is not None and is_fallen(last.truth))
     faults = summary["faults"]
     print("summary:")
     print(f"  scene: {last.scene if last is not None else args.scene}")

@@ -17,6 +17,7 @@ from app.service.host import Published
 from controller.core.layer import Status, plain
 from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
 from robot.names import JOINT_NAMES
+from robot.sensors import is_fallen
 
 
 def jsonable(value: Any) -> Any:
@@ -58,7 +59,7 @@ def state_document(pub: Published) -> dict[str, Any]:
     types already (floats from tolist, statuses through `plain`): `state_json` encodes it without a walk over
     every value unless a NaN or an infinity needs turning into null."""
     snap = pub.snapshot
-    truth = snap.truth
+    truth = pub.truth
     rpy_truth = matrix_to_rpy(quat_wxyz_to_matrix(np.asarray(truth.base_quat_wxyz, dtype=float)))
     cmd, meas, seq = (_deg(snap.q_cmd_rad), _deg(snap.q_meas_rad), _deg(snap.q_seq_rad))
     joints = {n: {"cmd_deg": cmd[i], "meas_deg": meas[i], "seq_deg": seq[i]} for i, n in enumerate(JOINT_NAMES)}
@@ -74,7 +75,7 @@ def state_document(pub: Published) -> dict[str, Any]:
     return {
         "time": round(float(snap.time_s), 6),
         "tick": int(snap.tick),
-        "fallen": bool(snap.fallen or safety.fall is not None),
+        "fallen": bool(is_fallen(truth) or safety.fall is not None),
         "base": {"pos": _rounded(truth.base_pos_world, 5), "rpy_deg": _deg(rpy_truth),
                  "linvel": _rounded(truth.base_linvel_world, 5), "source": "simulation"},
         "estimate": {"rpy_deg": _deg(snap.base_rpy_est_rad), "source": "kf"},

@@ -237,7 +237,7 @@ class Viewer:
             if node is not None:
                 self._scene_nodes.append(node)
         try:
-            self._apply_poses(self.service.snapshot().truth)
+            self._apply_poses(self.service.observation().truth)
         except ServiceError:
             pass
 
@@ -277,7 +277,8 @@ class Viewer:
             frame.wxyz = quat[b]
 
     def apply_snapshot(self, snap) -> None:
-        """Body poses and the balance markers of one snapshot, in one atomic batch."""
+        """Body poses and the balance markers of one observation (a snapshot with the ground truth beside it),
+        in one atomic batch."""
         with self.server.atomic():
             self._set_body_poses(snap.truth)
             self._update_markers(snap)
@@ -367,7 +368,7 @@ class Viewer:
         self._fault = gui.add_text("fault", "none", disabled=True)
         self._message = gui.add_text("last action", "", disabled=True)
         try:
-            self._cp_history.add(self.service.snapshot())
+            self._cp_history.add(self.service.observation())
         except ServiceError:
             pass
         self._cp_plot = gui.add_uplot(
@@ -426,7 +427,7 @@ class Viewer:
             try:
                 if self.service.info.scene != self._scene:
                     self._build_scene()  # the simulation was reset to another scene
-                snap = self.service.snapshot()
+                snap = self.service.observation()
                 if snap.tick != last_tick:
                     self.apply_snapshot(snap)
                     last_tick = snap.tick

@@ -39,6 +39,16 @@ class Sensors:
     accel_m_s2: np.ndarray  # (3,) specific force of BODY in the BODY frame (+9.81 z when still)
 
 
+_COS_45_DEG = float(np.cos(np.deg2rad(45.0)))
+
+
+def is_fallen(truth: GroundTruth) -> bool:
+    """The simulation's verdict: BODY lower than 0.35 m, or its z axis more than 45 deg from vertical."""
+    w, x, y, z = truth.base_quat_wxyz.tolist()
+    up_z = 1.0 - 2.0 * (x * x + y * y)  # z component of BODY's z axis in world
+    return bool(truth.base_pos_world[2] < 0.35 or up_z < _COS_45_DEG)
+
+
 @dataclass(frozen=True, slots=True)
 class GroundTruth:
     """The simulator's view. Tests and the GUI may read it; the controller must not."""

@@ -100,7 +100,7 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
                 events.pop(0)[1]()  # the planner's verbs, between two ticks
             except Refused as exc:  # e.g. the motion stopped by the flag: the plan's next step does not run
                 refused.append(f"{t_rel:.2f} s: {exc}")
-        snap = loop.step()
+        snap = robot.step()  # the snapshot, and the simulation's verdict beside it
         st = snap.layers["st"]
         es_st = snap.layers["es"]
         if es_st.stopped and flag_time is None and es_st.flag_time is not None:

@@ -13,7 +13,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError, Unavailable
-from app.service.host import EstopAck, Published
+from app.service.host import EstopAck, Observation, Published
 from app.service.verbs import (
     ChainTiming,
     ClearSequence,
@@ -223,6 +223,11 @@ class OperatorService:
 
     def snapshot(self) -> Snapshot:
         return self.published().snapshot
+
+    def observation(self) -> Observation:
+        """The latest snapshot with the simulator's ground truth beside it (for the GUI)."""
+        pub = self.published()
+        return Observation(pub.snapshot, pub.truth)
 
     def timing(self, last_s: float | None = None) -> LoopTiming:
         """The loop's figures as last published, or computed now over the last `last_s` seconds."""

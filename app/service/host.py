@@ -21,6 +21,7 @@ from controller.core.loop_timing import LoopTiming
 from controller.core.system import ControllerSystem
 from robot.names import JOINT_NAMES
 from robot.plant import MujocoPlant, available_scenes
+from robot.sensors import GroundTruth, is_fallen
 
 log = logging.getLogger(__name__)
 
@@ -34,11 +35,12 @@ class RunStats:
         self.fallen = False
         self.faults: set[str] = set()
 
-    def update(self, snap: Snapshot) -> None:
+    def update(self, obs: Observation) -> None:
+        snap = obs.snapshot
         self.ticks += 1
         if snap.loop_ms > self.max_loop_ms:
             self.max_loop_ms = float(snap.loop_ms)
-        if snap.fallen:
+        if obs.fallen:
             self.fallen = True
         fault = snap.safety.fault
         if fault and fault not in self.faults:
@@ -59,6 +61,22 @@ class EstopAck:
     already_engaged: bool
 
 
+@dataclass(frozen=True, slots=True)
+class Observation:
+    """One tick as the simulation sees it: the controller's snapshot and, beside it, the simulator's ground
+    truth (for the GUI, the log and tests; the controller never sees it). Reads through to the snapshot."""
+
+    snapshot: Snapshot
+    truth: GroundTruth
+
+    @property
+    def fallen(self) -> bool:
+        return is_fallen(self.truth)
+
+    def __getattr__(self, name: str):
+        return getattr(self.snapshot, name)
+
+
 @dataclass(frozen=True)
 class Published:
     """What the robot side publishes after a tick: the snapshot and the loop's own figures, latest wins."""
@@ -66,6 +84,7 @@ class Published:
     seq: int  # increases with every publication of this robot process
     generation: int  # increases with every reset (the chain and the scene may have changed)
     snapshot: Snapshot
+    truth: GroundTruth  # the simulator's, beside the snapshot
     timing: LoopTiming
     scene: str
     speed: float | None
@@ -84,7 +103,7 @@ class RobotHost:
     """Owns the simulation and the control loop. Verbs reach them only through `apply`."""
 
     def __init__(self, scene: str = "default", dt_control_s: float = 0.005, speed: float | None = 1.0,
-                 logger: DataLogger | None = None) -> None:
+                 logger: DataLogger | None = None, start_auto_balancer: bool = True) -> None:
         self.scene = scene
         self.dt_control_s = dt_control_s
         self.logger = logger if logger is not None else DataLogger(12000)
@@ -93,7 +112,9 @@ class RobotHost:
         self._seq = 0
         self._timing: tuple[float, LoopTiming] | None = None
         self.plant = MujocoPlant(scene)
-        self.system = ControllerSystem(self.plant, dt_control_s=dt_control_s, on_snapshot=self._on_snapshot)
+        self.system = ControllerSystem(self.plant, dt_control_s=dt_control_s, on_snapshot=self._on_snapshot,
+                                       start_auto_balancer=start_auto_balancer)
+        self.observation = Observation(self.loop.snapshot, self.plant.ground_truth())
         self.loop.speed = speed
 
     def __repr__(self) -> str:
@@ -104,8 +125,9 @@ class RobotHost:
         return self.system.loop
 
     def _on_snapshot(self, snap: Snapshot) -> None:
-        self.logger.record(snap)
-        self.stats.update(snap)
+        self.observation = obs = Observation(snap, self.plant.ground_truth())
+        self.logger.record(obs)
+        self.stats.update(obs)
 
     # ---- verbs ---------------------------------------------------------------------------------------
     def apply(self, verb: Verb) -> Any:
@@ -197,6 +219,7 @@ class RobotHost:
         plant = MujocoPlant(scene)
         self.loop.replace_plant(plant)
         self.plant = plant
+        self.observation = Observation(self.loop.snapshot, plant.ground_truth())
         self.scene = scene
         self.generation += 1
         self.logger.clear()
@@ -230,6 +253,8 @@ class RobotHost:
     def publish(self) -> Published:
         self._seq += 1
         loop = self.loop
-        return Published(seq=self._seq, generation=self.generation, snapshot=loop.snapshot, timing=self.timing(),
+        obs = self.observation
+        return Published(seq=self._seq, generation=self.generation, snapshot=obs.snapshot, truth=obs.truth,
+                         timing=self.timing(),
                          scene=self.scene, speed=loop.speed, stats=self.stats.summary(),
                          chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic())

@@ -16,8 +16,9 @@ class LocalRobot:
     """A RobotHost in this process. Without `start()`, verbs run at once (between the caller's ticks);
     with it, they queue for the loop thread's next tick boundary."""
 
-    def __init__(self, scene: str = "default", speed: float | None = None, dt_control_s: float = 0.005) -> None:
-        self.host = RobotHost(scene, dt_control_s, speed)
+    def __init__(self, scene: str = "default", speed: float | None = None, dt_control_s: float = 0.005,
+                 start_auto_balancer: bool = True) -> None:
+        self.host = RobotHost(scene, dt_control_s, speed, start_auto_balancer=start_auto_balancer)
         self.exit_reason: str | None = None
         self.priority = "default"
         self._published: Published | None = None
@@ -32,6 +33,18 @@ class LocalRobot:
     @property
     def system(self):
         return self.host.system
+
+    @property
+    def chain(self):
+        return self.host.loop.chain
+
+    @property
+    def kin(self):
+        return self.host.system.kin
+
+    @property
+    def plant(self):
+        return self.host.plant
 
     @property
     def scene(self) -> str:
@@ -53,10 +66,25 @@ class LocalRobot:
         self.loop.stop()
 
     def step(self):
-        return self.loop.step()
+        """One tick; the Observation (the snapshot with the simulator's ground truth beside it)."""
+        self.loop.step()
+        return self.host.observation
 
     def run_for(self, seconds: float):
-        return self.loop.run_for(seconds)
+        self.loop.run_for(seconds)
+        return self.host.observation
+
+    def run_until(self, predicate, timeout_s: float):
+        """Step until `predicate(observation)` holds; TimeoutError after `timeout_s` of simulated time."""
+        for _ in range(int(round(timeout_s / self.loop.dt_control_s))):
+            obs = self.step()
+            if predicate(obs):
+                return obs
+        raise TimeoutError(f"condition not reached within {timeout_s} s of simulated time")
+
+    @property
+    def truth(self):
+        return self.host.observation.truth
 
     # ---- channels -----------------------------------------------------------------------------------------
     def submit(self, verb: Verb) -> Future:

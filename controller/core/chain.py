@@ -68,6 +68,11 @@ class Chain:
                 raise InvalidCommand(f"layer registered as {name!r} calls itself {layer.name!r}")
         self.layers: dict[str, Layer] = {n: layers[n] for n in CHAIN_ORDER if n in layers}
         self.timers: dict[str, TickTimer] = {n: TickTimer() for n in self.layers}
+        stops = [layer for layer in self.layers.values() if layer.safe_stop]
+        if len(stops) > 1:
+            raise InvalidCommand(f"more than one safe-stop layer: {[s.name for s in stops]}")
+        #: the layer faults and falls engage (the HardEmergencyStopper), None if the chain has none
+        self.safe_stop_layer: Layer | None = stops[0] if stops else None
 
     def order(self) -> list[str]:
         return list(self.layers)

@@ -127,6 +127,8 @@ class Layer:
 
     name: ClassVar[str] = "layer"
     description: ClassVar[str] = ""
+    #: the layer the loop engages on a fault or a fall: it has engage(q_rad, reason) and an `engaged` flag
+    safe_stop: ClassVar[bool] = False
 
     def __init__(self) -> None:
         self.enabled = True

@@ -21,21 +21,22 @@ from controller.core.errors import InvalidCommand
 from controller.core.layer import Status
 from controller.core.loop_timing import LatenessMeter, LoopTiming
 from controller.core.types import Estimate, Ports, Reference, TickContext, frozen_array
-from robot.sensors import GroundTruth, Sensors
+from robot.sensors import Sensors
 
 log = logging.getLogger(__name__)
 
 
 class Plant(Protocol):
-    """The hardware interface the loop drives (robot.plant.MujocoPlant, or a real robot)."""
+    """The hardware interface the loop drives (robot.plant.MujocoPlant, or a real robot): its sensors, its
+    servos, its clock. Nothing of a simulator's ground truth: the controller works from what it senses."""
 
     dt_physics: float
 
+    @property
+    def time_s(self) -> float: ...
     def read(self) -> Sensors: ...
     def write(self, q_ref_rad: np.ndarray) -> None: ...
     def step(self, n: int = 1) -> None: ...
-    def ground_truth(self) -> GroundTruth: ...
-    def warnings(self) -> dict[str, int]: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,23 +66,11 @@ class Snapshot:
     layers: dict[str, Status]  # per-layer frozen status
     layer_tick_ms: dict[str, float]  # wall time of each layer's tick [ms]
     safety: Safety
-    truth: GroundTruth  # simulator ground truth: GUI and tests only
-    fallen: bool  # from ground truth: BODY below 0.35 m or tilted over 45 deg
     loop_ms: float  # wall time of the whole tick (chain + physics) [ms]
 
     @property
     def fault(self) -> str | None:
         return self.safety.fault
-
-
-_COS_45_DEG = float(np.cos(np.deg2rad(45.0)))
-
-
-def is_fallen(truth: GroundTruth) -> bool:
-    """BODY lower than 0.35 m, or its z axis more than 45 deg from vertical."""
-    w, x, y, z = truth.base_quat_wxyz.tolist()
-    up_z = 1.0 - 2.0 * (x * x + y * y)  # z component of BODY's z axis in world
-    return bool(truth.base_pos_world[2] < 0.35 or up_z < _COS_45_DEG)
 
 
 StateEstimatorFn = Callable[[Sensors, Estimate, Reference], tuple[np.ndarray, np.ndarray]]
@@ -137,8 +126,7 @@ class ControlLoop:
         self._ports = Ports()
         self._last_ref = Reference.from_arrays(sensors.q_rad)
         self._last_q_cmd = np.array(sensors.q_rad, dtype=float)
-        self.snapshot: Snapshot = self._make_snapshot(
-            sensors, Estimate(), self._last_ref, self._last_ref, 0.0)
+        self.snapshot: Snapshot = self._make_snapshot(sensors, Estimate(), self._last_ref, 0.0, sensors.q_rad)
 
     def replace_plant(self, plant: Plant) -> None:
         """Swap in a new plant (simulation reset) and rebuild the chain from its sensors."""
@@ -205,10 +193,9 @@ class ControlLoop:
         self.plant.step(self.substeps)
         self.physics_timer.add((time.perf_counter() - t_phys) * 1e3)
         self.tick_count += 1
-        seq_ref = getattr(self.chain.layers.get("seq"), "last_output", None) or ref
         loop_ms = (time.perf_counter() - t_start) * 1e3
         self.tick_timer.add(loop_ms)
-        self.snapshot = self._make_snapshot(sensors, est, ref, seq_ref, loop_ms)
+        self.snapshot = self._make_snapshot(sensors, est, ref, loop_ms)
         if self._on_snapshot is not None:
             self._on_snapshot(self.snapshot)
         return self.snapshot
@@ -222,41 +209,41 @@ class ControlLoop:
         self.safe_stop("fault", self._last_q_cmd)
 
     def safe_stop(self, reason: str, q_rad: np.ndarray | None = None) -> None:
-        """Engage the hard e-stop (the chain's safe stop) for `reason`: "operator", "fault" or "fallen"."""
-        hes = self.chain.layers.get("hes")
-        if hes is not None and hasattr(hes, "engage"):
-            hes.engage(q_rad, reason=reason)
+        """Engage the chain's safe stop (its layer that declares `safe_stop`, the HardEmergencyStopper) for
+        `reason`: "operator", "fault" or "fallen"."""
+        layer = self.chain.safe_stop_layer
+        if layer is not None:
+            layer.engage(q_rad, reason=reason)
 
     @property
     def hard_stop_engaged(self) -> bool:
-        hes = self.chain.layers.get("hes")
-        return bool(getattr(hes, "engaged", False))
+        return bool(getattr(self.chain.safe_stop_layer, "engaged", False))
 
     def clear_fault(self) -> None:
         self.fault = None
 
-    def _make_snapshot(self, sensors: Sensors, est: Estimate, ref: Reference, seq_ref: Reference,
-                       loop_ms: float) -> Snapshot:
-        truth = self.plant.ground_truth()
-        if est.cog_world is not None:  # the Stabilizer estimated them this tick
+    def _make_snapshot(self, sensors: Sensors, est: Estimate, ref: Reference, loop_ms: float,
+                       planned_q_rad: np.ndarray | None = None) -> Snapshot:
+        if est.cog_world is not None:  # estimated by a layer this tick (the Stabilizer)
             cog, zmp = est.cog_world, est.zmp_world
-        elif self._state_estimator is not None:
+        elif self._state_estimator is not None:  # no layer did: the same estimator, once
             cog, zmp = self._state_estimator(sensors, est, ref)
         else:
             cog, zmp = np.zeros(3), np.zeros(3)
         timers = self.chain.timers
         layers = {name: layer.status() for name, layer in self.chain.layers.items()}
-        hes = layers.get("hes")
-        safety = Safety(hard_stop=bool(getattr(hes, "engaged", False)), hard_stop_reason=getattr(hes, "reason", None),
+        stop = self.chain.safe_stop_layer
+        safety = Safety(hard_stop=bool(getattr(stop, "engaged", False)), hard_stop_reason=getattr(stop, "reason", None),
                         fault=self.fault, fall=None if self.fall is None else self.fall.reason)
+        planned = self._ports.planned_q_rad if planned_q_rad is None else planned_q_rad
         return Snapshot(
-            tick=self.tick_count, time_s=float(sensors.time_s if self.tick_count == 0 else truth.time_s),
-            q_cmd_rad=frozen_array(self._last_q_cmd), q_seq_rad=frozen_array(seq_ref.q_rad),
+            tick=self.tick_count, time_s=float(sensors.time_s if self.tick_count == 0 else self.plant.time_s),
+            q_cmd_rad=frozen_array(self._last_q_cmd), q_seq_rad=frozen_array(ref.q_rad if planned is None else planned),
             q_meas_rad=sensors.q_rad, reference=ref,
             base_rpy_est_rad=frozen_array(est.base_rpy_rad), wrenches_ext=frozen_array(est.wrenches_ext),
             cog_world=frozen_array(cog), zmp_world=frozen_array(zmp), layers=layers,
             layer_tick_ms={name: t.last_ms for name, t in timers.items()},
-            safety=safety, truth=truth, fallen=is_fallen(truth), loop_ms=loop_ms,
+            safety=safety, loop_ms=loop_ms,
         )
 
     # ---- synchronous running ----------------------------------------------------------------

@@ -75,16 +75,19 @@ class ControllerSystem:
         # separate kinematics objects: each user updates its own pinocchio data
         self._kin_est = RobotKinematics()
         self._kin_seq = RobotKinematics()
+        # the one estimator of the actual COG and ZMP, new with every chain: the Stabilizer runs it, the
+        # loop only when no layer did (a chain without the Stabilizer)
         self.estimator = ActualStateEstimator(self._kin_est)
         weight_n = self.kin.total_mass * GRAVITY_M_S2
         self.loop = ControlLoop(plant, self.build_chain, dt_control_s=dt_control_s,
-                                state_estimator=self.estimator, on_snapshot=on_snapshot,
-                                fall_detector_factory=lambda: FallDetector(weight_n))
+                                state_estimator=lambda sensors, est, ref: self.estimator(sensors, est, ref),
+                                on_snapshot=on_snapshot, fall_detector_factory=lambda: FallDetector(weight_n))
 
     def build_chain(self, sensors: Sensors, dt_s: float) -> Chain:
         q0 = np.array(sensors.q_rad, dtype=float)
         ref0 = initial_reference(self.kin, q0)
         tilt = AttitudeKalmanFilter.tilt_from_accel(sensors.accel_m_s2)
+        self.estimator = ActualStateEstimator(self._kin_est)
         layers = [
             KalmanFilter(rpy0=(tilt[0], tilt[1], 0.0)),
             RemoveForceOffset(RobotKinematics()),
@@ -92,7 +95,7 @@ class ControllerSystem:
             EmergencyStopper(dt_s),
             ImpedanceController(),
             AutoBalancer(ref0, dt_s, active=self.start_auto_balancer),
-            Stabilizer(dt_s, active=self.start_stabilizer),
+            Stabilizer(dt_s, active=self.start_stabilizer, estimator=self.estimator),
             CollisionDetector(q0),
             HardEmergencyStopper(q0),
             SoftErrorLimiter(self.kin.q_lower, self.kin.q_upper, q0),

@@ -141,6 +141,8 @@ class Ports:
 
     hold: bool = False  # hes: the hard e-stop is engaged; the layers before it hold their motion
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
+    planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
+    cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
 
 
 @dataclass(slots=True)

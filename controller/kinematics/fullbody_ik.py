@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 
 from controller.core.layer import Params
-from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, _floats, _leg_ik_floats
+from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, as_floats, leg_ik_floats
 from controller.kinematics.model import RobotKinematics
 
 _RLEG = LEG_INDICES["rleg"]
@@ -82,16 +82,16 @@ class FullbodyIK:
         if cache is None or cache[0] is not kin:
             cache = self._leg_q_slices = (kin, _as_slice(kin.idx_q[_RLEG]), _as_slice(kin.idx_q[_LLEG]))
         idx_r, idx_l = cache[1], cache[2]
-        R_rows = _floats(R_world_body)
-        rsole = (_floats(T_world_rsole[0]), _floats(T_world_rsole[1]))
-        lsole = (_floats(T_world_lsole[0]), _floats(T_world_lsole[1]))
+        R_rows = as_floats(R_world_body)
+        rsole = (as_floats(T_world_rsole[0]), as_floats(T_world_rsole[1]))
+        lsole = (as_floats(T_world_lsole[0]), as_floats(T_world_lsole[1]))
         tol = p.com_tolerance_m
         gain = p.move_base_gain
         bz = float(base_z_m)
         for it in range(1, p.max_iterations + 1):  # noqa: B007 - reported after the loop
             base_l = [bx, by, bz]
-            qr, ok_r = _leg_ik_floats(RLEG, base_l, R_rows, *rsole)
-            ql, ok_l = _leg_ik_floats(LLEG, base_l, R_rows, *lsole)
+            qr, ok_r = leg_ik_floats(RLEG, base_l, R_rows, *rsole)
+            ql, ok_l = leg_ik_floats(LLEG, base_l, R_rows, *lsole)
             reachable = ok_r and ok_l
             qp[0], qp[1], qp[2] = bx, by, bz
             qp[idx_r] = qr
@@ -105,8 +105,8 @@ class FullbodyIK:
         else:
             # the last correction was not applied to the legs yet: finish with it
             base_l = [bx, by, bz]
-            qr, ok_r = _leg_ik_floats(RLEG, base_l, R_rows, *rsole)
-            ql, ok_l = _leg_ik_floats(LLEG, base_l, R_rows, *lsole)
+            qr, ok_r = leg_ik_floats(RLEG, base_l, R_rows, *rsole)
+            ql, ok_l = leg_ik_floats(LLEG, base_l, R_rows, *lsole)
             reachable = ok_r and ok_l
             qp[0], qp[1], qp[2] = bx, by, bz
             qp[idx_r] = qr

@@ -29,7 +29,7 @@ LLEG = LegGeometry(hip_offset_y_m=0.06, shin_offset_y_m=0.035)
 LEG_INDICES = {"rleg": np.array(JOINT_GROUPS["rleg"]), "lleg": np.array(JOINT_GROUPS["lleg"])}
 
 
-def _floats(a) -> list:
+def as_floats(a) -> list:
     """An array (or sequence) as nested Python floats."""
     return (a if isinstance(a, np.ndarray) else np.asarray(a, dtype=float)).tolist()
 
@@ -42,12 +42,12 @@ def leg_ik(geom: LegGeometry, p_body_world: np.ndarray, R_world_body: np.ndarray
     closest pose with reachable = False, so a caller never gets NaN. Scalar maths on purpose:
     this runs several times per 5 ms tick.
     """
-    q, reachable = _leg_ik_floats(geom, _floats(p_body_world), _floats(R_world_body),
-                                  _floats(p_sole_world), _floats(R_world_sole))
+    q, reachable = leg_ik_floats(geom, as_floats(p_body_world), as_floats(R_world_body),
+                                  as_floats(p_sole_world), as_floats(R_world_sole))
     return np.array(q), reachable
 
 
-def _leg_ik_floats(geom: LegGeometry, p_body_world, R_world_body, p_sole_world, R_world_sole
+def leg_ik_floats(geom: LegGeometry, p_body_world, R_world_body, p_sole_world, R_world_sole
                    ) -> tuple[tuple[float, ...], bool]:
     """leg_ik on Python floats: positions as 3 floats, rotations as 3 rows of 3 floats."""
     L1, L2, dy = geom.thigh_m, geom.shin_m, geom.shin_offset_y_m

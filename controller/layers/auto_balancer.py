@@ -100,7 +100,7 @@ class AutoBalancer(Layer):
         self._blend: Transition | None = None  # start / stop blend of the weight
         self.has_ik_failed = False
         self.last_gait: GaitState | None = None
-        self._footsteps_cache: tuple[list, int, list[dict]] | None = None
+        self._footsteps_cache: tuple[int, int, tuple] | None = None
         self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
         self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
         self._holding = False  # the hard e-stop holds the chain
@@ -195,7 +195,10 @@ class AutoBalancer(Layer):
             self.last_gait = None
             return ref
         if ctx.hold and self._last_out is not None:
-            return self._hold()
+            out = self._hold()
+            if out.gait is not None:
+                ctx.ports.cog_acc_world = out.gait.cog_acc_world
+            return out
         if self._holding:
             self._resume(ctx)
         if self._blend is not None:
@@ -241,6 +244,7 @@ class AutoBalancer(Layer):
         # all fresh arrays of this tick: frozen in place rather than copied
         self._last_out = ref._with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
                                          gait=gait)
+        ctx.ports.cog_acc_world = gait.cog_acc_world
         return self._last_out
 
     def _resume(self, ctx: TickContext) -> None:
@@ -282,11 +286,10 @@ class AutoBalancer(Layer):
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes
         (the list is shared between snapshots: readers must not modify it)."""
         remaining = self.gait.remaining_footsteps()
-        # the remaining steps are a tail of the plan list, which the gait generator replaces (never
-        # mutates) on a new plan or replan: that list and the tail length identify the content
-        plan = self.gait._footsteps
+        # the remaining steps are a tail of the plan: its version and the tail length identify the content
+        plan = self.gait.plan_version
         cache = self._footsteps_cache
-        if cache is None or cache[0] is not plan or cache[1] != len(remaining):
+        if cache is None or cache[0] != plan or cache[1] != len(remaining):
             cache = self._footsteps_cache = (plan, len(remaining), self.remaining_footsteps())
         return cache[2]
 

@@ -38,6 +38,7 @@ class HardEmergencyStopper(Layer):
 
     name = "hes"
     description = "HardEmergencyStopper: operator e-stop, latched freeze, blended release"
+    safe_stop = True
 
     def __init__(self, q0_rad: np.ndarray, params: HardEmergencyStopperParams | None = None) -> None:
         super().__init__()
@@ -52,7 +53,7 @@ class HardEmergencyStopper(Layer):
     def set_params(self, params: HardEmergencyStopperParams) -> None:
         self.params = params
 
-    def engage(self, q_rad: np.ndarray | None = None, reason: str = "operator") -> None:
+    def engage(self, q_rad: np.ndarray | None = None, reason: str = "operator") -> None:  # the safe-stop port
         """Freeze now (at the last output, or at `q_rad`). Engaging an engaged stopper is a no-op."""
         if self.engaged:
             return

@@ -114,13 +114,13 @@ class KalmanFilter(Layer):
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         s = ctx.sensors
         accel = s.accel_m_s2
-        gait = ref.gait  # the loop hands the chain last tick's final reference
-        if self.params.use_planned_acceleration and gait is not None and gait.cog_acc_world is not None:
+        cog_acc = ctx.last_ports.cog_acc_world  # the AutoBalancer's plan of the tick before
+        if self.params.use_planned_acceleration and cog_acc is not None:
             # the accelerometer feels tilt AND the body's acceleration: remove the planned one (the COG's,
             # the body moves with it) so the walking sway is not read as roll
             (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rpy_to_rows(*self.filter.rpy.tolist())
             a0, a1, a2 = _floats3(accel)
-            c0, c1, c2 = _floats3(gait.cog_acc_world)
+            c0, c1, c2 = _floats3(cog_acc)
             accel = (a0 - (r00 * c0 + r10 * c1 + r20 * c2), a1 - (r01 * c0 + r11 * c1 + r21 * c2),
                      a2 - (r02 * c0 + r12 * c1 + r22 * c2))  # accel - R^T cog_acc
         ctx.estimate.base_rpy_rad = read_only(self.filter.update(s.gyro_rad_s, accel, ctx.dt_s))  # a copy

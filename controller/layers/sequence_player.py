@@ -146,6 +146,7 @@ class SequencePlayer(Layer):
         if ctx.hold and self.is_interpolating():
             self.clear()  # the hard e-stop: the motion stops where it is and does not resume on release
         if not self.is_interpolating():
+            ctx.ports.planned_q_rad = self.last_output.q_rad
             return self.last_output
         dt_s = ctx.dt_s
         last = self.last_output
@@ -155,6 +156,7 @@ class SequencePlayer(Layer):
                 ch.step(dt_s)
                 fields[i] = frozen_array(ch.x.reshape(fields[i].shape))
         self.last_output = Reference(*fields)
+        ctx.ports.planned_q_rad = self.last_output.q_rad
         return self.last_output
 
     def _output(self) -> Reference:

@@ -25,7 +25,7 @@ from controller.core.errors import InvalidState
 from controller.core.layer import Layer, Params, Status, described
 from controller.core.types import Reference, TickContext
 from controller.interpolation.blend import Transition
-from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, _leg_ik_floats
+from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, leg_ik_floats
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rpy_to_rows
 from robot.names import FORCE_SENSOR_NAMES
@@ -107,12 +107,13 @@ class Stabilizer(Layer):
     description = "Stabilizer: LIP feedback, QP force distribution, foot damping, CP emergency flag"
 
     def __init__(self, dt_s: float, params: StabilizerParams | None = None, active: bool = True,
-                 kinematics: RobotKinematics | None = None) -> None:
+                 kinematics: RobotKinematics | None = None, estimator: ActualStateEstimator | None = None) -> None:
         super().__init__()
         self.params = params or StabilizerParams()
         self.dt_s = dt_s
         self.kin = kinematics or RobotKinematics()
-        self.estimator = ActualStateEstimator(self.kin)
+        # the system's one estimator of the actual COG and ZMP (the loop uses it when this layer does not run)
+        self.estimator = estimator if estimator is not None else ActualStateEstimator(self.kin)
         self.total_mass = self.kin.total_mass
         self.soles: tuple[FootRectangle, FootRectangle] = (HRP2_RIGHT_SOLE, HRP2_LEFT_SOLE)
         self.d_foot_rpy = np.zeros((2, 2))  # (foot, [roll, pitch]) [rad]
@@ -283,7 +284,7 @@ class Stabilizer(Layer):
             pos = p_r if i == 0 else p_l
             R = soles_world[i][1].tolist()
             R_mod = _matmul3(rpy_to_rows(w * d_foot[i][0], w * d_foot[i][1], 0.0), R)
-            q[_LEG_SLICES[leg]], _ = _leg_ik_floats(geom, base, R_body, (pos[0], pos[1], pos[2] + dz[i]), R_mod)
+            q[_LEG_SLICES[leg]], _ = leg_ik_floats(geom, base, R_body, (pos[0], pos[1], pos[2] + dz[i]), R_mod)
         self._last_out = ref._with_owned(q_rad=q)
         return self._last_out
 

@@ -147,6 +147,7 @@ class GaitGenerator:
         self._arrays: dict[str, np.ndarray] | None = None
         self._checks: dict[int, int] = {}  # absolute tick -> segment index of the mid-step overwrite checks
         self._stopping_from_rest = False  # the rest of the walk is a stop_from_rest plan
+        self._plan_version = 0
         self._rest_from: tuple | None = None  # the pose stop_from_rest planned from (feet p, R, support, footstep)
         self._idle = self._idle_sample()
 
@@ -163,6 +164,11 @@ class GaitGenerator:
     @property
     def footsteps(self) -> tuple[Footstep, ...]:
         return tuple(self._footsteps)
+
+    @property
+    def plan_version(self) -> int:
+        """Changes whenever the footstep list is replaced (a new plan or a replan): a cache key."""
+        return self._plan_version
 
     @property
     def T_world_rfoot(self) -> np.ndarray:  # (4, 4) where the right foot stands when idle
@@ -192,6 +198,7 @@ class GaitGenerator:
             raise InvalidCommand(f"footsteps[0] ({first.leg}) must be at the current {first.leg} pose "
                                  f"{current.position.tolist()}; build it with go_pos/set_footsteps from the feet")
         self._footsteps = footsteps
+        self._plan_version += 1
         self._stopping_from_rest = False
         q0 = np.stack([_q_of(self._feet["rleg"]), _q_of(self._feet["lleg"])])
         self._segments = [_Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0)]
@@ -328,6 +335,7 @@ class GaitGenerator:
             self._segments.append(seg)
             start += len(b["zmp"])
         self._footsteps = steps
+        self._plan_version += 1
         self._stepper = None
         self._checks = {}
         self._stopping_from_rest = True
@@ -346,6 +354,7 @@ class GaitGenerator:
         if footsteps[:from_index] != self._footsteps[:from_index]:
             raise InvalidCommand(f"replan may only change footsteps from index {from_index} on")
         self._footsteps = footsteps
+        self._plan_version += 1
         self._resample_from(from_index - 1)
 
     # ----- per tick -------------------------------------------------------------------------------------

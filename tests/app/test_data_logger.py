@@ -1,4 +1,5 @@
-"""DataLogger: ring buffer of snapshots and CSV export."""
+"""DataLogger: a ring buffer of the ticks' rows (the snapshot and the simulator's truth beside it), read
+by another process through shared storage, and the CSV export."""
 
 import csv
 import io
@@ -6,13 +7,13 @@ import io
 import numpy as np
 
 from app.service.data_logger import DataLogger, csv_header
-from tests.controller.test_chain_and_loop import make_loop
+from app.service.host import RobotHost
 
 
-def test_logger_keeps_only_the_newest_snapshots_and_exports_csv(tmp_path):
+def test_logger_keeps_only_the_newest_rows_and_exports_csv(tmp_path):
     logger = DataLogger(max_length=50)
-    loop, _, _ = make_loop(on_snapshot=logger.record)
-    loop.run_for(0.5)  # 100 ticks
+    host = RobotHost(speed=None, logger=logger)
+    host.loop.run_for(0.5)  # 100 ticks
     assert len(logger) == 50
     text = logger.to_csv(tmp_path / "log.csv")
     rows = list(csv.reader(io.StringIO(text)))
@@ -22,3 +23,15 @@ def test_logger_keeps_only_the_newest_snapshots_and_exports_csv(tmp_path):
     assert np.all(np.diff(times) > 0)
     assert times[-1] == np.float64(0.5)
     assert (tmp_path / "log.csv").read_text() == text
+    base_z = float(rows[-1][csv_header().index("truth/base_z")])
+    assert 0.6 < base_z < 0.7  # the simulator's BODY height, logged beside the controller's data
+
+
+def test_a_reader_of_the_shared_storage_sees_what_the_writer_logged():
+    storage = np.zeros(DataLogger.storage_shape(20))
+    writer = DataLogger(20, storage)
+    host = RobotHost(speed=None, logger=writer)
+    host.loop.run_for(0.15)  # 30 ticks: the ring wrapped
+    reader = DataLogger.reader(storage)
+    np.testing.assert_array_equal(reader.rows(), writer.rows())
+    assert len(reader) == 20 and np.all(np.diff(reader.rows()[:, 0]) > 0)

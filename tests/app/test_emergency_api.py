@@ -162,7 +162,7 @@ def test_emergency_walking_stop_shows_while_stopping_and_clears_when_stood_still
     step(runtime, 0.02)
     s = client.get("/api/state").json()
     assert s["walking"] is True and s["emergency"]["walking_stop"] is True
-    snap = runtime.loop.run_until(lambda sn: not sn.layers["abc"].walking, timeout_s=8.0)
+    snap = runtime.run_until(lambda sn: not sn.layers["abc"].walking, timeout_s=8.0)
     assert not snap.fallen
     assert emergency(client)["walking_stop"] is False
     # a new walk afterwards is not shown as stopping
@@ -180,7 +180,7 @@ def test_flag_rose_at_is_the_simulated_time_the_flag_rose(client, runtime):
     assert client.put(URL, json={"threshold": 0.001}).status_code == 200
     assert client.post("/api/sim/push", json={"body": "BODY", "force": [150.0, 0.0, 0.0],
                                               "duration": 0.1}).status_code == 200
-    snap = runtime.loop.run_until(lambda sn: sn.layers["st"].emergency, timeout_s=2.0)
+    snap = runtime.run_until(lambda sn: sn.layers["st"].emergency, timeout_s=2.0)
     e = emergency(client)
     assert e["flag"] is True
     assert isinstance(e["flag_rose_at"], float)

@@ -129,7 +129,7 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     ticks = runtime.loop.snapshot.tick - tick0
     assert runtime.scene == scene and runtime.running
     assert ticks > 0.2 * wall / runtime.loop.dt_control_s, f"{ticks} live ticks in {wall:.1f} s"
-    assert not runtime.loop.snapshot.fallen
+    assert not runtime.host.observation.fallen
     print(f"\n{name}: {body['verdict']}, {body['wall_time_s']:.1f} s for the run; "
           f"live loop {ticks} ticks in {wall:.1f} s ({ticks * runtime.loop.dt_control_s / wall:.2f} x real time)")
     assert client.get(f"/api/experiments/runs/{body['run_id'] + 1}/csv").status_code == 404

@@ -27,9 +27,9 @@ def viewer(robot):
 def test_every_body_gets_a_frame_placed_at_its_simulated_pose(viewer, robot):
     model = robot.host.plant.model
     assert len(viewer._frames) == model.nbody - 1
-    robot.run_for(0.1)
-    viewer._apply_poses(robot.loop.snapshot.truth)
-    np.testing.assert_allclose(viewer._frames[0].position, robot.loop.snapshot.truth.body_pos_world[1])
+    obs = robot.run_for(0.1)
+    viewer._apply_poses(obs.truth)
+    np.testing.assert_allclose(viewer._frames[0].position, obs.truth.body_pos_world[1])
 
 
 def test_the_estop_and_release_buttons_are_verbs_of_the_service(viewer, robot):
@@ -46,11 +46,9 @@ def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snap
     assert viewer._cp_plot is not None and len(viewer._cp_plot.data) == 5
     assert set(viewer._markers) == {"cog", "zmp", "cp_ref", "cp_act", "support", "soles", "footsteps"}
     for _ in range(5):
-        robot.run_for(0.05)
-        snap = robot.loop.snapshot
+        snap = robot.run_for(0.05)
         viewer.apply_snapshot(snap)
         viewer._update_plot(snap)
-    snap = robot.loop.snapshot
     m = viewer._markers
     np.testing.assert_allclose(m["cog"].position, snap.cog_world, atol=1e-6)
     st = snap.layers["st"]
@@ -76,8 +74,7 @@ def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewe
     handles = dict(viewer._markers)
     robot.run_for(2.5)  # AutoBalancer blended in
     viewer.service.go_pos(0.3, 0.0, math.radians(40.0))
-    robot.run_for(0.1)
-    snap = robot.loop.snapshot
+    snap = robot.run_for(0.1)
     planned = snap.layers["abc"].footsteps
     assert len(planned) >= 2 and max(abs(f.rpy[2]) for f in planned) > math.radians(10.0)
     viewer.apply_snapshot(snap)

@@ -42,7 +42,7 @@ def test_go_velocity_then_stop_ends_the_walk(standing, runtime):
     step(runtime, 1.5)
     assert standing.get("/api/state").json()["walking"] is True
     assert standing.post("/api/walk/stop").status_code == 200
-    snap = runtime.loop.run_until(lambda s: not s.layers["abc"].walking, timeout_s=8.0)
+    snap = runtime.run_until(lambda s: not s.layers["abc"].walking, timeout_s=8.0)
     assert not snap.fallen
     assert standing.get("/api/walk/footsteps").json()["walking"] is False
 
@@ -52,7 +52,7 @@ def test_emergency_walking_stop_is_accepted_while_walking(standing, runtime):
     step(runtime, 1.0)
     r = standing.post("/api/walk/emergency-stop")
     assert r.status_code == 200, r.text
-    snap = runtime.loop.run_until(lambda s: not s.layers["abc"].walking, timeout_s=8.0)
+    snap = runtime.run_until(lambda s: not s.layers["abc"].walking, timeout_s=8.0)
     assert not snap.fallen
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from controller.core.system import ControllerSystem
+from app.service.local import LocalRobot
 from robot.generate import half_sitting_deg
 from robot.names import JOINT_NAMES, joint_index
 from robot.plant import MujocoPlant
@@ -26,13 +26,58 @@ MOVE_POSE_DEG = pose_deg(RARM_JOINT0=-50, RARM_JOINT3=-70, LARM_JOINT0=-50, LARM
                          CHEST_JOINT1=8, HEAD_JOINT1=15, HEAD_JOINT0=20)
 
 
-def make_system(scene: str = "default", auto_balancer: bool = True) -> ControllerSystem:
+class ObservedLoop:
+    """The control loop as the scenarios drive it: step, run_for and run_until give Observations (the
+    snapshot, and the simulator's ground truth beside it, which the controller never sees); `snapshot` is
+    the latest Observation; everything else is the loop's own."""
+
+    def __init__(self, robot: LocalRobot) -> None:
+        self._robot = robot
+
+    def step(self):
+        return self._robot.step()
+
+    def run_for(self, seconds: float):
+        return self._robot.run_for(seconds)
+
+    def run_until(self, predicate, timeout_s: float):
+        return self._robot.run_until(predicate, timeout_s)
+
+    @property
+    def snapshot(self):
+        return self._robot.host.observation
+
+    def __getattr__(self, name: str):
+        return getattr(self._robot.loop, name)
+
+
+class SimulatedRobot:
+    """The simulated HRP-2 with its chain (the robot host the console runs), for scenario tests."""
+
+    def __init__(self, scene: str = "default", auto_balancer: bool = True) -> None:
+        self.robot = LocalRobot(scene, start_auto_balancer=auto_balancer)
+        self.loop = ObservedLoop(self.robot)
+
+    @property
+    def chain(self):
+        return self.robot.chain
+
+    @property
+    def kin(self):
+        return self.robot.kin
+
+    @property
+    def plant(self):
+        return self.robot.plant
+
+
+def make_system(scene: str = "default", auto_balancer: bool = True) -> SimulatedRobot:
     """The simulated robot with the chain; `auto_balancer=False` plays the plan on the joints as is
     (the hrpsys SequencePlayer and EmergencyStopper samples run that way)."""
-    return ControllerSystem(MujocoPlant(scene), start_auto_balancer=auto_balancer)
+    return SimulatedRobot(scene, auto_balancer)
 
 
-def seq_call(system: ControllerSystem, method: str, *args):
+def seq_call(system: SimulatedRobot, method: str, *args):
     """Call a SequencePlayer operation through the loop's command queue."""
     loop = system.loop
     return loop.call(lambda: getattr(loop.chain["seq"], method)(*args))

@@ -54,7 +54,7 @@ def test_estop_mid_walk_holds_and_after_release_the_robot_stands_where_it_is(vx,
     abc = robot.loop.snapshot.layers["abc"]
     planned_feet = [f.pos for f in abc.footsteps]
     robot.run_for(HOLD_S - 0.05)
-    snap = robot.loop.snapshot
+    snap = robot.host.observation
     assert np.max(np.abs(snap.q_cmd_rad - frozen)) < 1e-9
     assert [f.pos for f in snap.layers["abc"].footsteps] == planned_feet  # nothing consumed while held
     assert snap.layers["abc"].walking_stop and len(planned_feet) <= 1  # cut to a stop: at most the landing

@@ -14,7 +14,7 @@ def test_a_40_newton_second_push_ends_in_the_safe_stop_reported_and_a_reset_reco
     robot.run_for(2.5)
     # 1. a 40 N s push forward on BODY (beyond what the ankles absorb: 26 N s)
     service.push("BODY", (400.0, 0.0, 0.0), 0.1)
-    snap = robot.loop.run_until(lambda s: s.safety.fall is not None, timeout_s=3.0)
+    snap = robot.run_until(lambda s: s.safety.fall is not None, timeout_s=3.0)
     # 2. detected from the KF attitude (or unloaded feet) before the body hits the ground, in the safe stop
     assert snap.safety.hard_stop and snap.safety.hard_stop_reason == "fallen"
     robot.run_for(2.0)

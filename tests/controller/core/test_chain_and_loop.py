@@ -11,7 +11,6 @@ from controller.core.errors import InvalidCommand
 from controller.core.layer import Layer, Status
 from controller.core.loop import ControlLoop
 from controller.core.types import Reference
-from robot.sensors import GroundTruth
 from tests.controller.fakes import make_sensors
 
 
@@ -33,16 +32,13 @@ class FakePlant:
         self.q_cmd = np.array(q)
         self.writes.append(self.q_cmd)
 
+    @property
+    def time_s(self):
+        return self.t
+
     def step(self, n=1):
         self.t += n * self.dt_physics
         self.q = self.q_cmd.copy()
-
-    def ground_truth(self):
-        return GroundTruth(self.t, np.array([0, 0, 0.65]), np.array([1.0, 0, 0, 0]), np.zeros(3), np.zeros(3),
-                           np.zeros(3), np.zeros((1, 3)), np.zeros((1, 4)))
-
-    def warnings(self):
-        return {}
 
 
 class Ramp(Layer):
@@ -73,6 +69,7 @@ class FreezeStatus(Status):
 
 class Freeze(Layer):
     name = "hes"
+    safe_stop = True  # the loop engages it on a fault
 
     def __init__(self):
         super().__init__()
