@@ -61,6 +61,22 @@ def _scene(text: str) -> str:
     return text
 
 
+def _params_file(text: str) -> dict[str, dict]:
+    """A parameter document {owner: {field: value}} read from a JSON file (GET /api/params writes one)."""
+    from pathlib import Path
+
+    try:
+        doc = json.loads(Path(text).read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"cannot read {text!r}: {exc.strerror or exc}") from None
+    except (ValueError, UnicodeDecodeError) as exc:
+        raise argparse.ArgumentTypeError(f"{text!r} is not JSON: {exc}") from None
+    if not isinstance(doc, dict) or not all(isinstance(v, dict) for v in doc.values()):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected a JSON object {{owner: {{field: value}}}} as "
+                                         "GET /api/params gives")
+    return doc
+
+
 def run_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="hrp2-console",
@@ -76,6 +92,10 @@ def run_parser() -> argparse.ArgumentParser:
     p.add_argument("--host", default="127.0.0.1", help="address of the HTTP API and the viewer")
     p.add_argument("--port", type=_port, default=8000, help="HTTP API port")
     p.add_argument("--viewer-port", type=_port, default=8080, help="viser viewer port")
+    p.add_argument("--params", type=_params_file, default=None, metavar="FILE",
+                   help="start with these layer parameters: a JSON document {owner: {field: value}} as "
+                        "GET /api/params gives (some owners and fields suffice; checked as PUT /api/params "
+                        "checks them; kept across resets)")
     p.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     return p
 
@@ -172,7 +192,7 @@ def run(argv: Sequence[str]) -> int:
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     wall0 = time.perf_counter()
     try:
-        robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed))
+        robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed, params=args.params))
     except ServiceError as exc:
         print(f"hrp2-console: error: {exc}", file=sys.stderr)
         return 2

@@ -40,6 +40,12 @@ class Console:
                 self.proc.kill()
                 raise RuntimeError(f"the console did not start in {timeout_s} s:\n{''.join(self.lines)}")
 
+    def __enter__(self) -> Console:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.stop()  # also when a test failed: a console left running would take the cores of the next
+
     def connection(self) -> http.client.HTTPConnection:
         return http.client.HTTPConnection("127.0.0.1", self.port, timeout=10)
 
@@ -61,6 +67,8 @@ class Console:
 
     def stop(self, sig: int = signal.SIGTERM, timeout_s: float = 30.0) -> tuple[int, str]:
         """Send `sig`, wait; (exit code, everything it printed)."""
+        if self.proc.returncode is not None:
+            return self.proc.returncode, "".join(self.lines)
         if self.proc.poll() is None:
             self.proc.send_signal(sig)
         try:

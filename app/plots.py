@@ -40,7 +40,7 @@ def record_push(impulse_ns: float = 20.0, seconds: float = 4.0):
     for _ in range(int(seconds / robot.loop.dt_control_s)):
         s = robot.step()
         st = s.layers["st"]
-        rows.append([s.time_s, *st.cp_error, st.cp_error_norm, st.threshold, float(st.emergency),
+        rows.append([s.time_s, *st.cp_error, st.cp_error_norm, st.cp_threshold_m, float(st.emergency),
                      *s.zmp_world[:2], *s.cog_world[:2]])
     return np.array(rows)
 

@@ -213,8 +213,8 @@ class ExperimentRequest(_Body):
         description="stop the script after this many seconds [s] (default: the experiment's whole duration)")
     params: dict[str, Any] | None = Field(
         default=None, description="EmergencyStopper parameters for this run only, named and bounded as in "
-                                  "PUT /api/emergency-stopper/params (t1, t2, recover_time [s], threshold [m], "
-                                  "mode); the others keep their defaults", examples=[{"threshold": 0.03}])
+                                  "PUT /api/emergency-stopper/params (t1, t2, recover_time [s], cp_threshold_m [m], "
+                                  "mode); the others keep their defaults", examples=[{"cp_threshold_m": 0.03}])
 
 
 class ExperimentInfo(BaseModel):

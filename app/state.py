@@ -66,7 +66,8 @@ def state_document(pub: Published) -> dict[str, Any]:
     layers = snap.layers
     abc, st, es = layers.get("abc"), layers.get("st"), layers.get("es")
     safety = snap.safety
-    flag_rose_at = getattr(st, "flag_rise_time", None)
+    flag_rose_at = getattr(st, "flag_rose_at", None)
+    cp_threshold_m = float(getattr(st, "cp_threshold_m", 0.0))
     layer_docs = {}
     for name, status in layers.items():
         d = plain(status)
@@ -87,12 +88,13 @@ def state_document(pub: Published) -> dict[str, Any]:
         "capture_point": {"ref": _xy(getattr(st, "cp_ref", None)), "act": _xy(getattr(st, "cp_act", None)),
                           "error": _xy(getattr(st, "cp_error", None)),
                           "error_norm": round(float(getattr(st, "cp_error_norm", 0.0)), 6),
-                          "threshold": float(getattr(st, "threshold", 0.0))},
+                          "cp_threshold_m": cp_threshold_m,
+                          "threshold": cp_threshold_m},  # deprecated name of cp_threshold_m
         "emergency": {
             "hard_stop": safety.hard_stop, "hard_stop_reason": safety.hard_stop_reason, "fault": safety.fault,
             "fall": safety.fall,
             "flag": bool(getattr(st, "emergency", False)),
-            "flag_rise_time": flag_rose_at,  # older name of flag_rose_at
+            "flag_rise_time": flag_rose_at,  # deprecated name of flag_rose_at
             "flag_rose_at": flag_rose_at,
             "motion_stop": bool(getattr(es, "stopped", False)),
             "motion_stop_reason": getattr(es, "reason", None),
@@ -202,7 +204,8 @@ def state_model() -> type[BaseModel]:
                       act=(list[float], Field(description="actual capture point x, y [m]")),
                       error=(list[float], Field(description="ref - act [m]")),
                       error_norm=(float, Field(description="|ref - act| [m]")),
-                      threshold=(float, Field(description="emergency flag threshold [m]")))
+                      cp_threshold_m=(float, Field(description="the emergency flag's threshold on error_norm [m]")),
+                      threshold=(float, Field(description="deprecated name of cp_threshold_m [m]", deprecated=True)))
     opt_float = float | None
     emergency = create_model(
         "EmergencyState", __base__=_Doc,
@@ -211,7 +214,7 @@ def state_model() -> type[BaseModel]:
         fault=(str | None, Field(description="the last controller fault, until released")),
         fall=(str | None, Field(description="why the fall detector says the robot fell (until a reset)")),
         flag=(bool, Field(description="the Stabilizer's capture-point emergency flag")),
-        flag_rise_time=(opt_float, Field(description="deprecated name of flag_rose_at [s]")),
+        flag_rise_time=(opt_float, Field(description="deprecated name of flag_rose_at [s]", deprecated=True)),
         flag_rose_at=(opt_float, Field(description="simulated time the flag last rose [s]")),
         motion_stop=(bool, Field(description="the EmergencyStopper holds the planned motion")),
         motion_stop_reason=(str | None, Field(description="'capture_point' or 'operator'")),

@@ -110,7 +110,7 @@ class CpErrorHistory:
         if self._rows and t == self._rows[-1][0]:
             return False
         ex, ey = st.cp_error
-        self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.threshold)))
+        self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m)))
         while self._rows and self._rows[0][0] < t - self.window_s:
             self._rows.popleft()
         return True

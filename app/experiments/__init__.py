@@ -107,7 +107,7 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
             flag_time = es_st.flag_time - t0
         if not es and st.emergency and flag_time is None:
             flag_time = snap.time_s - t0
-        rows.append([snap.time_s - t0, *st.cp_error, st.cp_error_norm, st.threshold, _edge_distance(snap),
+        rows.append([snap.time_s - t0, *st.cp_error, st.cp_error_norm, st.cp_threshold_m, _edge_distance(snap),
                      float(st.emergency), float(es_st.stopped), float(snap.fallen)])
         if snap.fallen:
             fell_at = snap.time_s - t0

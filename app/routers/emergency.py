@@ -57,9 +57,11 @@ ES_PARAMS: dict[str, tuple[str, str]] = {
     "t1": ("es", "t1_s"),
     "t2": ("es", "t2_s"),
     "recover_time": ("es", "recover_time_s"),
-    "threshold": ("st", "cp_threshold_m"),
+    "cp_threshold_m": ("st", "cp_threshold_m"),
     "mode": ("st", "emergency_mode"),
 }
+#: deprecated presented name -> the name it stands for (accepted in changes, also given in the document)
+ES_DEPRECATED: dict[str, str] = {"threshold": "cp_threshold_m"}
 
 EsChangesBody = Annotated[dict[str, Any], Body(
     description="{parameter name: new value} for some of " + ", ".join(ES_PARAMS) + ", e.g. {\"t1\": 0.8}")]
@@ -69,12 +71,15 @@ def es_changes(changes: dict[str, Any]) -> dict[str, dict[str, Any]]:
     """{owner: {field: value}} from the presented names (unknown names -> 422 listing the valid ones)."""
     if not changes:
         raise InvalidArgument("body", f"give at least one parameter; valid: {list(ES_PARAMS)}")
-    unknown = sorted(set(changes) - set(ES_PARAMS))
+    unknown = sorted(set(changes) - set(ES_PARAMS) - set(ES_DEPRECATED))
     if unknown:
         raise InvalidArgument(unknown[0], f"unknown parameter(s) {unknown}; valid: {list(ES_PARAMS)}")
+    for old, name in ES_DEPRECATED.items():
+        if old in changes and name in changes and changes[old] != changes[name]:
+            raise InvalidArgument(old, f"{old!r} is the deprecated name of {name!r}: give one of them")
     grouped: dict[str, dict[str, Any]] = {}
     for name, value in changes.items():
-        layer, field = ES_PARAMS[name]
+        layer, field = ES_PARAMS[ES_DEPRECATED.get(name, name)]
         grouped.setdefault(layer, {})[field] = value
     return grouped
 
@@ -87,6 +92,8 @@ def es_document(params: dict) -> dict[str, Any]:
         values[name] = docs[layer]["params"][field]
         declared = next(d for d in docs[layer]["schema"] if d["name"] == field)
         schema.append({**declared, "name": name, "layer": layer, "param": f"{type(params[layer]).__name__}.{field}"})
+    for old, name in ES_DEPRECATED.items():
+        values[old] = values[name]
     return {"params": values, "schema": schema}
 
 
@@ -95,7 +102,7 @@ params_router = APIRouter(prefix="/api/emergency-stopper", tags=["emergency"])
 
 @params_router.get("/params", responses=errors(404),
                    summary="EmergencyStopper parameters: T1, T2, recover time [s] and the Stabilizer's "
-                           "capture-point flag (threshold [m], mode), with units, defaults and ranges")
+                           "capture-point flag (cp_threshold_m [m], mode), with units, defaults and ranges")
 def get_es_params(service: ServiceDep) -> dict[str, Any]:
     return es_document(service.params("es", "st"))
 
@@ -106,6 +113,9 @@ def _es_body() -> dict[str, Any]:
     classes = layer_params_classes()
     schema = changes_json_schema({name: (classes[layer], field) for name, (layer, field) in ES_PARAMS.items()},
                                  "EmergencyStopperChanges")
+    for old, name in ES_DEPRECATED.items():
+        schema["properties"][old] = {**schema["properties"][name], "deprecated": True,
+                                     "description": f"deprecated name of {name}"}
     return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
 
 

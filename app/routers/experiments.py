@@ -19,7 +19,7 @@ from fastapi.responses import Response
 
 from app import experiments
 from app.errors import errors
-from app.routers.emergency import ES_PARAMS, es_changes
+from app.routers.emergency import ES_DEPRECATED, ES_PARAMS, es_changes
 from app.schemas import ExperimentInfo, ExperimentList, ExperimentRequest, ExperimentResponse
 from app.service import InvalidArgument, NotFound, Refused
 from app.service.verbs import typed_changes
@@ -117,6 +117,7 @@ def run(name: Annotated[str, Path(description="experiment name (GET /api/experim
     run_id, out = _runner(request).run(name, req.es, req.variant, grouped, req.save, req.duration_s)
     owners = {layer: p.replaced(**grouped.get(layer, {})) for layer, p in _FRESH_PARAMS.items()}
     params = {n: getattr(owners[layer], field) for n, (layer, field) in ES_PARAMS.items()}
+    params.update({old: params[name] for old, name in ES_DEPRECATED.items()})
     files = _runner(request).results.get(run_id, {})
     return ExperimentResponse(**{**jsonable(out), "params": jsonable(params), "run_id": run_id,
                                  "csv_url": f"/api/experiments/runs/{run_id}/csv" if "csv" in files else None,

@@ -6,14 +6,15 @@ from __future__ import annotations
 
 import logging
 import time
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
 from app.service.data_logger import DataLogger
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
-from app.service.verbs import RobotInfo, Verb
+from app.service.verbs import RobotInfo, SetParams, Verb
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
 from controller.core.layer import Params
 from controller.core.loop import Snapshot
@@ -91,7 +92,6 @@ class Published:
     stats: dict[str, Any]
     chain: str  # "kf -> rmfo -> ..."
     published_at_monotonic_s: float
-    extras: dict[str, Any] = field(default_factory=dict)
 
 
 #: Owners of parameters: a layer name, or "ic:<limb>" for one hand's impedance.
@@ -103,7 +103,10 @@ class RobotHost:
     """Owns the simulation and the control loop. Verbs reach them only through `apply`."""
 
     def __init__(self, scene: str = "default", dt_control_s: float = 0.005, speed: float | None = 1.0,
-                 logger: DataLogger | None = None, start_auto_balancer: bool = True) -> None:
+                 logger: DataLogger | None = None, start_auto_balancer: bool = True,
+                 params: Mapping[str, Mapping[str, Any]] | None = None) -> None:
+        """`params`: a parameter document {owner: {field: value}} (as GET /api/params gives) the chain starts
+        with, and starts with again after every reset; checked as a PUT of it would be (InvalidArgument)."""
         self.scene = scene
         self.dt_control_s = dt_control_s
         self.logger = logger if logger is not None else DataLogger(12000)
@@ -116,6 +119,8 @@ class RobotHost:
                                        start_auto_balancer=start_auto_balancer)
         self.observation = Observation(self.loop.snapshot, self.plant.ground_truth())
         self.loop.speed = speed
+        self.startup_params = {owner: dict(fields) for owner, fields in (params or {}).items()}
+        self._load_startup_params()
 
     def __repr__(self) -> str:
         return f"RobotHost(scene={self.scene!r}, speed={self.loop.speed}, generation={self.generation})"
@@ -224,6 +229,12 @@ class RobotHost:
         self.generation += 1
         self.logger.clear()
         self.loop.lateness.clear()
+        self._load_startup_params()
+
+    def _load_startup_params(self) -> None:
+        if self.startup_params:
+            doc = self.startup_params
+            SetParams.of(self.info(), doc, {owner: f"{owner}." for owner in doc}).run(self)
 
     def stop_loop(self) -> None:
         self.loop.request_stop()

@@ -17,8 +17,8 @@ class LocalRobot:
     with it, they queue for the loop thread's next tick boundary."""
 
     def __init__(self, scene: str = "default", speed: float | None = None, dt_control_s: float = 0.005,
-                 start_auto_balancer: bool = True) -> None:
-        self.host = RobotHost(scene, dt_control_s, speed, start_auto_balancer=start_auto_balancer)
+                 start_auto_balancer: bool = True, params: dict | None = None) -> None:
+        self.host = RobotHost(scene, dt_control_s, speed, start_auto_balancer=start_auto_balancer, params=params)
         self.exit_reason: str | None = None
         self.priority = "default"
         self._published: Published | None = None

@@ -51,6 +51,8 @@ class RobotConfig:
     # 20 pollers + 100 commands/s (polling without naps is worse: the kernel throttles a real-time task
     # that never sleeps)
     nap_s: float = 1e-4
+    # a parameter document {owner: {field: value}} the chain starts with (and again after each reset)
+    params: dict[str, dict[str, Any]] | None = None
 
 
 class UnexpectedError(ServiceError):
@@ -82,11 +84,17 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     log_shm = attach(log_name)
     storage = np.ndarray(DataLogger.storage_shape(cfg.log_length), dtype=np.float64, buffer=log_shm.buf)
     try:
-        host = RobotHost(cfg.scene, cfg.dt_control_s, cfg.speed, logger=DataLogger(cfg.log_length, storage))
+        host = RobotHost(cfg.scene, cfg.dt_control_s, cfg.speed, logger=DataLogger(cfg.log_length, storage),
+                         params=cfg.params)
+    except ServiceError as exc:  # e.g. a bad parameter document: the console says which field
+        cmd.send(("failed", str(exc)))
+        return
     except Exception as exc:  # noqa: BLE001 - tell the console why, then give up
         cmd.send(("failed", f"{type(exc).__name__}: {exc}"))
         return
-    priority = _raise_priority() if cfg.realtime_priority else "default"
+    # a paced loop sleeps most of each tick and deserves the CPU when it wakes; one running as fast as it can
+    # never sleeps, and with SCHED_FIFO it would starve the HTTP process (and everything else) of a core
+    priority = _raise_priority() if cfg.realtime_priority and cfg.speed is not None else "default"
     board.put(host.publish())
     cmd.send(("ready", host.info(), priority))
     loop = host.loop

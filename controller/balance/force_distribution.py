@@ -18,7 +18,7 @@ from controller.core.errors import ControllerError, InvalidCommand
 from controller.core.layer import Params
 from controller.core.types import read_only
 
-QP_SOLVERS = ("daqp", "quadprog", "osqp", "proxqp", "clarabel", "highs")
+QP_SOLVERS = ("daqp", "clarabel")  # the backends pyproject pins (qpsolvers names)
 
 
 class ForceDistributionFailed(ControllerError):
@@ -273,7 +273,7 @@ class ForceDistributionQP:
         if s is None:
             raise ForceDistributionFailed(
                 f"{self.weights.solver} found no vertex forces for ZMP {zmp} in hull {self._hull.tolist()}; "
-                "try solver='quadprog' or 'clarabel'"
+                "try solver='clarabel'"
             )
         f = np.maximum(s, 0.0) * float(total_fz_n)  # clip solver round-off below zero  [N]
         # Eq. 12-14 (fz = S f, n_x = Nx f, n_y = Ny f) as per-foot sums over its vertices

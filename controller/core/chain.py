@@ -98,9 +98,5 @@ class Chain:
             self.timers[name].add((clock() - t0) * 1e3)
         return ref
 
-    def reset(self, ctx: TickContext, ref: Reference) -> None:
-        for layer in self.layers.values():
-            layer.reset(ctx, ref)
-
     def timing(self) -> dict[str, dict[str, float]]:
         return {n: t.percentiles() for n, t in self.timers.items()}

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import dataclasses
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
@@ -50,9 +49,6 @@ class Params:
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
-
-    def to_json(self) -> str:
-        return json.dumps(self.to_dict())
 
     @classmethod
     def describe(cls) -> list[dict[str, Any]]:
@@ -139,6 +135,3 @@ class Layer:
     def status(self) -> Status:
         """The layer's frozen Status (a subclass per layer), published in every snapshot."""
         return Status(enabled=self.enabled)
-
-    def reset(self, ctx: TickContext, ref: Reference) -> None:  # noqa: B027 - optional hook
-        """Re-initialise internal state from the current measured state and reference."""

@@ -62,7 +62,7 @@ class Reference:
         shapes = _REFERENCE_SHAPES
         return self._replace({k: (frozen_array(v, shapes[k]) if k in shapes else v) for k, v in changes.items()})
 
-    def _with_owned(self, **changes) -> Reference:
+    def with_owned(self, **changes) -> Reference:
         """with_ for arrays the caller has just built and hands over: a float64 array of the right shape
         is frozen in place instead of copied (anything else is copied as in with_)."""
         shapes = _REFERENCE_SHAPES
@@ -81,9 +81,9 @@ class Reference:
         if not changes.keys() <= _REFERENCE_FIELDS:
             return replace(self, **changes)  # raises the usual TypeError for unknown fields
         get = changes.get
-        return Reference(get("q_rad", self.q_rad), get("base_pos_world", self.base_pos_world),
-                         get("base_rpy_rad", self.base_rpy_rad), get("zmp_base", self.zmp_base),
-                         get("wrenches", self.wrenches), get("gait", self.gait))
+        return Reference(q_rad=get("q_rad", self.q_rad), base_pos_world=get("base_pos_world", self.base_pos_world),
+                         base_rpy_rad=get("base_rpy_rad", self.base_rpy_rad), zmp_base=get("zmp_base", self.zmp_base),
+                         wrenches=get("wrenches", self.wrenches), gait=get("gait", self.gait))
 
 
 _REFERENCE_SHAPES = {"q_rad": (NUM_JOINTS,), "base_pos_world": (3,), "base_rpy_rad": (3,),
@@ -118,7 +118,8 @@ class Estimate:
         """The loop's fresh Estimate: the same zero defaults, shared and read-only instead of allocated
         every tick (the estimators assign their results; nothing writes into an Estimate's arrays)."""
         z = _READ_ONLY_DEFAULTS
-        return Estimate(z[0], z[0], z[1], z[1], z[2], z[3], z[0])
+        return Estimate(base_rpy_rad=z[0], base_angvel_rad_s=z[0], wrenches_ext=z[1], wrenches_ext_world=z[1],
+                        sensor_pos_from_base=z[2], sensor_R_world=z[3], com_from_base=z[0])
 
 
 def read_only(a: np.ndarray) -> np.ndarray:

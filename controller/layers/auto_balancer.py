@@ -242,7 +242,7 @@ class AutoBalancer(Layer):
         base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         zmp_base = R_body.T @ (zmp - base)
         # all fresh arrays of this tick: frozen in place rather than copied
-        self._last_out = ref._with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
+        self._last_out = ref.with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
                                          gait=gait)
         ctx.ports.cog_acc_world = gait.cog_acc_world
         return self._last_out

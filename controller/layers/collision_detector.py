@@ -118,10 +118,6 @@ class CollisionDetector(Layer):
             return ref.with_(q_rad=candidate)
         return ref
 
-    def reset(self, ctx: TickContext, ref: Reference) -> None:
-        self.q_safe = np.array(ref.q_rad, dtype=float)
-        self.in_collision, self.blend, self.pairs = False, None, []
-
     def status(self) -> CollisionDetectorStatus:
         pairs = tuple(tuple(p) for p in self.pairs[:4])
         return CollisionDetectorStatus(enabled=self.enabled, collision=self.in_collision, pairs=pairs,

@@ -169,11 +169,6 @@ class EmergencyStopper(Layer):
         self._prev_out, self._last_out = self._last_out, x
         return ref if x is x_seq else unpack(ref, x)
 
-    def reset(self, ctx: TickContext, ref: Reference) -> None:
-        self.reverter = MotionReverter(self.params, self.dt_s)
-        self.blend, self._requested, self.reason = None, None, None
-        self._last_out = self._prev_out = None
-
     def status(self) -> EmergencyStopperStatus:
         return EmergencyStopperStatus(enabled=self.enabled, stopped=self.stopped, reason=self.reason,
                                       flag_time=self.flag_time_s, recovering=self.blend is not None,

@@ -86,10 +86,6 @@ class HardEmergencyStopper(Layer):
         self.q_out = np.asarray(ref.q_rad)
         return ref
 
-    def reset(self, ctx: TickContext, ref: Reference) -> None:
-        self.engaged, self.blend, self.q_frozen, self.reason = False, None, None, None
-        self.q_out = np.array(ref.q_rad, dtype=float)
-
     def status(self) -> HardEmergencyStopperStatus:
         return HardEmergencyStopperStatus(
             enabled=self.enabled, engaged=self.engaged, reason=self.reason, recovering=self.blend is not None,

@@ -127,10 +127,6 @@ class KalmanFilter(Layer):
         ctx.estimate.base_angvel_rad_s = np.array(s.gyro_rad_s, dtype=float)
         return ref
 
-    def reset(self, ctx: TickContext, ref: Reference) -> None:
-        tilt = AttitudeKalmanFilter.tilt_from_accel(ctx.sensors.accel_m_s2)
-        self.filter = AttitudeKalmanFilter(self.params, (tilt[0], tilt[1], 0.0))
-
     def status(self) -> KalmanFilterStatus:
         return KalmanFilterStatus(enabled=self.enabled, rpy_rad=tuple(self.filter.rpy.tolist()),
                                   gyro_bias_rad_s=tuple(self.filter.bias.tolist()))

@@ -22,6 +22,10 @@ IkSolver = Callable[[str, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.nda
 NUM_WRENCH_VALUES = 6 * len(FORCE_SENSOR_NAMES)
 
 
+#: the Reference fields the channels interpolate, in the order of SequencePlayer._channels
+_CHANNEL_FIELDS = ("q_rad", "base_pos_world", "base_rpy_rad", "zmp_base", "wrenches")
+
+
 @dataclass(frozen=True)
 class SequencePlayerParams(Params):
     # hrpsys interpolator default_avg_vel: sets the duration of a joint command given with time_s=None
@@ -132,7 +136,7 @@ class SequencePlayer(Layer):
         self._base_rpy = _Channel(initial.base_rpy_rad)
         self._zmp = _Channel(initial.zmp_base)
         self._wrenches = _Channel(np.asarray(initial.wrenches).reshape(-1))
-        self._channels = (self._q, self._base_pos, self._base_rpy, self._zmp, self._wrenches)
+        self._channels = (self._q, self._base_pos, self._base_rpy, self._zmp, self._wrenches)  # _CHANNEL_FIELDS
         self.last_output: Reference = self._output()
 
     def set_params(self, params: SequencePlayerParams) -> None:
@@ -150,12 +154,12 @@ class SequencePlayer(Layer):
             return self.last_output
         dt_s = ctx.dt_s
         last = self.last_output
-        fields = [last.q_rad, last.base_pos_world, last.base_rpy_rad, last.zmp_base, last.wrenches]
-        for i, ch in enumerate(self._channels):
+        changes = {}
+        for name, ch in zip(_CHANNEL_FIELDS, self._channels, strict=True):
             if ch.motions:
                 ch.step(dt_s)
-                fields[i] = frozen_array(ch.x.reshape(fields[i].shape))
-        self.last_output = Reference(*fields)
+                changes[name] = ch.x.reshape(getattr(last, name).shape)  # copied and frozen by with_
+        self.last_output = last.with_(**changes)
         ctx.ports.planned_q_rad = self.last_output.q_rad
         return self.last_output
 
@@ -167,15 +171,6 @@ class SequencePlayer(Layer):
             zmp_base=frozen_array(self._zmp.x),
             wrenches=frozen_array(self._wrenches.x.reshape(len(FORCE_SENSOR_NAMES), 6)),
         )
-
-    def reset(self, ctx: TickContext, ref: Reference) -> None:
-        """Re-seed every channel from `ref` at rest; motions in progress are dropped."""
-        self._q.reseed(ref.q_rad)
-        self._base_pos.reseed(ref.base_pos_world)
-        self._base_rpy.reseed(ref.base_rpy_rad)
-        self._zmp.reseed(ref.zmp_base)
-        self._wrenches.reseed(np.asarray(ref.wrenches).reshape(-1))
-        self.last_output = self._output()
 
     # ---- joint angles ---------------------------------------------------------------------------
 

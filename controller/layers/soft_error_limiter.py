@@ -97,8 +97,5 @@ class SoftErrorLimiter(Layer):
         self.limited_ticks += 1
         return ref.with_(q_rad=q)
 
-    def reset(self, ctx: TickContext, ref: Reference) -> None:
-        self.q_prev = np.array(ctx.sensors.q_rad, dtype=float)
-
     def status(self) -> SoftErrorLimiterStatus:
         return SoftErrorLimiterStatus(enabled=self.enabled, limited=self.limited, limited_ticks=self.limited_ticks)

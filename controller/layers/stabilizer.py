@@ -23,7 +23,7 @@ from controller.balance.state_estimation import ActualStateEstimator
 from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidState
 from controller.core.layer import Layer, Params, Status, described
-from controller.core.types import Reference, TickContext
+from controller.core.types import GaitState, Reference, TickContext
 from controller.interpolation.blend import Transition
 from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, leg_ik_floats
 from controller.kinematics.model import RobotKinematics
@@ -32,7 +32,13 @@ from robot.names import FORCE_SENSOR_NAMES
 
 FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
 HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
-HAND_FORCE_DEADBAND_N = 2.0
+HAND_FORCE_DEADBAND_N = 2.0  # [N] hand forces below this count as none (sensor noise and offset residue)
+# [m] smallest COG height above the ZMP taken for omega = sqrt(g / h): keeps the capture point finite when the
+# estimate says the COG is at or below the ground (a fallen robot, a bad sensor), far below any real 0.6-0.8 m
+MIN_LIP_HEIGHT_M = 0.1
+# [s] time constant with which a swing foot's damping offset returns to the plan (hrpsys-like: quickly, so the
+# foot lands as planned; 16 ticks of 5 ms)
+SWING_FOOT_RETURN_TIME_CONST_S = 0.08
 EMERGENCY_MODES = ("cp_error", "cp_support", "none")
 # consecutive joint indices of each leg as slices (assignment through a slice is cheaper)
 _LEG_SLICES = {leg: (slice(int(i[0]), int(i[-1]) + 1) if np.array_equal(i, np.arange(i[0], i[-1] + 1)) else i)
@@ -81,9 +87,9 @@ class StabilizerStatus(Status):
     cp_act: tuple[float, float] = field(metadata=described("actual capture point x, y (world, estimated)", "m"))
     cp_error: tuple[float, float] = field(metadata=described("cp_ref - cp_act", "m"))
     cp_error_norm: float = field(metadata=described("|cp_ref - cp_act|", "m"))
-    threshold: float = field(metadata=described("the emergency flag's threshold on |cp_error|", "m"))
+    cp_threshold_m: float = field(metadata=described("the emergency flag's threshold on |cp_error|", "m"))
     emergency: bool = field(metadata=described("the capture-point emergency flag"))
-    flag_rise_time: float | None = field(metadata=described("simulated time the flag last rose", "s"))
+    flag_rose_at: float | None = field(metadata=described("simulated time the flag last rose", "s"))
     d_foot_rpy_deg: tuple[tuple[float, float], tuple[float, float]] = field(metadata=described(
         "foot damping control's roll, pitch of the right and the left sole", "deg"))
     dz_diff_m: float = field(metadata=described("right minus left sole height offset of the force control", "m"))
@@ -128,7 +134,7 @@ class Stabilizer(Layer):
         self.cp_act = np.zeros(2)
         self.cp_error = np.zeros(2)
         self.emergency = False
-        self.flag_rise_time_s: float | None = None
+        self.flag_rose_at_s: float | None = None
         self.new_zmp = np.zeros(3)
         self.projected = False
         self._qp: ForceDistributionQP | None = None
@@ -163,18 +169,50 @@ class Stabilizer(Layer):
             self._transition = None
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        """[MLC] III-D in its steps: estimate, capture points and the flag, LIP feedback (Eq. 7-8), force
+        distribution (Eq. 9-14), foot control (Eq. 3 with m = 0) and the legs re-solved for it."""
         if not self.enabled:  # pass-through (no estimate either: the loop's state estimator runs)
             self.emergency = False
             return ref
-        p = self.params
         dt = ctx.dt_s
         est = ctx.estimate
         self._advance_transition(dt)
-        # actual COG and ZMP (always: the operator and the emergency flag need them)
+        cog, zmp = self._estimate(ctx, ref)  # always: the operator and the emergency flag need them
+        gait = ref.gait
+        if gait is None:
+            self.emergency = False
+            return ref
+        self._capture_points(cog, gait)
+        foot_wrenches = self._foot_wrenches(est)
+        contact_act = tuple(w[2] > self.params.contact_threshold_n for w in foot_wrenches)
+        if ctx.hold and self._last_out is not None:
+            # the hard e-stop freezes the command: estimate only, integrate nothing, raise no flag
+            self.emergency = False
+            return self._last_out
+        self._update_emergency(ctx.time_s, gait, contact_act)
+        ctx.ports.cp_flag = self.emergency
+        if self.weight <= 0.0:
+            self._last_out = ref
+            return ref
+        zmp_new_xy = self._lip_feedback(cog, zmp, est, gait)
+        contact_idx = [i for i in (0, 1) if gait.contact[i]]
+        forces = self._distribute(zmp_new_xy, contact_idx, gait)
+        self._foot_damping(dt, contact_idx, contact_act, foot_wrenches, forces, gait.walking)
+        self._force_difference(dt, contact_idx, contact_act, foot_wrenches, forces)
+        self._body_attitude(dt, est, ref)
+        self._last_out = self._legs(ref, gait)
+        return self._last_out
+
+    # ---- the steps of a tick ------------------------------------------------------------------------
+    def _estimate(self, ctx: TickContext, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
+        """Actual COG and ZMP (world) from the encoders, the KF attitude and the foot sensors, and the COG
+        velocity as a first-order low-pass of its finite difference; written into the tick's Estimate."""
+        est = ctx.estimate
+        dt = ctx.dt_s
         cog, zmp = self.estimator(ctx.sensors, est, ref)
         if self._prev_cog is None:
             self._prev_cog = cog
-        alpha = 1.0 - math.exp(-2.0 * math.pi * p.cogvel_cutoff_hz * dt)
+        alpha = 1.0 - math.exp(-2.0 * math.pi * self.params.cogvel_cutoff_hz * dt)
         cx, cy, cz = cog.tolist()
         px, py, pz = self._prev_cog.tolist()
         vx, vy, vz = self.act_cogvel.tolist()
@@ -184,109 +222,129 @@ class Stabilizer(Layer):
         self.act_cogvel = np.array((vx, vy, vz))
         self._prev_cog = cog
         est.cog_world, est.zmp_world, est.cog_vel_world = cog, zmp, self.act_cogvel
-        gait = ref.gait
-        if gait is None:
-            self.emergency = False
-            return ref
-        held = ctx.hold and self._last_out is not None
-        # capture points
-        zr = gait.zmp_world.tolist()
-        height = max(0.1, cz - zr[2])
+        return cog, zmp
+
+    def _capture_points(self, cog: np.ndarray, gait: GaitState) -> None:
+        """cp = x + v / omega with omega = sqrt(g / (z_cog - z_zmp)) ([MLC] III-E), reference and actual."""
+        cz = float(cog[2])
+        height = max(MIN_LIP_HEIGHT_M, cz - float(gait.zmp_world[2]))
         omega = math.sqrt(GRAVITY_M_S2 / height)
         gcx, gcy = gait.cog_world[:2].tolist()
-        gvx, gvy, gvz = gait.cog_vel_world.tolist()
+        gvx, gvy, _ = gait.cog_vel_world.tolist()
+        cx, cy = cog[:2].tolist()
+        vx, vy, _ = self.act_cogvel.tolist()
         cp_ref = (gcx + gvx / omega, gcy + gvy / omega)
         cp_act = (cx + vx / omega, cy + vy / omega)
         self.cp_ref = np.array(cp_ref)
         self.cp_act = np.array(cp_act)
         self.cp_error = np.array((cp_ref[0] - cp_act[0], cp_ref[1] - cp_act[1]))
+
+    @staticmethod
+    def _foot_wrenches(est) -> tuple[list[float], list[float]]:
+        """The measured external wrenches of the right and the left sole (world-aligned) [N, N m]."""
         wrenches = est.wrenches_ext_world.tolist()
-        w_r, w_l = wrenches[FEET[0]], wrenches[FEET[1]]
-        fz = (w_r[2], w_l[2])
-        contact_act = (fz[0] > p.contact_threshold_n, fz[1] > p.contact_threshold_n)
-        if held:  # the hard e-stop freezes the command: estimate only, integrate nothing, raise no flag
-            self.emergency = False
-            return self._last_out
-        self._update_emergency(ctx.time_s, gait, contact_act)
-        ctx.ports.cp_flag = self.emergency
-        if self.weight <= 0.0:
-            self._last_out = ref
-            return ref
+        return wrenches[FEET[0]], wrenches[FEET[1]]
+
+    def _lip_feedback(self, cog: np.ndarray, zmp: np.ndarray, est, gait: GaitState) -> tuple[float, float]:
+        """Eq. 8: the ZMP the feet should realise, u = zmp_ref + k1 (x_ref - x) + k2 (v_ref - v) + k3 (zmp_ref -
+        zmp), blended in by the start/stop weight. References as the paper says: p_G^pc (preview COG, before
+        the hand-force offset) and p_zmp^abc. The actual side is the static balance point, the COG shifted
+        by the measured hand forces (hrpsys does the same): with hands loaded the LIP's "COG" is where the
+        ZMP would sit at rest."""
+        p = self.params
         w = self.weight
-        # LIP state feedback (Eq. 8): the ZMP the feet should realise. References as the paper says:
-        # p_G^pc (preview COG, before the hand-force offset) and p_zmp^abc. The actual side is the
-        # static balance point, the COG shifted by the measured hand forces (hrpsys does the same):
-        # with hands loaded the LIP's "COG" is where the ZMP would sit at rest.
+        zr = gait.zmp_world.tolist()
         sbp = self.static_balance_point(cog, est, zr[2]).tolist()
         pc = gait.cog_pc_world.tolist()
         zm = zmp.tolist()
-        act_vel = (vx, vy, vz)
-        gv = (gvx, gvy, gvz)
+        act_vel = self.act_cogvel.tolist()
+        gv = gait.cog_vel_world.tolist()
         k1, k2, k3 = p.k1, p.k2, p.k3
         nzx, nzy = (zr[j] + w * (k1 * (pc[j] - sbp[j]) + k2 * (gv[j] - act_vel[j]) + k3 * (zr[j] - zm[j]))
                     for j in range(2))
-        # QP distribution (Eq. 9-14) over the feet meant to be in contact
+        return nzx, nzy
+
+    def _distribute(self, zmp_new_xy: tuple[float, float], contact_idx: list[int], gait: GaitState):
+        """Eq. 9-14: the QP distributes the total force and moment over the soles meant to be in contact,
+        weighted by the ZMP's place between the feet (alpha); returns the per-foot forces and moments."""
         soles_world = ((gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
-        contact = gait.contact
-        idx = [i for i in (0, 1) if contact[i]]
-        qp = self._force_qp(idx, soles_world)
-        p_r = gait.p_rsole_world.tolist()
-        p_l = gait.p_lsole_world.tolist()
-        if len(idx) == 2:
-            qp.set_alpha(alpha_from_zmp((nzx, nzy), p_r[:2], p_l[:2]))
-        forces = qp.solve(np.array((nzx, nzy)), self.total_mass * GRAVITY_M_S2)
+        qp = self._force_qp(contact_idx, soles_world)
+        if len(contact_idx) == 2:
+            qp.set_alpha(alpha_from_zmp(zmp_new_xy, gait.p_rsole_world[:2].tolist(), gait.p_lsole_world[:2].tolist()))
+        forces = qp.solve(np.array(zmp_new_xy), self.total_mass * GRAVITY_M_S2)
         zx, zy = forces.zmp_world_xy.tolist()
-        self.new_zmp = np.array((zx, zy, zr[2]))
+        self.new_zmp = np.array((zx, zy, float(gait.zmp_world[2])))
         self.projected = forces.projected
-        # foot moment damping (Eq. 3, m = 0) and force-difference control
-        tau_act = ((w_r[3], w_r[4]), (w_l[3], w_l[4]))
-        damping = p.rot_damping_gain_walking if gait.walking else p.rot_damping_gain
+        return forces
+
+    def _foot_damping(self, dt: float, contact_idx: list[int], contact_act, foot_wrenches, forces,
+                      walking: bool) -> None:
+        """Eq. 3 with m = 0 on each sole's roll and pitch: d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T for a
+        foot in contact; a swing foot returns to the plan with SWING_FOOT_RETURN_TIME_CONST_S."""
+        p = self.params
+        damping = p.rot_damping_gain_walking if walking else p.rot_damping_gain
         T_rot = p.rot_time_const_s
         d_foot = self.d_foot_rpy.tolist()
         n_xy = forces.n_xy_nm.tolist()
-        for k, i in enumerate(idx):
+        for k, i in enumerate(contact_idx):
             d = d_foot[i]
             if contact_act[i]:
-                ta = tau_act[i]
+                ta = (foot_wrenches[i][3], foot_wrenches[i][4])
                 tau_ref = (-n_xy[k][0], -n_xy[k][1])  # ground-reaction moment about the sole origin
                 rate = [(ta[j] - tau_ref[j]) / damping - d[j] / T_rot for j in range(2)]
             else:
                 rate = [-d[j] / T_rot for j in range(2)]
             d_foot[i] = [d[j] + rate[j] * dt for j in range(2)]
         for i in range(2):
-            if i not in idx:
+            if i not in contact_idx:
                 d = d_foot[i]
-                d_foot[i] = [d[j] - d[j] * dt / 0.08 for j in range(2)]  # swing foot: back to the plan quickly
+                d_foot[i] = [d[j] - d[j] * dt / SWING_FOOT_RETURN_TIME_CONST_S for j in range(2)]
         lim = math.radians(p.rot_limit_deg)
-        d_foot = [[min(max(roll, -lim), lim), min(max(pitch, -lim), lim)] for roll, pitch in d_foot]  # np.clip
-        self.d_foot_rpy[:] = d_foot
-        if len(idx) == 2 and contact_act[0] and contact_act[1]:
+        self.d_foot_rpy[:] = [[min(max(roll, -lim), lim), min(max(pitch, -lim), lim)] for roll, pitch in d_foot]
+
+    def _force_difference(self, dt: float, contact_idx: list[int], contact_act, foot_wrenches, forces) -> None:
+        """Foot vertical force difference control (Kajita 2010): with both feet down the right-minus-left
+        height offset follows the error of the force difference, else it decays; limited to +-2 z_limit_m
+        (z_limit_m for each foot)."""
+        p = self.params
+        if len(contact_idx) == 2 and contact_act[0] and contact_act[1]:
             fz_ref = forces.fz_n.tolist()
             df_ref = fz_ref[0] - fz_ref[1]
-            df_act = fz[0] - fz[1]
+            df_act = foot_wrenches[0][2] - foot_wrenches[1][2]
             self.dz_diff += ((df_act - df_ref) / p.z_damping_gain - self.dz_diff / p.z_time_const_s) * dt
         else:
             self.dz_diff -= self.dz_diff / p.z_time_const_s * dt
         self.dz_diff = float(min(max(self.dz_diff, -2 * p.z_limit_m), 2 * p.z_limit_m))
-        # body attitude control
+
+    def _body_attitude(self, dt: float, est, ref: Reference) -> None:
+        """BODY roll and pitch: d(rpy)/dt = k (ref - act) - rpy / T, limited as the feet (rot_limit_deg)."""
+        p = self.params
+        lim = math.radians(p.rot_limit_deg)
         act_rp = est.base_rpy_rad[:2].tolist()
         ref_rpy = ref.base_rpy_rad.tolist()
         gain, T_body = p.body_attitude_gain, p.body_attitude_time_const_s
         db = self.d_body_rp.tolist()
-        db = [min(max(db[j] + (gain * (ref_rpy[j] - act_rp[j]) - db[j] / T_body) * dt, -lim), lim) for j in range(2)]
-        self.d_body_rp[:] = db
-        # legs re-solved for the modified sole targets and BODY attitude
-        R_body = rpy_to_rows(ref_rpy[0] + w * db[0], ref_rpy[1] + w * db[1], ref_rpy[2] + w * 0.0)
+        self.d_body_rp[:] = [min(max(db[j] + (gain * (ref_rpy[j] - act_rp[j]) - db[j] / T_body) * dt, -lim), lim)
+                             for j in range(2)]
+
+    def _legs(self, ref: Reference, gait: GaitState) -> Reference:
+        """The legs re-solved (closed form) for the sole targets turned by the foot damping, moved by the force
+        difference, under the BODY attitude of the attitude control (roll and pitch; yaw is not controlled)."""
+        w = self.weight
+        ref_rpy = ref.base_rpy_rad.tolist()
+        db = self.d_body_rp.tolist()
+        d_foot = self.d_foot_rpy.tolist()
+        R_body = rpy_to_rows(ref_rpy[0] + w * db[0], ref_rpy[1] + w * db[1], ref_rpy[2])
         base = ref.base_pos_world.tolist()
         q = np.array(ref.q_rad, dtype=float)
         dz = (0.5 * w * self.dz_diff, -0.5 * w * self.dz_diff)
-        for i, (geom, leg) in enumerate(((RLEG, "rleg"), (LLEG, "lleg"))):
-            pos = p_r if i == 0 else p_l
-            R = soles_world[i][1].tolist()
-            R_mod = _matmul3(rpy_to_rows(w * d_foot[i][0], w * d_foot[i][1], 0.0), R)
+        soles = ((RLEG, "rleg", gait.p_rsole_world, gait.R_rsole_world),
+                 (LLEG, "lleg", gait.p_lsole_world, gait.R_lsole_world))
+        for i, (geom, leg, p_sole, R_sole) in enumerate(soles):
+            pos = p_sole.tolist()
+            R_mod = _matmul3(rpy_to_rows(w * d_foot[i][0], w * d_foot[i][1], 0.0), R_sole.tolist())
             q[_LEG_SLICES[leg]], _ = leg_ik_floats(geom, base, R_body, (pos[0], pos[1], pos[2] + dz[i]), R_mod)
-        self._last_out = ref._with_owned(q_rad=q)
-        return self._last_out
+        return ref.with_owned(q_rad=q)
 
     def _force_qp(self, idx: list[int], soles_world) -> ForceDistributionQP:
         """The QP for the feet in contact, rebuilt only when they move (a support switch or a new step)."""
@@ -339,7 +397,7 @@ class Stabilizer(Layer):
             poly = shrink_polygon(support_polygon(feet), p.cp_margin_m)
             flag = poly.shape[0] < 3 or not point_in_convex_polygon(self.cp_act, poly)
         if flag and not self.emergency:
-            self.flag_rise_time_s = time_s
+            self.flag_rose_at_s = time_s
         self.emergency = flag
 
     def status(self) -> StabilizerStatus:
@@ -349,7 +407,7 @@ class Stabilizer(Layer):
         return StabilizerStatus(
             enabled=self.enabled, active=self.active, weight=round(self.weight, 4),
             cp_ref=tuple(self.cp_ref.tolist()), cp_act=tuple(self.cp_act.tolist()), cp_error=cp_error,
-            cp_error_norm=math.hypot(ex, ey), threshold=self.params.cp_threshold_m, emergency=self.emergency,
-            flag_rise_time=self.flag_rise_time_s,
+            cp_error_norm=math.hypot(ex, ey), cp_threshold_m=self.params.cp_threshold_m,
+            emergency=self.emergency, flag_rose_at=self.flag_rose_at_s,
             d_foot_rpy_deg=((deg(r_roll), deg(r_pitch)), (deg(l_roll), deg(l_pitch))), dz_diff_m=self.dz_diff,
             new_zmp=tuple(self.new_zmp.tolist()))

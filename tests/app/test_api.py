@@ -42,7 +42,7 @@ def test_state_has_every_contract_field_with_the_right_types(client, runtime):
     assert len(s["cog"]) == 3 and len(s["zmp"]) == 3
     assert s["emergency"]["hard_stop"] is False and s["emergency"]["fault"] is None
     assert isinstance(s["emergency"]["flag"], bool)
-    assert s["emergency"]["flag_rise_time"] is None or isinstance(s["emergency"]["flag_rise_time"], float)
+    assert s["emergency"]["flag_rose_at"] is None or isinstance(s["emergency"]["flag_rose_at"], float)
     assert set(s["layers"]) == set(runtime.loop.chain.order())
     assert all(isinstance(v, dict) for v in s["layers"].values())
     assert s["chain"] == runtime.loop.chain.describe() and s["chain"].startswith("kf -> ")

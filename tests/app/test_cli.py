@@ -105,3 +105,16 @@ def test_bench_scenario_needing_a_left_out_layer_fails_naming_it():
     r = run("bench", "--scenario", "walk", "--chain", "foundation")
     assert r.returncode == 2
     assert "abc" in r.stderr
+
+
+def test_the_console_starts_with_a_parameter_file_and_refuses_a_bad_one(tmp_path):
+    good, bad, broken = tmp_path / "good.json", tmp_path / "bad.json", tmp_path / "broken.json"
+    good.write_text(json.dumps({"st": {"cp_threshold_m": 0.05}}))
+    bad.write_text(json.dumps({"st": {"k1": "a"}}))
+    broken.write_text("{not json")
+    r = run("--headless", "--duration", "0.2", "--speed", "max", "--port", "0", "--params", str(good))
+    assert r.returncode == 0, r.stdout + r.stderr
+    r = run("--headless", "--duration", "0.2", "--speed", "max", "--port", "0", "--params", str(bad))
+    assert r.returncode == 2 and "st.k1: must be a number" in r.stderr
+    r = run("--headless", "--params", str(broken))
+    assert r.returncode == 2 and "--params" in r.stderr and "is not JSON" in r.stderr

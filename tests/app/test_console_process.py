@@ -15,9 +15,8 @@ PARAM_PUTS = ["/api/stabilizer/params", "/api/auto-balancer/params", "/api/imped
 
 @pytest.fixture(scope="module")
 def console():
-    c = Console("--speed", "1.0")
-    yield c
-    c.stop()
+    with Console("--speed", "1.0") as c:
+        yield c
 
 
 def wait_state(console, predicate, timeout_s=10.0):
@@ -114,9 +113,9 @@ def test_twenty_pollers_and_a_hundred_commands_a_second_do_not_make_the_loop_lat
 
 def test_sigterm_and_sigint_shut_the_console_down_cleanly_with_the_summary():
     for sig in (signal.SIGTERM, signal.SIGINT):
-        c = Console("--speed", "max")
-        assert c.request("GET", "/api/health")[1]["robot_alive"] is True
-        code, out = c.stop(sig)
-        assert f"{signal.Signals(sig).name} received" in out, out
-        assert "summary:" in out and "faults: none" in out and "fallen: false" in out
-        assert code == 0, out
+        with Console("--speed", "max") as c:
+            assert c.request("GET", "/api/health")[1]["robot_alive"] is True
+            code, out = c.stop(sig)
+            assert f"{signal.Signals(sig).name} received" in out, out
+            assert "summary:" in out and "faults: none" in out and "fallen: false" in out
+            assert code == 0, out

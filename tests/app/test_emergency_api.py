@@ -11,7 +11,7 @@ from controller.layers.stabilizer import EMERGENCY_MODES, StabilizerParams
 URL = "/api/emergency-stopper/params"
 WARM_UP_S = 2.5  # AutoBalancer and Stabilizer blended in
 OWNERS = {"t1": ("es", "t1_s"), "t2": ("es", "t2_s"), "recover_time": ("es", "recover_time_s"),
-          "threshold": ("st", "cp_threshold_m"), "mode": ("st", "emergency_mode")}
+          "cp_threshold_m": ("st", "cp_threshold_m"), "mode": ("st", "emergency_mode")}
 
 
 def step(runtime, seconds):
@@ -29,24 +29,26 @@ def test_get_presents_the_timing_and_the_flag_with_units_and_ranges(client, runt
     body = r.json()
     es, st = EmergencyStopperParams(), StabilizerParams()
     assert body["params"] == {"t1": es.t1_s, "t2": es.t2_s, "recover_time": es.recover_time_s,
-                              "threshold": st.cp_threshold_m, "mode": st.emergency_mode}
+                              "cp_threshold_m": st.cp_threshold_m, "mode": st.emergency_mode,
+                              "threshold": st.cp_threshold_m}  # the deprecated name, for one release
     schema = {f["name"]: f for f in body["schema"]}
     assert list(schema) == list(OWNERS)
     for name in ("t1", "t2", "recover_time"):
         assert schema[name]["unit"] == "s" and schema[name]["layer"] == "es"
         assert isinstance(schema[name]["min"], float) and isinstance(schema[name]["max"], float)
-    assert schema["threshold"]["unit"] == "m" and schema["threshold"]["layer"] == "st"
-    assert (schema["threshold"]["min"], schema["threshold"]["max"]) == (0.001, 0.5)
+    assert schema["cp_threshold_m"]["unit"] == "m" and schema["cp_threshold_m"]["layer"] == "st"
+    assert (schema["cp_threshold_m"]["min"], schema["cp_threshold_m"]["max"]) == (0.001, 0.5)
     assert schema["mode"]["choices"] == list(EMERGENCY_MODES)
     assert schema["t1"]["param"] == "EmergencyStopperParams.t1_s"
-    assert schema["threshold"]["default"] == st.cp_threshold_m
+    assert schema["cp_threshold_m"]["default"] == st.cp_threshold_m
 
 
 def test_put_reaches_both_layers_replacing_their_params_whole(client, runtime):
     es_before, st_before = layer_params(runtime)
-    r = client.put(URL, json={"t1": 0.8, "t2": 1, "recover_time": 3.0, "threshold": 0.06, "mode": "cp_support"})
+    r = client.put(URL, json={"t1": 0.8, "t2": 1, "recover_time": 3.0, "cp_threshold_m": 0.06, "mode": "cp_support"})
     assert r.status_code == 200, r.text
-    expected = {"t1": 0.8, "t2": 1.0, "recover_time": 3.0, "threshold": 0.06, "mode": "cp_support"}
+    expected = {"t1": 0.8, "t2": 1.0, "recover_time": 3.0, "cp_threshold_m": 0.06, "mode": "cp_support",
+                "threshold": 0.06}
     assert r.json()["params"] == expected
     assert client.get(URL).json()["params"] == expected
     es, st = layer_params(runtime)
@@ -58,7 +60,7 @@ def test_put_reaches_both_layers_replacing_their_params_whole(client, runtime):
     assert st.replaced(cp_threshold_m=st_before.cp_threshold_m, emergency_mode=st_before.emergency_mode) == st_before
     step(runtime, 0.01)
     s = client.get("/api/state").json()
-    assert s["capture_point"]["threshold"] == pytest.approx(0.06)
+    assert s["capture_point"]["cp_threshold_m"] == pytest.approx(0.06)
     assert s["layers"]["es"]["t1_s"] == pytest.approx(0.8)
     # a PUT of one layer's fields leaves the other layer's params object alone
     r = client.put(URL, json={"t1": 0.5})
@@ -70,16 +72,16 @@ BAD = [
     ({"t1": -0.1}, ["t1", "[0, 10] s"]),
     ({"t2": 11}, ["t2", "[0, 10] s"]),
     ({"recover_time": 31.0}, ["recover_time", "[0, 30] s"]),
-    ({"threshold": 0.0001}, ["threshold", "[0.001, 0.5] m"]),
-    ({"threshold": 0.6}, ["threshold", "[0.001, 0.5] m"]),
+    ({"cp_threshold_m": 0.0001}, ["cp_threshold_m", "[0.001, 0.5] m"]),
+    ({"cp_threshold_m": 0.6}, ["cp_threshold_m", "[0.001, 0.5] m"]),
     ({"mode": "panic"}, ["mode", "cp_error", "cp_support", "none"]),
     ({"t1": "soon"}, ["t1", "number"]),
     ({"mode": 1}, ["mode", "string"]),
     ({"t1": True}, ["t1", "number"]),
-    ({"bogus": 1}, ["bogus", "t1", "t2", "recover_time", "threshold", "mode"]),
+    ({"bogus": 1}, ["bogus", "t1", "t2", "recover_time", "cp_threshold_m", "mode"]),
     ({"t1_s": 1.0}, ["t1_s", "t1"]),  # the layer's own name is not the API's
-    ({}, ["at least one", "t1", "threshold"]),
-    ({"t1": 0.5, "threshold": 5.0}, ["threshold", "0.5"]),  # one bad field: nothing applied
+    ({}, ["at least one", "t1", "cp_threshold_m"]),
+    ({"t1": 0.5, "cp_threshold_m": 5.0}, ["cp_threshold_m", "0.5"]),  # one bad field: nothing applied
 ]
 
 
@@ -177,7 +179,7 @@ def test_flag_rose_at_is_the_simulated_time_the_flag_rose(client, runtime):
     assert emergency(client)["flag_rose_at"] is None
     t_before = runtime.loop.snapshot.time_s
     # the smallest threshold: the flag rises on the CP error of a push (if not on the standing error already)
-    assert client.put(URL, json={"threshold": 0.001}).status_code == 200
+    assert client.put(URL, json={"cp_threshold_m": 0.001}).status_code == 200
     assert client.post("/api/sim/push", json={"body": "BODY", "force": [150.0, 0.0, 0.0],
                                               "duration": 0.1}).status_code == 200
     snap = runtime.run_until(lambda sn: sn.layers["st"].emergency, timeout_s=2.0)
@@ -190,3 +192,11 @@ def test_flag_rose_at_is_the_simulated_time_the_flag_rose(client, runtime):
     step(runtime, 0.02)
     e = emergency(client)
     assert e["motion_stop"] is True and e["motion_stop_reason"] == "capture_point"
+
+
+def test_the_deprecated_threshold_name_still_sets_the_flag_threshold(client):
+    r = client.put(URL, json={"threshold": 0.05})
+    assert r.status_code == 200, r.text
+    assert r.json()["params"]["cp_threshold_m"] == pytest.approx(0.05)
+    r = client.put(URL, json={"threshold": 0.05, "cp_threshold_m": 0.06})
+    assert r.status_code == 422 and "deprecated name of 'cp_threshold_m'" in r.text

@@ -58,10 +58,10 @@ def test_a_bad_body_is_a_422_naming_the_field(client, body, word):
 
 
 @pytest.mark.parametrize(("params", "words"), [
-    ({"threshold": 0.9}, ["params.threshold", "[0.001, 0.5] m"]),
+    ({"cp_threshold_m": 0.9}, ["params.cp_threshold_m", "[0.001, 0.5] m"]),
     ({"t1": -1}, ["params.t1", "[0, 10] s"]),
     ({"mode": "panic"}, ["params.mode", "cp_error", "cp_support", "none"]),
-    ({"t1_s": 1.0}, ["params.t1_s", "t1", "t2", "recover_time", "threshold", "mode"]),
+    ({"t1_s": 1.0}, ["params.t1_s", "t1", "t2", "recover_time", "cp_threshold_m", "mode"]),
     ({"t2": "later"}, ["params.t2", "number"]),
 ])
 def test_bad_run_params_are_a_422_naming_the_field_and_range(client, params, words):
@@ -97,7 +97,7 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     time.sleep(0.3)
     scene, tick0, wall0 = runtime.scene, runtime.loop.snapshot.tick, time.perf_counter()
     live_params = client.get("/api/emergency-stopper/params").json()["params"]
-    r = client.post(f"/api/experiments/{name}", json={"save": True, "params": {"threshold": 0.05}})
+    r = client.post(f"/api/experiments/{name}", json={"save": True, "params": {"cp_threshold_m": 0.05}})
     wall = time.perf_counter() - wall0
     assert r.status_code == 200, r.text
     body = r.json()
@@ -121,7 +121,7 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     csv_text = client.get(body["csv_url"])
     assert csv_text.status_code == 200 and csv_text.headers["content-type"].startswith("text/csv")
     # the run used the threshold asked for; the live robot kept its parameters
-    assert body["params"] == {**live_params, "threshold": 0.05}
+    assert body["params"] == {**live_params, "cp_threshold_m": 0.05}
     rows = list(csv.DictReader(io.StringIO(csv_text.text)))
     assert rows and {float(row["threshold_m"]) for row in rows} == {0.05}
     assert client.get("/api/emergency-stopper/params").json()["params"] == live_params

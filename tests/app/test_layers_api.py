@@ -16,12 +16,12 @@ def test_state_has_walking_support_capture_point_and_the_emergency_flag(client, 
     assert s["walking"] is False
     assert s["support"] in ("rleg", "lleg", "both") and s["support"] == "both"
     cp = s["capture_point"]
-    assert set(cp) == {"ref", "act", "error", "error_norm", "threshold"}
+    assert set(cp) == {"ref", "act", "error", "error_norm", "cp_threshold_m", "threshold"}  # threshold: deprecated
     for key in ("ref", "act", "error"):
         assert len(cp[key]) == 2 and all(isinstance(v, float) for v in cp[key])
     assert isinstance(cp["error_norm"], float) and cp["error_norm"] >= 0.0
     assert cp["error_norm"] == pytest.approx(abs(complex(*cp["error"])), abs=1e-5)
-    assert cp["threshold"] == pytest.approx(StabilizerParams().cp_threshold_m)
+    assert cp["cp_threshold_m"] == pytest.approx(StabilizerParams().cp_threshold_m)
     st = runtime.loop.snapshot.layers["st"]
     assert cp["error"] == pytest.approx(st.cp_error, abs=1e-6)
     assert s["emergency"]["flag"] is bool(st.emergency)
@@ -48,7 +48,7 @@ def test_put_stabilizer_params_roundtrip_and_is_applied_to_the_layer(client, run
     assert client.get("/api/stabilizer/params").json()["params"]["cp_threshold_m"] == 0.06
     assert runtime.loop.chain["st"].params.cp_threshold_m == 0.06
     step(runtime, 0.01)
-    assert client.get("/api/state").json()["capture_point"]["threshold"] == pytest.approx(0.06)
+    assert client.get("/api/state").json()["capture_point"]["cp_threshold_m"] == pytest.approx(0.06)
     # an integer is accepted for a float field and stored as a float
     r = client.put("/api/auto-balancer/params", json={"transition_time_s": 3})
     assert r.status_code == 200, r.text

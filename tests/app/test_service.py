@@ -136,3 +136,24 @@ def test_sequence_verbs_are_refused_while_the_collision_detector_holds_or_the_mo
     assert info.value.reason == "motion_stop"
     service.release_motion()
     assert "interpolating" in service.set_some_joint_angles({"LARM_JOINT0": -0.3}, 1.0)
+
+
+def test_a_startup_parameter_document_is_loaded_checked_and_kept_across_resets():
+    doc = {"st": {"cp_threshold_m": 0.05}, "es": {"t1_s": 0.8}, "ic:rarm": {"m_p": 5.0}}
+    robot = LocalRobot(params=doc)
+    service = OperatorService(robot)
+    try:
+        def now():
+            p = service.params("st", "es", "ic:rarm")
+            return p["st"].cp_threshold_m, p["es"].t1_s, p["ic:rarm"].m_p
+
+        assert now() == (0.05, 0.8, 5.0)
+        service.set_params({"st": {"cp_threshold_m": 0.07}})
+        service.reset()
+        assert now() == (0.05, 0.8, 5.0)  # a reset starts again from the document, not the defaults
+    finally:
+        robot.close()
+    with pytest.raises(InvalidArgument, match=r"st\.k1: must be a number"):
+        LocalRobot(params={"st": {"k1": "a"}})
+    with pytest.raises(InvalidArgument, match=r"es\.t1_s=.*out of range|es\.t1_s"):
+        LocalRobot(params={"es": {"t1_s": -1.0}})

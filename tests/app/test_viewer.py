@@ -64,7 +64,7 @@ def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snap
     t, ex, ey, hi, lo = viewer._cp_plot.data
     assert len(t) >= 5 and np.all(np.diff(t) > 0) and t[-1] == pytest.approx(snap.time_s)  # + thread samples
     assert ex[-1] == pytest.approx(1e3 * st.cp_error[0]) and ey[-1] == pytest.approx(1e3 * st.cp_error[1])
-    np.testing.assert_allclose(hi, 1e3 * st.threshold)
+    np.testing.assert_allclose(hi, 1e3 * st.cp_threshold_m)
     np.testing.assert_allclose(lo, -hi)
 
 
@@ -96,7 +96,7 @@ def test_the_cp_history_keeps_a_time_window_and_clears_on_reset():
     from app.viewer import CpErrorHistory
 
     h = CpErrorHistory(window_s=1.0)
-    st = SimpleNamespace(cp_error=(0.01, -0.02), threshold=0.04)
+    st = SimpleNamespace(cp_error=(0.01, -0.02), cp_threshold_m=0.04)
     for i in range(30):
         assert h.add(SimpleNamespace(time_s=0.1 * i, layers={"st": st}))
     t, ex, ey, hi, lo = h.data()

@@ -48,9 +48,8 @@ def test_filter_follows_a_rotation_through_the_gyro():
 
 
 def test_layer_writes_the_estimate_and_passes_the_reference_through():
-    layer = KalmanFilter()
     ctx = make_ctx(accel=accel_for_tilt(0.0, np.deg2rad(5.0)))
-    layer.reset(ctx, None)
+    layer = KalmanFilter(rpy0=(0.0, np.deg2rad(5.0), 0.0))
     ref = Reference.from_arrays(np.zeros(30))
     assert layer.tick(ctx, ref) is ref
     assert abs(np.rad2deg(ctx.estimate.base_rpy_rad[1]) - 5.0) < 0.05

@@ -408,19 +408,6 @@ def test_idle_player_holds_its_last_output_whatever_comes_in():
     assert_joints(out, RESET_POSE)
 
 
-def test_reset_reseeds_every_channel_at_rest():
-    seq = make_player()
-    seq.set_joint_angles(MOVE_POSE, 2.0)
-    seq.set_zmp([0.1, 0.0, 0.0], 2.0)
-    run(seq, 1.0)
-    seed = Reference.from_arrays(MOVE_POSE, base_pos_world=(0.0, 0.0, 0.7))
-    seq.reset(CTX, seed)
-    assert not seq.is_interpolating()
-    out = run(seq, 0.1)
-    assert_joints(out, MOVE_POSE)
-    assert np.allclose(out.base_pos_world, [0.0, 0.0, 0.7]) and np.allclose(out.zmp_base, 0.0)
-
-
 def test_status_reports_motion_and_remaining_time():
     seq = make_player()
     assert seq.status().to_dict() == {"enabled": True, "interpolating": False, "active_groups": [], "remaining_s": 0.0}
