@@ -12,10 +12,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import pinocchio as pin
 
 from app.experiments.common import Event, Experiment, Rig, pose_with
 from controller.core.errors import InvalidCommand
+from controller.kinematics.limb_ik import LimbIkParams, PointAxisTarget, solve_limb_ik
 from controller.kinematics.model import RobotKinematics
 from robot.generate import DOOR_FACE_X_M, DOOR_HINGE_Y_M, DOOR_KNOB_M
 from robot.names import JOINT_GROUPS, joint_index
@@ -49,41 +49,26 @@ def knob_world(door_deg: float) -> tuple[np.ndarray, np.ndarray]:
     return centre, np.array([c, s, 0.0])
 
 
-def _skew(v: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -v[2], v[1]], [v[2], 0.0, -v[0]], [-v[1], v[0], 0.0]])
+#: The grasp's IK: the six arm joints (not the gripper), steps of at most 0.05 rad, the free turn drawn toward
+#: GRASP_POSTURE_DEG until the step settles; the knob within 2 mm, the jaws within ~1 deg of across it.
+ARM_JOINTS = JOINT_GROUPS[LIMB][:6]
+GRASP_IK = LimbIkParams(max_iterations=300, damping=1e-4, max_step_rad=0.05, pos_tol_m=2e-3, rot_tol_rad=0.02,
+                        posture_gain=0.02, settle_step_rad=1e-5)
 
 
-def grasp_ik(kin: RobotKinematics, q_rad: np.ndarray, base_pos_world: np.ndarray, knob_world_m: np.ndarray,
-             axis_world: np.ndarray, iterations: int = 300) -> np.ndarray:
+def knob_grasp(kin: RobotKinematics, q_rad: np.ndarray, base_pos_world: np.ndarray, knob_world_m: np.ndarray,
+               axis_world: np.ndarray) -> np.ndarray:
     """The posture (30,) [rad] whose left hand holds a knob at `knob_world_m` with axis `axis_world`: the knob
     centre at KNOB_IN_END_M and the jaws closing across the knob (hand x axis perpendicular to its axis); the
-    hand's turn about that closing direction is free and taken toward GRASP_POSTURE_DEG. Damped least
-    squares from `q_rad`, BODY level at `base_pos_world`; raises InvalidCommand when out of reach."""
-    q = np.array(q_rad, dtype=float)
-    idx = np.array(JOINT_GROUPS[LIMB][:6])
-    cols = kin.idx_v[idx]
-    fid = kin.model.getFrameId(f"{LIMB}_end")
-    posture = np.radians(GRASP_POSTURE_DEG)
-    for _ in range(iterations):
-        kin.update_rpy(base_pos_world, np.zeros(3), q)
-        M = kin.data.oMf[fid]
-        offset = M.rotation @ KNOB_IN_END_M
-        J = pin.computeFrameJacobian(kin.model, kin.data, kin.q, fid, pin.LOCAL_WORLD_ALIGNED)[:, cols]
-        x_hand = M.rotation[:, 0]
-        A = np.vstack([J[:3] - _skew(offset) @ J[3:], (np.cross(x_hand, axis_world) @ J[3:])[None]])
-        err = np.concatenate([knob_world_m - M.translation - offset, [-x_hand @ axis_world]])
-        A_inv = A.T @ np.linalg.inv(A @ A.T + 1e-4 * np.eye(4))
-        dq = A_inv @ err + (np.eye(6) - A_inv @ A) @ (0.02 * (posture - q[idx]))
-        q[idx] = np.clip(q[idx] + np.clip(dq, -0.05, 0.05), kin.q_lower[idx], kin.q_upper[idx])
-        if np.abs(dq).max() < 1e-5:
-            break
-    kin.update_rpy(base_pos_world, np.zeros(3), q)
-    M = kin.data.oMf[fid]
-    miss_m = np.linalg.norm(knob_world_m - M.translation - M.rotation @ KNOB_IN_END_M)
-    if miss_m > 2e-3 or abs(M.rotation[:, 0] @ axis_world) > 0.02:
+    hand's turn about that closing direction is free and taken toward GRASP_POSTURE_DEG. From `q_rad`, BODY
+    level at `base_pos_world`; raises InvalidCommand when out of reach."""
+    target = PointAxisTarget(knob_world_m, KNOB_IN_END_M, np.array([1.0, 0.0, 0.0]), axis_world)
+    sol = solve_limb_ik(kin, ARM_JOINTS, kin.frame_ids[f"{LIMB}_end"], target, q_rad, base_pos_world, np.eye(3),
+                        GRASP_IK, posture_rad=np.radians(GRASP_POSTURE_DEG))
+    if not sol.reached:
         raise InvalidCommand(f"door: the left hand cannot hold the knob at {np.round(knob_world_m, 3).tolist()} "
-                             f"(misses by {miss_m * 1e3:.1f} mm)")
-    return q
+                             f"(misses by {sol.pos_error_m * 1e3:.1f} mm)")
+    return sol.q_rad
 
 
 def hand_axis(kin: RobotKinematics) -> np.ndarray:
@@ -102,9 +87,10 @@ def grasp_posture(rig: Rig, door_deg: float, back_off_m: float, q_rad: np.ndarra
     kin = rig.kin
     base = np.array(rig.snapshot.reference.base_pos_world)
     knob, axis = knob_world(door_deg)
-    q = grasp_ik(kin, q_rad, base, knob, axis)
+    q = knob_grasp(kin, q_rad, base, knob, axis)
     if back_off_m > 0.0:
-        q = grasp_ik(kin, q, base, knob - back_off_m * hand_axis(kin), axis)
+        kin.update_rpy(base, np.zeros(3), q)
+        q = knob_grasp(kin, q, base, knob - back_off_m * hand_axis(kin), axis)
     return q
 
 

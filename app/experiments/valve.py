@@ -33,11 +33,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import pinocchio as pin
 
 from app.experiments.common import Event, Experiment, Rig
 from app.service.verbs import Footstep
 from controller.core.errors import InvalidCommand
+from controller.kinematics.limb_ik import LimbIkParams, LimbIkSolution, PoseTarget, solve_limb_ik
 from controller.kinematics.rotations import rpy_to_matrix
 from controller.walking.footsteps import FootstepParams
 from controller.walking.gait_generator import GaitParams
@@ -144,29 +144,18 @@ def hand_end_target(valve: ValveRecognition, psi_rad: float, backoff_m: float = 
     return p_end + R[:, 2] * backoff_m, R
 
 
-def arm_ik(rig: Rig, q_seed_rad: np.ndarray, base_pos_world, base_rpy_rad, p_target_world,
-           R_target_world, max_iter: int = 300) -> np.ndarray:
-    """The planner's arm IK (HAND's six arm joints), step-limited damped least squares on rig.kin;
-    raises InvalidCommand when the pose is out of reach."""
+#: The planner's arm IK: HAND's six arm joints (not the gripper), steps of at most 0.1 rad, damped for the
+#: stretched arm.
+ARM_JOINTS = JOINT_GROUPS[HAND][:6]
+ARM_IK = LimbIkParams(max_iterations=300, damping=1e-2, max_step_rad=0.1, pos_tol_m=2e-4, rot_tol_rad=2e-3)
+
+
+def solve_arm(rig: Rig, q_seed_rad: np.ndarray, base_pos_world, base_rpy_rad, p_target_world,
+           R_target_world) -> LimbIkSolution:
+    """The posture whose `*arm_end` is at the target pose (world), from the seed (the base where it is)."""
     kin = rig.kin
-    idx = np.array(JOINT_GROUPS[HAND][:6])
-    cols = kin.idx_v[idx]
-    fid = kin.model.getFrameId(f"{HAND}_end")
-    R_base = rpy_to_matrix(base_rpy_rad)
-    target = pin.SE3(np.asarray(R_target_world, dtype=float), np.asarray(p_target_world, dtype=float))
-    q = np.array(q_seed_rad, dtype=float)
-    err = np.full(6, np.inf)
-    for _ in range(max_iter):
-        kin.update(base_pos_world, R_base, q)
-        err = pin.log6(kin.data.oMf[fid].actInv(target)).vector
-        if np.linalg.norm(err[:3]) < 2e-4 and np.linalg.norm(err[3:]) < 2e-3:
-            return q
-        J = pin.computeFrameJacobian(kin.model, kin.data, kin.q, fid, pin.LOCAL)[:, cols]
-        dq = J.T @ np.linalg.solve(J @ J.T + 1e-2 * np.eye(6), err)
-        dq *= min(1.0, 0.1 / max(np.abs(dq).max(), 1e-12))
-        q[idx] = np.clip(q[idx] + dq, kin.q_lower[idx], kin.q_upper[idx])
-    raise InvalidCommand(f"valve plan: {HAND} cannot reach the rim pose (residual "
-                         f"{np.linalg.norm(err[:3]) * 1e3:.1f} mm, {math.degrees(np.linalg.norm(err[3:])):.1f} deg)")
+    return solve_limb_ik(kin, ARM_JOINTS, kin.frame_ids[f"{HAND}_end"], PoseTarget(p_target_world, R_target_world),
+                         q_seed_rad, base_pos_world, rpy_to_matrix(base_rpy_rad), ARM_IK)
 
 
 #: IK seeds: elbow bent, forearm forward, wrist rolled either way (the first that converges is used).
@@ -175,17 +164,16 @@ IK_SEEDS_DEG = tuple({f"{HAND_SIDE}_JOINT0": -20.0, f"{HAND_SIDE}_JOINT3": -80.0
 
 
 def solve_first(rig: Rig, q_now_rad: np.ndarray, base_pos, base_rpy, p, R) -> np.ndarray:
-    """IK from the seeds in turn."""
-    last = None
+    """IK from the seeds in turn; raises InvalidCommand when none reaches the pose."""
     for seed_deg in IK_SEEDS_DEG:
         q = np.array(q_now_rad, dtype=float)
         for name, deg in seed_deg.items():
             q[joint_index(name)] = math.radians(deg)
-        try:
-            return arm_ik(rig, q, base_pos, base_rpy, p, R)
-        except InvalidCommand as exc:
-            last = exc
-    raise last
+        sol = solve_arm(rig, q, base_pos, base_rpy, p, R)
+        if sol.reached:
+            return sol.q_rad
+    raise InvalidCommand(f"valve plan: {HAND} cannot reach the rim pose (last seed: "
+                         f"{sol.pos_error_m * 1e3:.1f} mm, {math.degrees(sol.rot_error_rad):.1f} deg off)")
 
 
 def backed_off(rig: Rig, q_seed_rad, base_pos, base_rpy, valve: ValveRecognition, psi_rad: float,
@@ -193,10 +181,9 @@ def backed_off(rig: Rig, q_seed_rad, base_pos, base_rpy, valve: ValveRecognition
     """The grasp pose backed off along the fingers by `backoff_m`, or by less (in 2 cm steps) where the arm
     cannot reach that far; the seed itself if none is reachable."""
     for d in np.arange(backoff_m, 0.0, -0.02):
-        try:
-            return arm_ik(rig, q_seed_rad, base_pos, base_rpy, *hand_end_target(valve, psi_rad, float(d)))
-        except InvalidCommand:
-            continue
+        sol = solve_arm(rig, q_seed_rad, base_pos, base_rpy, *hand_end_target(valve, psi_rad, float(d)))
+        if sol.reached:
+            return sol.q_rad
     return np.array(q_seed_rad, dtype=float)
 
 
@@ -228,11 +215,10 @@ def plan_manipulation(rig: Rig, valve: ValveRecognition) -> ArmPlan:
     arc = []
     q = q_grasp.copy()
     for psi_deg in ARC_PSI_DEG[1:]:
-        try:
-            q = arm_ik(rig, q, base_pos, base_rpy, *hand_end_target(valve, math.radians(psi_deg)))
-        except InvalidCommand:
+        sol = solve_arm(rig, q, base_pos, base_rpy, *hand_end_target(valve, math.radians(psi_deg)))
+        if not sol.reached:
             break
-        q = q.copy()
+        q = sol.q_rad.copy()
         q[grip] = closed_rad
         arc.append(q)
     return ArmPlan(q_ready, q_pre, q_grasp, arc)

@@ -1,1 +1,2 @@
-"""Kinematics and IK: the robot model (pinocchio), closed-form leg IK, whole-body IK, rotations."""
+"""Kinematics and IK: the robot model (pinocchio), the one limb IK (damped least squares), closed-form leg IK,
+whole-body IK, rotations."""

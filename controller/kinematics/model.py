@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 import pinocchio as pin
 
 from controller.core.errors import InvalidCommand, UnknownName, Unreachable
+from controller.kinematics.limb_ik import LimbIkParams, PoseTarget, solve_limb_ik
 from controller.kinematics.rotations import rpy_to_matrix
 from robot.names import (
     END_EFFECTORS,
@@ -18,6 +21,12 @@ from robot.names import (
 
 #: Which limb group each end effector moves.
 LIMB_OF_GROUP = {"rarm": "rarm", "larm": "larm", "rleg": "rleg", "lleg": "lleg"}
+
+
+@lru_cache(maxsize=16)
+def _limb_ik_params(max_iterations: int, pos_tol_m: float, rot_tol_rad: float) -> LimbIkParams:
+    """limb_ik's solver parameters (validated once per combination: the ImpedanceController asks every tick)."""
+    return LimbIkParams(max_iterations=max_iterations, pos_tol_m=pos_tol_m, rot_tol_rad=rot_tol_rad)
 
 
 class RobotKinematics:
@@ -91,6 +100,16 @@ class RobotKinematics:
         j = self._below_joint[sensor]
         return float(self.data.mass[j]), self.data.com[j].copy()
 
+    def frame_jacobian(self, frame_id: int, base_pos_world, base_R_world, q_rad,
+                       reference=pin.LOCAL) -> tuple[pin.SE3, np.ndarray]:
+        """One kinematic pass for this configuration: the frame's placement (world <- frame) and its Jacobian
+        (6, nv) in `reference` (pin.LOCAL: the frame's axes; pin.LOCAL_WORLD_ALIGNED: world axes at the frame's
+        origin). Only the joint placements and this frame are updated (not the other frames, not the COM)."""
+        self.q = self.configuration(base_pos_world, base_R_world, q_rad)
+        pin.computeJointJacobians(self.model, self.data, self.q)
+        M_world_frame = pin.updateFramePlacement(self.model, self.data, frame_id)
+        return M_world_frame, pin.getFrameJacobian(self.model, self.data, frame_id, reference)
+
     # ---- inverse kinematics ---------------------------------------------------------------------
     def limb_ik(self, group: str, q_init_rad, base_pos_world, base_rpy_rad, target_pos, target_R,
                 frame: str | None = None, max_iter: int = 50, pos_tol_m: float = 1e-4,
@@ -98,46 +117,27 @@ class RobotKinematics:
         """Move only `group`'s joints so its end effector reaches the target (hrpsys setTargetPose).
 
         `frame` None: target in the world; otherwise in that link's frame (e.g. "BODY").
-        Damped least squares, joint limits enforced; raises InvalidCommand if it does not converge,
-        unless `best_effort`, which returns the closest posture it found. Afterwards only the joint
-        placements and the end-effector frame of the returned posture are up to date (not all frames).
+        `solve_limb_ik` with LimbIkParams' defaults; raises Unreachable if it does not converge, unless
+        `best_effort`, which returns the closest posture it found. Afterwards only the joint placements and
+        the end-effector frame of the last posture evaluated are up to date (not all frames).
         """
         if group not in LIMB_OF_GROUP:
             raise InvalidCommand(
                 f"setTargetPose group {group!r} has no end effector; valid: {sorted(LIMB_OF_GROUP)}")
-        ee = END_EFFECTORS[LIMB_OF_GROUP[group]]
-        q_rad = np.array(q_init_rad, dtype=float)
         base_R = rpy_to_matrix(base_rpy_rad)
-        self.update(base_pos_world, base_R, q_rad)
         target = pin.SE3(np.asarray(target_R, dtype=float), np.asarray(target_pos, dtype=float))
         if frame is not None:
             if not self.model.existFrame(frame):
                 raise UnknownName(f"unknown frame {frame!r}; e.g. BODY, CHEST_LINK1")
+            self.update(base_pos_world, base_R, q_init_rad)
             target = self.data.oMf[self.model.getFrameId(frame)] * target
-        idx = np.array(JOINT_GROUPS[group])
-        cols = self.idx_v[idx]
-        fid = self.model.getFrameId(ee)
-        best_q, best_err = q_rad.copy(), np.inf  # the closest iterate, for best_effort
-        model, data = self.model, self.data
-        for _ in range(max_iter):
-            # one kinematic pass per iteration: joint placements and Jacobians, then the end-effector frame
-            self.q = self.configuration(base_pos_world, base_R, q_rad)
-            pin.computeJointJacobians(model, data, self.q)
-            M = pin.updateFramePlacement(model, data, fid)
-            err = pin.log6(M.actInv(target)).vector  # in the local frame
-            if np.linalg.norm(err[:3]) < pos_tol_m and np.linalg.norm(err[3:]) < rot_tol_rad:
-                return q_rad
-            err_norm = float(np.linalg.norm(err))
-            if err_norm < best_err:
-                best_q[:], best_err = q_rad, err_norm
-            J = pin.getFrameJacobian(model, data, fid, pin.LOCAL)[:, cols]
-            lam = 1e-4
-            dq = J.T @ np.linalg.solve(J @ J.T + lam * np.eye(6), err)
-            q_rad[idx] = np.clip(q_rad[idx] + dq, self.q_lower[idx], self.q_upper[idx])
-        if best_effort:
-            return best_q
+        params = _limb_ik_params(max_iter, pos_tol_m, rot_tol_rad)
+        fid = self.frame_ids[END_EFFECTORS[LIMB_OF_GROUP[group]]]
+        sol = solve_limb_ik(self, JOINT_GROUPS[group], fid, PoseTarget(target.translation, target.rotation),
+                            q_init_rad, base_pos_world, base_R, params)
+        if sol.reached or best_effort:
+            return sol.q_rad
         raise Unreachable(
-            f"setTargetPose: {group} cannot reach the target "
-            f"(residual {np.linalg.norm(err[:3]) * 1e3:.1f} mm, "
-            f"{np.rad2deg(np.linalg.norm(err[3:])):.2f} deg) within joint limits"
+            f"setTargetPose: {group} cannot reach the target (closest: "
+            f"{sol.pos_error_m * 1e3:.1f} mm, {np.rad2deg(sol.rot_error_rad):.2f} deg off) within joint limits"
         )
