@@ -1,0 +1,95 @@
+"""The operational points of [OP] II-III and the twists commanded at them (Eq. 2-5).
+
+One frame convention for every twist, **the feet frame F**: origin midway between the two soles' reference
+positions, z up (the world's vertical), x along the mean yaw of the two soles (forward for the robot).
+Linear parts are in m/s, angular parts in rad/s (the HTTP API takes deg/s), both in F's axes.
+
+| point   | linear (F)                     | angular (F)                                   |
+|---------|--------------------------------|-----------------------------------------------|
+| `rhand` | hand velocity (x, y, z)        | hand angular velocity (x, y, z)               |
+| `lhand` | hand velocity (x, y, z)        | hand angular velocity (x, y, z)               |
+| `head`  | unused (0)                     | gaze rates: (0, pitch, yaw); pitch > 0 looks down |
+| `waist` | (0, 0, height rate)            | BODY (roll, pitch, yaw) rates                 |
+| `walk`  | (vx, vy, 0): goVelocity        | (0, 0, vtheta): goVelocity                    |
+
+The waist's x-y and the COM are never commanded: balance is the controller's ([OP] Eq. 4).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from controller.core.errors import InvalidCommand
+from robot.sensors import frozen_array
+
+#: The operational points, in the order they are solved and reported.
+POINTS: tuple[str, ...] = ("rhand", "lhand", "head", "waist", "walk")
+
+#: Components a point uses: (linear mask, angular mask); a non-zero unused component is refused.
+USED_COMPONENTS: Mapping[str, tuple[tuple[bool, bool, bool], tuple[bool, bool, bool]]] = {
+    "rhand": ((True, True, True), (True, True, True)),
+    "lhand": ((True, True, True), (True, True, True)),
+    "head": ((False, False, False), (False, True, True)),
+    "waist": ((False, False, True), (True, True, True)),
+    "walk": ((True, True, False), (False, False, True)),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Twist:
+    """A velocity at an operational point, in the feet frame F: linear [m/s], angular [rad/s]."""
+
+    linear_m_s: np.ndarray  # (3,)
+    angular_rad_s: np.ndarray  # (3,)
+
+    @staticmethod
+    def of(linear_m_s=(0.0, 0.0, 0.0), angular_rad_s=(0.0, 0.0, 0.0)) -> Twist:
+        return Twist(frozen_array(linear_m_s, (3,)), frozen_array(angular_rad_s, (3,)))
+
+    def __add__(self, other: Twist) -> Twist:
+        return Twist.of(self.linear_m_s + other.linear_m_s, self.angular_rad_s + other.angular_rad_s)
+
+    def scaled(self, factor: float) -> Twist:
+        return Twist.of(self.linear_m_s * factor, self.angular_rad_s * factor)
+
+    @property
+    def is_zero(self) -> bool:
+        return not (self.linear_m_s.any() or self.angular_rad_s.any())
+
+
+ZERO_TWIST = Twist.of()
+
+
+def check_twist(point: str, twist: Twist) -> None:
+    """Raise InvalidCommand naming the point and component when the twist is not one the point takes."""
+    if point not in USED_COMPONENTS:
+        raise InvalidCommand(f"unknown operational point {point!r}; valid: {list(POINTS)}")
+    lin_mask, ang_mask = USED_COMPONENTS[point]
+    for part, values, mask in (("linear", twist.linear_m_s, lin_mask), ("angular", twist.angular_rad_s, ang_mask)):
+        if not np.isfinite(values).all():
+            raise InvalidCommand(f"{point}.{part}: must be finite, got {values.tolist()}")
+        for axis, value, used in zip("xyz", values, mask, strict=True):
+            if value != 0.0 and not used:
+                raise InvalidCommand(f"{point}.{part}.{axis}: the {point} point does not use this component "
+                                     f"(it must be 0); see controller.operation.points")
+
+
+def sum_per_point(*contributions: Mapping[str, Twist]) -> dict[str, Twist]:
+    """[OP] Eq. 5: xi_ref_i = xi_motion_i + xi_behavior_i (+ ...), per operational point; absent = zero."""
+    total: dict[str, Twist] = {}
+    for contribution in contributions:
+        for point, twist in contribution.items():
+            total[point] = total[point] + twist if point in total else twist
+    return total
+
+
+def points_in(names: Iterable[str]) -> tuple[str, ...]:
+    """`names` in POINTS order; raises InvalidCommand on an unknown name."""
+    names = set(names)
+    unknown = sorted(names - set(POINTS))
+    if unknown:
+        raise InvalidCommand(f"unknown operational point(s) {unknown}; valid: {list(POINTS)}")
+    return tuple(p for p in POINTS if p in names)
