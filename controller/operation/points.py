@@ -93,3 +93,47 @@ def points_in(names: Iterable[str]) -> tuple[str, ...]:
     if unknown:
         raise InvalidCommand(f"unknown operational point(s) {unknown}; valid: {list(POINTS)}")
     return tuple(p for p in POINTS if p in names)
+
+
+@dataclass(frozen=True, slots=True)
+class WalkCommand:
+    """The walking point this tick, as the AutoBalancer takes it (hrpsys goVelocity plus the step parameters
+    [OP] V-A lets the operator set while walking); velocities in the feet frame F."""
+
+    vx_m_s: float
+    vy_m_s: float
+    vtheta_rad_s: float
+    max_stride_m: float | None = None  # step length limit (None: the gait generator's own)
+    foot_distance_m: float | None = None  # lateral distance between the feet's centres (None: its own)
+
+    @property
+    def is_zero(self) -> bool:
+        return self.vx_m_s == 0.0 and self.vy_m_s == 0.0 and self.vtheta_rad_s == 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class PointPose:
+    """Where an operational point is, as the controller computes it from its own reference (not the simulator):
+    position [m] and rotation (world <- point) in the world frame, and the same in the feet frame F."""
+
+    p_world_m: np.ndarray  # (3,)
+    R_world_point: np.ndarray  # (3, 3)
+    p_feet_m: np.ndarray  # (3,)
+    R_feet_point: np.ndarray  # (3, 3)
+
+
+@dataclass(frozen=True, slots=True)
+class OperationView:
+    """What behaviours may read between ticks (the operation layer's view after the last tick).
+
+    Poses are the controller's reference (what it commands), the walking state the AutoBalancer's plan; the
+    robot's place in the world is the feet frame F as the gait plan puts it (odometry, not ground truth)."""
+
+    time_s: float
+    feet_p_world_m: np.ndarray  # (3,) origin of F in the world
+    feet_yaw_rad: float  # yaw of F in the world
+    points: Mapping[str, PointPose]  # "rhand", "lhand", "head" (the gaze origin, x along the gaze), "waist" (BODY)
+    gaze_rad: tuple[float, float]  # (pitch, yaw) of the gaze in F; pitch > 0 looks down
+    waist_height_m: float  # BODY height above F
+    walking: bool
+    motion_stopped: bool  # the EmergencyStopper holds (or reverts) the motion: nothing moves until released
