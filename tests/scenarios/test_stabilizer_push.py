@@ -35,14 +35,14 @@ def test_the_capture_point_error_is_in_every_snapshot_and_the_flag_rises_past_th
     fallen, _, snaps = push_and_watch(np.array([20.0, 0.0, 0.0]), seconds=2.0)
     errors = np.array([s.layers["st"].cp_error_norm for s in snaps])
     flags = np.array([s.layers["st"].emergency for s in snaps])
-    threshold = snaps[0].layers["st"].threshold
+    threshold = snaps[0].layers["st"].cp_threshold_m
     # 1. before the push the error is tiny and the flag down
     assert errors[0] < 0.01 and not flags[0]
     # 2. the push drives the error past the threshold and the flag follows it
     assert errors.max() > threshold
     assert flags.any()
     assert np.array_equal(flags, errors > threshold)
-    assert snaps[-1].layers["st"].flag_rise_time is not None
+    assert snaps[-1].layers["st"].flag_rose_at is not None
 
 
 @pytest.mark.slow
