@@ -237,6 +237,26 @@ def test_an_error_raised_inside_the_loop_is_a_500_and_the_loop_keeps_running(cli
     tick = loop.snapshot.tick
     step(runtime, 0.05)
     assert loop.snapshot.tick == tick + 10 and loop.snapshot.fault is None
+    assert client.get("/api/health").json()["run"]["faults"] == []  # a failed verb is no controller fault
+
+
+def test_health_gives_the_runs_own_counters_and_a_controller_fault_stays_in_them(client, runtime, monkeypatch):
+    step(runtime, 0.05)
+    run = client.get("/api/health").json()["run"]
+    assert run["ticks"] == 10 and run["fallen"] is False and run["faults"] == [] and run["max_loop_ms"] > 0.0
+
+    def broken(*_args):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(runtime.loop.chain["es"], "tick", broken)
+    step(runtime, 0.05)
+    monkeypatch.undo()
+    # the release clears the loop's fault: the snapshot forgets it, the run's counters do not
+    assert client.post("/api/estop/release").status_code == 200
+    step(runtime, 0.05)
+    assert runtime.loop.snapshot.fault is None
+    run = client.get("/api/health").json()["run"]
+    assert run["ticks"] == 30 and run["faults"] == ["RuntimeError: boom"]
 
 
 def test_reset_restarts_the_simulation(client, runtime):
