@@ -114,7 +114,9 @@ def bench_parser() -> argparse.ArgumentParser:
     which = p.add_mutually_exclusive_group()
     which.add_argument("--layers", type=_layers, default=None,
                        help="only these layers work, comma-separated (e.g. kf,rmfo,seq,co,hes,el); the others "
-                            "pass their input through. The report adds step_ms, loop_overhead_ms, passthrough")
+                            "are disabled. The report adds step_ms, loop_overhead_ms, passthrough (the disabled "
+                            "layers that passed their input through) and disabled_but_ran (kf, rmfo and hes "
+                            "keep working when disabled)")
     which.add_argument("--chain", choices=tuple(CHAINS), default=None,
                        help="a named layer selection: " + "; ".join(f"{k}: {','.join(v)}" for k, v in CHAINS.items()))
     return p
