@@ -303,8 +303,9 @@ def experiment(argv: Sequence[str]) -> int:
     print(f"simulated at {r.real_time_factor:.1f}x real time")
     for key, value in r.outcome.items():
         print(f"{key}: {value:.4g}")
+    print(f"faults: {'; '.join(r.faults) if r.faults else 'none'}")
     print(r.verdict_line())
-    return 0
+    return 1 if r.faults else 0  # a fall can be the experiment's result; a controller fault never is
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -260,6 +260,8 @@ class ExperimentResponse(BaseModel):
     params: dict[str, Any] = Field(default_factory=dict, description="the EmergencyStopper parameters of the run")
     refused: list[str] = Field(default_factory=list, description="planner commands the robot refused (when, why), "
                                                                  "e.g. the plan's next step after a motion stop")
+    faults: list[str] = Field(default_factory=list, description="every distinct controller fault of the run "
+                                                                "(its own counters); empty: none")
     run_id: int = Field(description="the run's number in this console")
     csv_url: str | None = Field(default=None, description="where the run's CSV is (with save)")
     png_url: str | None = Field(default=None, description="where the run's Fig. 10-style PNG is (with save)")
