@@ -137,15 +137,20 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
 
 
 @pytest.mark.slow
-def test_thirty_runs_leave_the_console_no_bigger_and_no_folder_behind(client):
+def test_thirty_runs_leave_the_console_no_bigger_and_no_folder_behind(client, tmp_path, monkeypatch):
     import glob
     import tempfile
+
+    # the runs' temp folders in a directory of this test's own (other programs' runs may share /tmp)
+    monkeypatch.setenv("TMPDIR", str(tmp_path))
+    monkeypatch.setattr(tempfile, "tempdir", None)
 
     def rss_mb() -> float:
         with open("/proc/self/statm") as fh:
             return int(fh.read().split()[1]) * 4096 / 2**20
 
     pattern = f"{tempfile.gettempdir()}/hrp2-*"
+    assert pattern.startswith(str(tmp_path))
     folders = set(glob.glob(pattern))
     body = {"save": True, "duration_s": 0.5}
     first = client.post("/api/experiments/wall-push-left", json=body)
