@@ -19,24 +19,23 @@ def console():
         yield c
 
 
-def wait_state(console, predicate, timeout_s=10.0):
+def wait_for(console, path, predicate, timeout_s=10.0):
+    """GET `path` until `predicate(document)` holds; the document."""
     deadline = time.monotonic() + timeout_s
     while True:
-        status, state = console.request("GET", "/api/state")
-        if status == 200 and predicate(state):
-            return state
-        assert time.monotonic() < deadline, f"state not reached: {state}"
+        status, doc = console.request("GET", path)
+        if status == 200 and predicate(doc):
+            return doc
+        assert time.monotonic() < deadline, f"{path} not as expected: {doc}"
         time.sleep(0.05)
+
+
+def wait_state(console, predicate, timeout_s=10.0):
+    return wait_for(console, "/api/state", predicate, timeout_s)
 
 
 def wait_health(console, predicate, timeout_s=10.0):
-    deadline = time.monotonic() + timeout_s
-    while True:
-        status, health = console.request("GET", "/api/health")
-        if status == 200 and predicate(health):
-            return health
-        assert time.monotonic() < deadline, f"health not reached: {health}"
-        time.sleep(0.05)
+    return wait_for(console, "/api/health", predicate, timeout_s)
 
 
 def test_a_bad_parameter_request_then_an_estop_on_the_same_connection_is_applied(console):
