@@ -177,3 +177,22 @@ def test_paced_and_unpaced_runs_give_the_same_trajectory():
 def test_reference_from_arrays_validates_shapes():
     with pytest.raises(ValueError):
         Reference.from_arrays(np.zeros(29))
+
+
+def test_before_tick_runs_with_the_control_time_after_the_commands_of_that_boundary():
+    seen = []
+    loop, plant, _ = make_loop(before_tick=lambda t: seen.append(("tick", t)))
+    loop.step()
+    loop.submit(lambda: seen.append(("command", plant.time_s)))  # not running: applied at once
+    loop.step()
+    assert seen == [("tick", 0.0), ("command", 0.005), ("tick", 0.005)]
+
+
+def test_an_exception_in_before_tick_never_stops_the_loop():
+    def boom(t):
+        raise RuntimeError("behaviour bug")
+
+    loop, plant, _ = make_loop(before_tick=boom)
+    for _ in range(3):
+        loop.step()
+    assert loop.tick_count == 3 and loop.fault is None
