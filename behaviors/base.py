@@ -120,8 +120,13 @@ class Behavior(ABC):
 
     # ---- what the runner asks -----------------------------------------------------------------------------
     def points(self) -> tuple[str, ...]:
-        """The operational points this behaviour drives (two runs may not share one)."""
+        """The operational points this behaviour drives with twists."""
         return ()
+
+    def resources(self) -> tuple[str, ...]:
+        """What it needs alone: its points, and anything else it commands ("rhand.gripper"); two runs may
+        not share one."""
+        return self.points()
 
     @abstractmethod
     def nominal_duration_s(self) -> float:

@@ -39,7 +39,7 @@ class RunStatus:
     progress: float  # 0..1
     message: str
     result: dict[str, Any]
-    points: tuple[str, ...]
+    points: tuple[str, ...]  # what the run needs alone: operational points, "rhand.gripper", ...
     started_s: float  # control time [s]
     ended_s: float | None
     nominal_duration_s: float
@@ -57,6 +57,7 @@ class _Run:
     behavior: Behavior
     started_s: float
     points: tuple[str, ...]
+    resources: tuple[str, ...]
     state: str = "running"
     progress: float = 0.0
     message: str = "running"
@@ -68,7 +69,7 @@ class _Run:
         b = self.behavior
         return RunStatus(id=self.id, behavior=b.name, params=b.params.to_dict(), state=self.state,
                          progress=round(self.progress, 4), message=self.message, result=dict(self.result),
-                         points=self.points, started_s=self.started_s, ended_s=self.ended_s,
+                         points=self.resources, started_s=self.started_s, ended_s=self.ended_s,
                          nominal_duration_s=b.nominal_duration_s())
 
 
@@ -98,15 +99,16 @@ class BehaviorRunner:
         of its points, InvalidCommand when the chain lacks what it needs, or what its start raised."""
         now = self._time_s if time_s is None else float(time_s)
         points = tuple(behavior.points())
+        resources = tuple(dict.fromkeys((*points, *behavior.resources())))
         op = self._op()
         if points and op is None:
             raise InvalidCommand(f"{behavior.name} drives {list(points)}, and the chain has no operation layer")
         for other in self._running.values():
-            shared = sorted(set(points) & set(other.points))
+            shared = sorted(set(resources) & set(other.resources))
             if shared:
-                raise InvalidState(f"{behavior.name} refused: point(s) {shared} are driven by run {other.id} "
+                raise InvalidState(f"{behavior.name} refused: {shared} driven by run {other.id} "
                                    f"({other.behavior.name}); cancel it or wait until it ends")
-        run = _Run(self._next_id, behavior, now, points)
+        run = _Run(self._next_id, behavior, now, points, resources)
         behavior.start(self._context(run, now, op))  # may raise: the run is refused
         self._next_id += 1
         self._running[run.id] = run

@@ -75,7 +75,8 @@ class FakeOp:
 
 class FakeCommands:
     """Records every command; joints follow their commands linearly over the given time (no load), or stop
-    at `blocked` angles (an object in the jaws); `refuse` makes every command raise InvalidState."""
+    below `blocked` angles (an object in the jaws, closing = increasing angle);
+    `refuse` makes every command raise InvalidState."""
 
     def __init__(self, op: FakeOp | None = None) -> None:
         self.op = op
@@ -100,7 +101,7 @@ class FakeCommands:
             self.q_cmd[name] = q0 + (q1 - q0) * a
             q = self.q_cmd[name]
             if name in self.blocked:
-                q = min(q, self.blocked[name]) if q1 >= q0 else max(q, self.blocked[name])
+                q = min(q, self.blocked[name])  # an object stops the closing (increasing) angle
             self.q[name] = q
 
     def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> float:
