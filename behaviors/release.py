@@ -52,4 +52,5 @@ class Release(Behavior):
 
     def stop(self, ctx: Context) -> None:
         r = ctx.commands.joint(self.joint)
-        ctx.commands.set_joint_angles({self.joint: r.q_meas_rad}, ctx.dt_s)
+        here = min(max(r.q_meas_rad, r.lower_rad), r.upper_rad)
+        ctx.commands.set_joint_angles({self.joint: here}, ctx.dt_s)
