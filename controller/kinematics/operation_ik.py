@@ -800,6 +800,14 @@ class OperationIK:
         """Forget the warm start: the next active solve starts from its inputs."""
         self._seeded = False
 
+    def warm_start(self, q: np.ndarray) -> None:
+        """Continue from the placo configuration `q` (nq,) (a copy of an earlier `self.q`), e.g. the
+        posture an emergency stop reverted to; the next solve steps from there instead of its inputs."""
+        self.q = np.array(q, dtype=float)
+        self.robot.state.q = self.q
+        self._forward_kinematics()
+        self._seeded = True
+
     def solve(self, q_rad: np.ndarray, base_pos_world: np.ndarray, base_rpy_rad: np.ndarray,
               targets: OperationTargets, feet: FeetPoses | None = None,
               com_xy_world: np.ndarray | None = None) -> OperationIKResult:
