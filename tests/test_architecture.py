@@ -98,7 +98,7 @@ def test_no_private_name_is_imported_across_modules_of_the_controller():
 
 def test_the_controller_tree_shows_its_architecture():
     packages = sorted(p.name for p in (ROOT / "controller").iterdir() if p.is_dir() and (p / "__init__.py").exists())
-    assert packages == ["balance", "core", "interpolation", "kinematics", "layers", "walking"]
+    assert packages == ["balance", "core", "interpolation", "kinematics", "layers", "operation", "walking"]
     assert not [p.name for p in (ROOT / "controller").glob("*.py") if p.name != "__init__.py"]
     from controller.core.chain import CHAIN_ORDER
     from controller.core.system import layer_classes

@@ -198,6 +198,7 @@ class AutoBalancer(Layer):
             out = self._hold()
             if out.gait is not None:
                 ctx.ports.cog_acc_world = out.gait.cog_acc_world
+            ctx.ports.gait = out.gait
             return out
         if self._holding:
             self._resume(ctx)
@@ -245,6 +246,7 @@ class AutoBalancer(Layer):
         self._last_out = ref.with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
                                          gait=gait)
         ctx.ports.cog_acc_world = gait.cog_acc_world
+        ctx.ports.gait = gait
         return self._last_out
 
     def _resume(self, ctx: TickContext) -> None:

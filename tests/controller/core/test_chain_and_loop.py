@@ -103,7 +103,7 @@ def test_chain_runs_layers_in_the_declared_order_whatever_the_mapping_order():
     chain = Chain({"hes": Freeze(), "seq": Ramp()})
     assert chain.order() == ["seq", "hes"]
     assert chain.describe() == "seq -> hes"
-    assert CHAIN_ORDER == ("kf", "rmfo", "seq", "es", "ic", "abc", "st", "co", "hes", "el")
+    assert CHAIN_ORDER == ("kf", "rmfo", "seq", "op", "es", "ic", "abc", "st", "co", "hes", "el")
 
 
 def test_chain_rejects_unknown_layer_names_listing_the_valid_ones():
