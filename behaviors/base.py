@@ -18,7 +18,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol
 
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Params
 from controller.operation.points import OperationView, Twist, WalkCommand
 
@@ -83,7 +83,8 @@ class Context:
 
     def require_view(self) -> OperationView:
         if self.view is None:
-            raise InvalidCommand("this behaviour needs the operation layer ('op'), which is not in the chain")
+            raise InvalidState("this behaviour needs the operation layer's view ('op'): the layer is not in the "
+                               "chain, or has not ticked yet")
         return self.view
 
 

@@ -73,6 +73,16 @@ class _Run:
                          nominal_duration_s=b.nominal_duration_s())
 
 
+def _view(op: OperationPort | None) -> OperationView | None:
+    """The op layer's view, or None (no layer, or none yet: before its first tick)."""
+    if op is None:
+        return None
+    try:
+        return op.view()
+    except (InvalidState, InvalidCommand):
+        return None
+
+
 class BehaviorRunner:
     """Runs behaviours; `step(time_s)` is installed on ControlLoop.before_tick.
 
@@ -198,7 +208,7 @@ class BehaviorRunner:
     # ---- pieces ----------------------------------------------------------------------------------------------------
     def _context(self, run: _Run, time_s: float, op: OperationPort | None) -> Context:
         return Context(time_s=float(time_s), elapsed_s=float(time_s) - run.started_s, dt_s=self.dt_s,
-                       view=None if op is None else op.view(), commands=self.commands)
+                       view=_view(op), commands=self.commands)
 
     def _end(self, run: _Run, state: str, message: str, interrupted: bool) -> None:
         """Finish a run. Its twists are no longer summed from the next tick on (set_behavior holds for one
