@@ -13,7 +13,7 @@ from behaviors.servo import rot_z, wrap_rad
 from controller.operation.points import OperationView
 
 SETTLE_S = 2.0  # [s] allowed beyond the planned walk (the last double support, the stop)
-WALK_START_S = 0.05  # [s] the plan starts within this (the walking flag rises on the next tick)
+WALK_START_S = 1.0  # [s] the walking flag rises within this of goPos (or the plan was empty)
 
 
 @dataclass(frozen=True)
@@ -48,6 +48,7 @@ class WalkTo(Behavior):
         d, dtheta = self._errors(ctx.require_view())
         self.distance0_m = float(np.linalg.norm(d))
         self.plan_s = float(ctx.commands.go_pos(float(d[0]), float(d[1]), float(dtheta)))
+        self.seen_walking = False
 
     def nominal_duration_s(self) -> float:
         return getattr(self, "plan_s", 0.0) + SETTLE_S
@@ -60,7 +61,8 @@ class WalkTo(Behavior):
 
     def step(self, ctx: Context) -> Output:
         view = ctx.require_view()
-        if view.walking or ctx.elapsed_s < WALK_START_S:
+        self.seen_walking = self.seen_walking or view.walking
+        if view.walking or (not self.seen_walking and ctx.elapsed_s < min(self.plan_s, WALK_START_S)):
             return NOTHING
         d, dtheta = self._errors(view)
         dist, dyaw_deg = float(np.linalg.norm(d)), math.degrees(abs(dtheta))
