@@ -573,7 +573,8 @@ class GetParams(Verb):
 
 @dataclass(frozen=True)
 class EnableLayers(Verb):
-    """Let layers work (True) or pass their input through (False): for benchmarks and diagnosis."""
+    """Let layers work (True) or pass their input through (False): for benchmarks and diagnosis. The KalmanFilter,
+    RemoveForceOffset and HardEmergencyStopper keep estimating and guarding when disabled (the bench says which ran)."""
 
     name = "enable_layers"
     enabled: tuple[tuple[str, bool], ...]

@@ -25,7 +25,7 @@ def test_state_has_walking_support_capture_point_and_the_emergency_flag(client, 
     st = runtime.loop.snapshot.layers["st"]
     assert cp["error"] == pytest.approx(st.cp_error, abs=1e-6)
     assert s["emergency"]["flag"] is bool(st.emergency)
-    rise = s["emergency"]["flag_rise_time"]
+    rise = s["emergency"]["flag_rose_at"]
     assert rise is None or isinstance(rise, float)
 
 
