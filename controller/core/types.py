@@ -6,6 +6,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from controller.operation.points import WalkCommand
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
@@ -144,6 +145,7 @@ class Ports:
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
+    walk_command: WalkCommand | None = None  # op: the walking point this tick; abc walks at it (goVelocity)
 
 
 @dataclass(slots=True)

@@ -14,13 +14,14 @@ import pinocchio as pin
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
 from controller.balance.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.core.constants import GRAVITY_M_S2
-from controller.core.errors import InvalidState
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
 from controller.core.types import GaitState, Reference, TickContext, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rpy_to_rows
+from controller.operation.points import WalkCommand
 from controller.walking.footsteps import StepParams
 from controller.walking.gait_generator import GaitGenerator, GaitParams
 from controller.walking.preview_control import PreviewController, PreviewControlParams
@@ -32,6 +33,36 @@ REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this f
 FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
 #: [N] a swing foot reading more has touched down (the Stabilizer's contact threshold)
 SWING_FOOT_LOADED_N = 25.0
+#: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it
+MAX_STRIDE_RANGE_M = (0.0, 0.3)
+#: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
+#: edges at 0.19 m) keep >= 2 cm apart at the low end
+FOOT_DISTANCE_RANGE_M = (0.14, 0.30)
+#: [m/s], [rad/s] the walking point's velocity bounds (the goVelocity verb's); the stride limits clamp the steps
+WALK_VELOCITY_LIMIT_M_S = 0.5
+WALK_VELOCITY_LIMIT_RAD_S = math.radians(45.0)
+
+
+def check_walk_command(cmd: WalkCommand) -> None:
+    """Raise InvalidCommand naming the field and the allowed range when the walking point's command is not
+    one the AutoBalancer takes (what the operation layer and the verbs check before it reaches the loop)."""
+    for name, value, limit, unit in (("vx_m_s", cmd.vx_m_s, WALK_VELOCITY_LIMIT_M_S, "m/s"),
+                                     ("vy_m_s", cmd.vy_m_s, WALK_VELOCITY_LIMIT_M_S, "m/s"),
+                                     ("vtheta_rad_s", cmd.vtheta_rad_s, WALK_VELOCITY_LIMIT_RAD_S, "rad/s")):
+        if not (math.isfinite(value) and abs(value) <= limit):
+            raise InvalidCommand(f"walk.{name}={value!r} [{unit}]; allowed: [{-limit:g}, {limit:g}]")
+    for name, value, (lo, hi) in (("max_stride_m", cmd.max_stride_m, MAX_STRIDE_RANGE_M),
+                                  ("foot_distance_m", cmd.foot_distance_m, FOOT_DISTANCE_RANGE_M)):
+        if value is not None and not (math.isfinite(value) and lo <= value <= hi):
+            raise InvalidCommand(f"walk.{name}={value!r} [m]; allowed: [{lo:g}, {hi:g}] or null (the gait's own)")
+
+
+def _walk_command_valid(cmd: WalkCommand) -> bool:
+    try:
+        check_walk_command(cmd)
+    except InvalidCommand:
+        return False
+    return True
 
 
 @dataclass(frozen=True)
@@ -62,6 +93,8 @@ class AutoBalancerStatus(Status):
     walking_stop: bool = field(metadata=described("the emergency walking stop is in force (stepping in place)"))
     has_ik_failed: bool = field(metadata=described("the whole-body IK could not reach its targets this tick"))
     footsteps: tuple[FootstepStatus, ...] = field(metadata=described("the footsteps not landed yet"))
+    walk_point: str = field(default="idle", metadata=described(
+        "the walking point (Ports.walk_command): 'idle', 'walking' (abc walks at it), or 'ignored: <why>'"))
 
 
 class AutoBalancer(Layer):
@@ -104,6 +137,9 @@ class AutoBalancer(Layer):
         self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
         self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
         self._holding = False  # the hard e-stop holds the chain
+        self._port_walking = False  # the walk in progress is driven by the walking point (Ports.walk_command)
+        self._walk_armed = True  # False after an e-stop or walking stop, until the walking point reads zero
+        self._walk_point = "idle"
         if active:
             self.start()
 
@@ -133,12 +169,23 @@ class AutoBalancer(Layer):
             raise InvalidState(f"{what}: the AutoBalancer must be running (start it first)")
 
     def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> int:
-        """hrpsys goPos relative to the current feet mid-coords; returns the number of footsteps."""
+        """hrpsys goPos relative to the current feet mid-coords; returns the number of footsteps to go.
+
+        While walking it replaces the rest of the plan (hrpsys): the goal is then relative to the feet's
+        mid-coords where this walk began (`gait.walk_origin`), the new steps start at the next free footstep,
+        and a velocity walk (the walking point's too) ends in it. Returns 0 when the walk is in its last
+        step: the new goal is then walked to from where the robot stands at its end."""
         self._require_active("goPos")
-        if self.gait.walking:
-            raise InvalidState("goPos while walking: stop first (goStop) or use goVelocity")
+        if self.walking_stop:
+            raise InvalidState("goPos: the emergency walking stop is in force (stepping in place); "
+                               "goPos again once the robot stands")
+        was_walking = self.gait.walking
+        steps = self.gait.go_pos(x_m, y_m, theta_rad)
         self._walking_stop_requested = False
-        return len(self.gait.go_pos(x_m, y_m, theta_rad))
+        self._port_walking = False  # the footsteps win; the walking point may drive the next walk
+        if not was_walking:
+            return len(steps)
+        return len(self.gait.remaining_footsteps()) if steps else 0
 
     def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
         self._require_active("goVelocity")
@@ -149,9 +196,55 @@ class AutoBalancer(Layer):
         self.gait.go_stop()
 
     def emergency_stop_walking(self) -> None:
-        """Remaining footsteps replaced so the robot stops in place (manipulation is left alone)."""
+        """Remaining footsteps replaced so the robot stops in place (manipulation is left alone). The walking
+        point is ignored from now until it reads zero (a held stick does not walk on after the stop)."""
         self.gait.emergency_stop()
         self._walking_stop_requested = True
+        self._disarm_walk_point()
+
+    def _disarm_walk_point(self) -> None:
+        self._port_walking = False
+        self._walk_armed = False
+
+    def _walk_at(self, cmd: WalkCommand | None) -> None:
+        """The walking point this tick (hrpsys goVelocity each tick): a non-zero command walks at it, the
+        velocity and step parameters taken by the velocity steps planned at the next mid-step check (the
+        gait goes on); zero or None after a walk it drove ends that walk as goStop does. Ignored (said in
+        status().walk_point) under the emergency walking stop, before the AutoBalancer runs, while a
+        footstep list is walked, while a stop from rest after the e-stop plays, and, after a stop, until it
+        has read zero once. Never raises: an invalid command is ignored too."""
+        if cmd is None or cmd.is_zero:
+            self._walk_armed = True
+            if self._port_walking:
+                self._port_walking = False
+                self.gait.go_stop()
+            self._walk_point = "idle"
+            return
+        why = self._walk_point_refusal(cmd)
+        if why is not None:
+            self._walk_point = why
+            return
+        gait = self.gait
+        gait.set_velocity_step(cmd.max_stride_m, cmd.foot_distance_m)
+        gait.go_velocity(cmd.vx_m_s, cmd.vy_m_s, cmd.vtheta_rad_s)
+        self._walking_stop_requested = False
+        self._port_walking = True
+        self._walk_point = "walking"
+
+    def _walk_point_refusal(self, cmd: WalkCommand) -> str | None:
+        if not self._walk_armed:
+            return "ignored: stopped; the walking point must read zero once before walking again"
+        if self.walking_stop:
+            return "ignored: the emergency walking stop is in force"
+        if not self.active or self._blend is not None:
+            return "ignored: the AutoBalancer is not running"
+        gait = self.gait
+        if gait.walking and gait.velocity_mode not in ("walking", "ending"):
+            return ("ignored: the walk is ending after the e-stop" if gait.stopping_from_rest
+                    else "ignored: walking a footstep list (goPos / setFootSteps)")
+        if not _walk_command_valid(cmd):
+            return "ignored: out of range (see check_walk_command)"
+        return None
 
     def set_footsteps(self, footsteps: list[tuple], step_params: list[StepParams | None] | None = None) -> int:
         """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
@@ -208,6 +301,11 @@ class AutoBalancer(Layer):
         if self._weight <= 0.0 and not self.active:
             self.last_gait = None
             return ref
+        cmd = ctx.ports.walk_command
+        if cmd is not None or self._port_walking or not self._walk_armed:
+            self._walk_at(cmd)
+        elif self._walk_point != "idle":
+            self._walk_point = "idle"
         future = self.gait.zmp_preview(self.preview.preview_length)
         cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
         g = self.gait.tick()
@@ -264,6 +362,8 @@ class AutoBalancer(Layer):
         foot goes down, the ZMP comes to the feet's middle), played after the release."""
         if not self._holding:
             self._holding = True
+            self._disarm_walk_point()
+            self._walk_point = "ignored: the hard e-stop holds"
             if self.gait.walking:
                 self._walking_stop_requested = True
                 self.gait.stop_from_rest(self._rest_zmp_xy(self._last_out.gait))
@@ -280,7 +380,8 @@ class AutoBalancer(Layer):
         return AutoBalancerStatus(enabled=self.enabled, active=self.active, weight=round(self._weight, 4),
                                   walking=bool(g.walking) if g else False, support=g.support if g else "both",
                                   walking_stop=self.walking_stop, has_ik_failed=self.has_ik_failed,
-                                  footsteps=self._status_footsteps() if self.gait.walking else ())
+                                  footsteps=self._status_footsteps() if self.gait.walking else (),
+                                  walk_point=self._walk_point)
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes
