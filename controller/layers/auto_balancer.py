@@ -22,7 +22,7 @@ from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rpy_to_rows
 from controller.operation.points import WalkCommand
-from controller.walking.footsteps import StepParams
+from controller.walking.footsteps import FootstepParams, StepParams, StrideLimits
 from controller.walking.gait_generator import GaitGenerator, GaitParams
 from controller.walking.preview_control import PreviewController, PreviewControlParams
 from controller.walking.toe_heel import ToeHeelParams
@@ -67,10 +67,46 @@ def _walk_command_valid(cmd: WalkCommand) -> bool:
 
 @dataclass(frozen=True)
 class AutoBalancerParams(Params):
+    """The AutoBalancer's parameters, the gait generator's among them (hrpsys setGaitGeneratorParam): a change
+    applies to the footsteps planned from then on (a velocity walk's at its next mid-step check)."""
+
     transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
     use_hand_force_offset: bool = field(default=True, metadata={"unit": "-"})
     preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6})
     preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0})
+    # gait (hrpsys default_step_time, rounded to whole control ticks; default_step_height; toe/heel angles)
+    step_time_s: float = field(default=1.0, metadata={"unit": "s", "min": 0.4, "max": 5.0})
+    step_height_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.2})
+    toe_angle_rad: float = field(default=0.0, metadata={"unit": "rad", "min": 0.0, "max": 0.6})
+    heel_angle_rad: float = field(default=0.0, metadata={"unit": "rad", "min": 0.0, "max": 0.6})
+    # share of each step's time in double support at its start and at its end (hrpsys default_double_support_ratio_*)
+    double_support_ratio_before: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
+    double_support_ratio_after: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
+    # largest feet mid-coords displacement per step (hrpsys stride_parameter); "inside": towards the support foot
+    stride_fwd_x_m: float = field(default=0.15, metadata={"unit": "m", "min": 0.0, "max": 0.4})
+    stride_bwd_x_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.3})
+    stride_outside_y_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.3})
+    stride_inside_y_m: float = field(default=0.025, metadata={"unit": "m", "min": 0.0, "max": 0.3})
+    stride_outside_th_rad: float = field(default=math.radians(10.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
+    stride_inside_th_rad: float = field(default=math.radians(5.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
+    # distance between the feet's centres when walking (hrpsys leg_default_translate_pos, both legs)
+    foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": 0.14, "max": 0.30})
+
+    def gait_params(self, base: GaitParams | None = None) -> GaitParams:
+        return (base or GaitParams()).replaced(double_support_ratio_before=self.double_support_ratio_before,
+                                               double_support_ratio_after=self.double_support_ratio_after)
+
+    def footstep_params(self, dt_s: float, base: FootstepParams | None = None) -> FootstepParams:
+        step_time = max(1, round(self.step_time_s / dt_s)) * dt_s  # a whole number of control ticks
+        return (base or FootstepParams()).replaced(step_time_s=step_time, step_height_m=self.step_height_m,
+                                                   toe_angle_rad=self.toe_angle_rad,
+                                                   heel_angle_rad=self.heel_angle_rad,
+                                                   leg_offset_y_m=0.5 * self.foot_distance_m)
+
+    def stride_limits(self) -> StrideLimits:
+        return StrideLimits(fwd_x_m=self.stride_fwd_x_m, outside_y_m=self.stride_outside_y_m,
+                            outside_th_rad=self.stride_outside_th_rad, bwd_x_m=self.stride_bwd_x_m,
+                            inside_y_m=self.stride_inside_y_m, inside_th_rad=self.stride_inside_th_rad)
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,7 +153,9 @@ class AutoBalancer(Layer):
         T_r, T_l = (_homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
         # toe and heel edges of HRP-2's sole (the model's sole box), not HRP2-JSKNT's 0.137 / -0.10
         toe_heel = ToeHeelParams(toe_offset_x_m=HRP2_RIGHT_SOLE.front_m, heel_offset_x_m=-HRP2_RIGHT_SOLE.rear_m)
-        self.gait = GaitGenerator(GaitParams(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l, toe_heel=toe_heel)
+        p = self.params
+        self.gait = GaitGenerator(p.gait_params(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l, toe_heel=toe_heel,
+                                  footstep_params=p.footstep_params(dt_s), stride_limits=p.stride_limits())
         com = self.kin.com_world()
         ground_z = 0.5 * (T_r[2, 3] + T_l[2, 3])
         self.com_height_m = float(com[2] - ground_z)
@@ -157,7 +195,12 @@ class AutoBalancer(Layer):
         self._blend = Transition(self._weight, 0.0, self.params.transition_time_s, "min_jerk")
 
     def set_params(self, params: AutoBalancerParams) -> None:
+        """New parameters; the gait's apply to the footsteps planned from now on (hrpsys setGaitGeneratorParam)."""
         self.params = params
+        gait = self.gait
+        gait.configure(params=params.gait_params(gait.params),
+                       footstep_params=params.footstep_params(self.dt_s, gait.footstep_params),
+                       stride_limits=params.stride_limits())
 
     @property
     def walking_stop(self) -> bool:
