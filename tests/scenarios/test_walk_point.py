@@ -123,6 +123,7 @@ def test_go_pos_during_a_go_pos_walk_ends_on_the_new_goal_relative_to_where_the_
     x, y, yaw = measured_mid(w)
     c, s = math.cos(oyaw), math.sin(oyaw)
     gx, gy = ox + c * goal[0] - s * goal[1], oy + s * goal[0] + c * goal[1]
+    # measured 1.8 cm (mostly the soles landing ahead of the plan) and 0.05 deg; bounds 2 cm / 2 deg (issue 10)
     assert math.hypot(x - gx, y - gy) < 0.02
     assert abs(math.degrees(yaw - oyaw - goal[2])) < 2.0
     assert w.worst_deg < 5.0  # test_walking's bound for goPos walks
