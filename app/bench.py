@@ -105,6 +105,58 @@ def layer_selection(layers: str | Sequence[str]) -> tuple[str, ...]:
     return names
 
 
+class _TouchRecorder:
+    """Stands in for a layer's TickContext: every read or write goes through to the real one and marks the
+    tick as used. A layer that passes its input through returns it without touching the context."""
+
+    __slots__ = ("_ctx", "touched")
+
+    def __init__(self, ctx) -> None:
+        object.__setattr__(self, "_ctx", ctx)
+        object.__setattr__(self, "touched", False)
+
+    def __getattr__(self, name: str):
+        object.__setattr__(self, "touched", True)
+        return getattr(self._ctx, name)
+
+    def __setattr__(self, name: str, value) -> None:
+        object.__setattr__(self, "touched", True)
+        setattr(self._ctx, name, value)
+
+
+#: ticks `layers_that_ran` watches (after the timed part: the recorder would slow the layers it times)
+PROBE_TICKS = 20
+
+
+def layers_that_ran(loop: ControlLoop, ticks: int = PROBE_TICKS) -> set[str]:
+    """Step the loop `ticks` times and return the layers whose tick used the tick's context (sensors,
+    estimate, ports) or returned another reference than it was given, in any of those ticks. A disabled
+    layer that honours its flag does neither (bookkeeping on the reference it passes on, as co and el do,
+    is not counted); disabled, the KalmanFilter and the RemoveForceOffset still fill the estimate and the
+    HardEmergencyStopper still publishes the hold port and would freeze the command on an e-stop.
+    Meant for disabled layers: an enabled one may work on the reference alone, unseen here (the
+    CollisionDetector checking the command)."""
+    chain = loop.chain
+    ran: set[str] = set()
+
+    def watched_tick(ctx, ref):
+        for name, layer in chain.layers.items():
+            recorder = _TouchRecorder(ctx)
+            out = layer.tick(recorder, ref)
+            if recorder.touched or out is not ref:
+                ran.add(name)
+            ref = out
+        return ref
+
+    chain.tick = watched_tick  # this chain only, until restored below
+    try:
+        for _ in range(ticks):
+            loop.step()
+    finally:
+        del chain.tick
+    return ran
+
+
 def _clear_timers(loop: ControlLoop) -> None:
     for timer in (*loop.chain.timers.values(), loop.tick_timer, loop.physics_timer):
         timer.clear()
@@ -148,10 +200,12 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     """Run `scenario` for `duration_s` of simulated time, synchronously, and return the timing report.
 
     `layers` (a chain name of CHAINS or layer names) keeps only those layers working: the others are
-    disabled (`enabled = False`, they pass their input through). The report then also gives the whole
-    step's wall time less physics (`step_ms`: chain, snapshot, state estimation, logging), the loop's
-    own share of it (`loop_overhead_ms`: step minus the sum of all layer timers), and the pass-through
-    layers' timers."""
+    disabled (`enabled = False`). The labels say what ran, watched after the timed part
+    (`layers_that_ran`): "chain" and "layers" are the enabled layers and the disabled ones that kept
+    working ("disabled_but_ran", e.g. kf and hes), "passthrough" the disabled ones that passed their
+    input through, with their timers. The report then also gives the whole step's wall time less physics
+    (`step_ms`: chain, snapshot, state estimation, logging) and the loop's own share of it
+    (`loop_overhead_ms`: step minus the sum of all layer timers)."""
     if scenario in CONSOLE_SCENARIOS:
         if layers is not None:
             raise ValueError(f"scenario {scenario!r} runs the whole console; --layers/--chain do not apply")
@@ -165,10 +219,10 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     robot = LocalRobot(scene=scene, speed=None)
     service = OperatorService(robot)
     loop = robot.loop
-    passthrough = []
+    disabled = []
     if selected is not None:
-        passthrough = [name for name in loop.chain.order() if name not in selected]
-        service.enable_layers({name: False for name in passthrough})
+        disabled = [name for name in loop.chain.order() if name not in selected]
+        service.enable_layers({name: False for name in disabled})
     if spec.warmup_s > 0.0:
         loop.run_for(spec.warmup_s)  # not part of the report
     spec.setup(service)
@@ -201,7 +255,10 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     tick_ms -= physics_ms  # the controller's share
     step_ms -= physics_ms
     snap = loop.snapshot
+    fallen = bool(robot.host.observation.fallen)
     sim_s = n * loop.dt_control_s  # the timed part only (no warm-up)
+    ran = layers_that_ran(loop) if disabled else set()  # (a few more ticks, not timed)
+    passthrough = [name for name in disabled if name not in ran]
     working = [name for name in names if name not in passthrough]
     report = {
         "scenario": scenario,
@@ -214,10 +271,11 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         "tick_ms": _percentiles(tick_ms),
         "physics_ms": _percentiles(physics_ms),
         "layers": {name: _percentiles(layer_ms[name]) for name in working},
-        "fallen": bool(robot.host.observation.fallen),
+        "fallen": fallen,
         "fault": snap.fault,
     }
     if selected is not None:
+        report["disabled_but_ran"] = [name for name in disabled if name in ran]
         report["passthrough"] = {name: _percentiles(layer_ms[name]) for name in passthrough}
         report["step_ms"] = _percentiles(step_ms)
         report["layers_sum_ms"] = _percentiles(_summed(layer_ms, working, n))

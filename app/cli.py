@@ -114,7 +114,9 @@ def bench_parser() -> argparse.ArgumentParser:
     which = p.add_mutually_exclusive_group()
     which.add_argument("--layers", type=_layers, default=None,
                        help="only these layers work, comma-separated (e.g. kf,rmfo,seq,co,hes,el); the others "
-                            "pass their input through. The report adds step_ms, loop_overhead_ms, passthrough")
+                            "are disabled. The report adds step_ms, loop_overhead_ms, passthrough (the disabled "
+                            "layers that passed their input through) and disabled_but_ran (kf, rmfo and hes "
+                            "keep working when disabled)")
     which.add_argument("--chain", choices=tuple(CHAINS), default=None,
                        help="a named layer selection: " + "; ".join(f"{k}: {','.join(v)}" for k, v in CHAINS.items()))
     return p
@@ -301,8 +303,9 @@ def experiment(argv: Sequence[str]) -> int:
     print(f"simulated at {r.real_time_factor:.1f}x real time")
     for key, value in r.outcome.items():
         print(f"{key}: {value:.4g}")
+    print(f"faults: {'; '.join(r.faults) if r.faults else 'none'}")
     print(r.verdict_line())
-    return 0
+    return 1 if r.faults else 0  # a fall can be the experiment's result; a controller fault never is
 
 
 def main(argv: Sequence[str] | None = None) -> int:

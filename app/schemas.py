@@ -159,11 +159,21 @@ class EstopResponse(Ok):
                                                       "(CLOCK_MONOTONIC, as Python's time.monotonic) [s]")
 
 
+class RunCounters(BaseModel):
+    ticks: int = Field(description="ticks the robot process has run")
+    fallen: bool = Field(description="the robot fell at some tick of the run")
+    faults: list[str] = Field(description="every distinct controller fault of the run; empty: none")
+    max_loop_ms: float = Field(description="the longest tick, chain and physics [ms]")
+
+
 class Health(BaseModel):
     robot_alive: bool = Field(description="the robot process runs")
     exit_reason: str | None = Field(description="why it does not (POST /api/sim/reset starts a new one)")
     priority: str = Field(description="the scheduling the robot process got: SCHED_FIFO, a nice value or default")
     scene: str
+    run: RunCounters | None = Field(default=None, description="the run's own counters (what the console's summary "
+                                                              "prints at exit); null before the first tick is "
+                                                              "published or when the robot process is gone")
 
 
 class LoopTimingResponse(BaseModel):
@@ -250,6 +260,8 @@ class ExperimentResponse(BaseModel):
     params: dict[str, Any] = Field(default_factory=dict, description="the EmergencyStopper parameters of the run")
     refused: list[str] = Field(default_factory=list, description="planner commands the robot refused (when, why), "
                                                                  "e.g. the plan's next step after a motion stop")
+    faults: list[str] = Field(default_factory=list, description="every distinct controller fault of the run "
+                                                                "(its own counters); empty: none")
     run_id: int = Field(description="the run's number in this console")
     csv_url: str | None = Field(default=None, description="where the run's CSV is (with save)")
     png_url: str | None = Field(default=None, description="where the run's Fig. 10-style PNG is (with save)")

@@ -72,6 +72,7 @@ class ExperimentResult:
     outcome: dict[str, float] = field(default_factory=dict)
     real_time_factor: float = 0.0  # simulated time (settling included) / wall time spent simulating it
     refused: tuple[str, ...] = ()  # planner commands the robot refused (when, why): e.g. after a motion stop
+    faults: tuple[str, ...] = ()  # every distinct controller fault of the run (its RunStats); empty: none
     csv_path: str | None = None
     png_path: str | None = None
 

@@ -12,7 +12,7 @@ from fastapi.responses import PlainTextResponse, Response
 
 from app.deps import ServiceDep, SettingsDep
 from app.errors import errors
-from app.schemas import ConsoleConfig, Health, LoopTimingResponse
+from app.schemas import ConsoleConfig, Health, LoopTimingResponse, RunCounters
 from app.service.data_logger import csv_header
 from app.state import state_model
 
@@ -43,8 +43,9 @@ def loop_timing(service: ServiceDep,
 def health(service: ServiceDep) -> Health:
     robot = service.robot
     alive = robot.alive
+    pub = robot.latest() if alive else None
     return Health(robot_alive=alive, exit_reason=None if alive else robot.exit_reason, priority=robot.priority,
-                  scene=service.info.scene)
+                  scene=service.info.scene, run=None if pub is None else RunCounters(**pub.stats))
 
 
 @router.get("/config", response_model=ConsoleConfig, summary="What the operator page needs to know")

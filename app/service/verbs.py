@@ -130,7 +130,8 @@ class ReleaseMotion(Verb):
 # ---- walking (hrpsys AutoBalancerService) --------------------------------------------------------------
 @dataclass(frozen=True)
 class GoPos(Verb):
-    """Walk to (x, y, theta) relative to the current feet's mid-coords."""
+    """Walk to (x, y, theta) relative to the current feet's mid-coords; while walking (hrpsys), relative to
+    the feet's mid-coords where the walk began, replacing the rest of the plan from the next free footstep."""
 
     name = "go_pos"
     motion = True
@@ -144,9 +145,16 @@ class GoPos(Verb):
         _bounded("theta_deg", self.theta_rad, -MAX_GO_POS_RAD, MAX_GO_POS_RAD, "deg", _deg)
 
     def run(self, host: RobotHost) -> str:
-        n = host.layer("abc").go_pos(self.x_m, self.y_m, self.theta_rad)
-        return (f"walking to ({self.x_m:g} m, {self.y_m:g} m, {math.degrees(self.theta_rad):g} deg) "
-                f"in {n} footsteps")
+        abc = host.layer("abc")
+        was_walking = abc.gait.walking
+        n = abc.go_pos(self.x_m, self.y_m, self.theta_rad)
+        goal = f"({self.x_m:g} m, {self.y_m:g} m, {math.degrees(self.theta_rad):g} deg)"
+        if not was_walking:
+            return f"walking to {goal} in {n} footsteps"
+        if n == 0:
+            return (f"re-planned: walking to {goal} relative to where this walk began, from where its last "
+                    "step lands")
+        return f"re-planned: walking to {goal} relative to where this walk began; {n} footsteps to go"
 
 
 @dataclass(frozen=True)
@@ -573,7 +581,8 @@ class GetParams(Verb):
 
 @dataclass(frozen=True)
 class EnableLayers(Verb):
-    """Let layers work (True) or pass their input through (False): for benchmarks and diagnosis."""
+    """Let layers work (True) or pass their input through (False): for benchmarks and diagnosis. The KalmanFilter,
+    RemoveForceOffset and HardEmergencyStopper keep estimating and guarding when disabled (the bench says which ran)."""
 
     name = "enable_layers"
     enabled: tuple[tuple[str, bool], ...]

@@ -82,7 +82,8 @@ class Status:
     the response schema of /api/state from them without per-field code.
     """
 
-    enabled: bool = field(metadata=described("the layer works; false: it passes its input through"))
+    enabled: bool = field(metadata=described(
+        "the layer works; false: it passes its input through (kf, rmfo and hes still estimate and guard)"))
 
     def to_dict(self) -> dict[str, Any]:
         """The fields as plain dicts and lists, nested status dataclasses included."""

@@ -237,6 +237,26 @@ def test_an_error_raised_inside_the_loop_is_a_500_and_the_loop_keeps_running(cli
     tick = loop.snapshot.tick
     step(runtime, 0.05)
     assert loop.snapshot.tick == tick + 10 and loop.snapshot.fault is None
+    assert client.get("/api/health").json()["run"]["faults"] == []  # a failed verb is no controller fault
+
+
+def test_health_gives_the_runs_own_counters_and_a_controller_fault_stays_in_them(client, runtime, monkeypatch):
+    step(runtime, 0.05)
+    run = client.get("/api/health").json()["run"]
+    assert run["ticks"] == 10 and run["fallen"] is False and run["faults"] == [] and run["max_loop_ms"] > 0.0
+
+    def broken(*_args):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(runtime.loop.chain["es"], "tick", broken)
+    step(runtime, 0.05)
+    monkeypatch.undo()
+    # the release clears the loop's fault: the snapshot forgets it, the run's counters do not
+    assert client.post("/api/estop/release").status_code == 200
+    step(runtime, 0.05)
+    assert runtime.loop.snapshot.fault is None
+    run = client.get("/api/health").json()["run"]
+    assert run["ticks"] == 30 and run["faults"] == ["RuntimeError: boom"]
 
 
 def test_reset_restarts_the_simulation(client, runtime):
@@ -286,24 +306,62 @@ def test_docs_the_operator_page_and_config_are_served(client):
     assert cfg["viewer_port"] == 8080 and cfg["joints"] == list(JOINT_NAMES)
 
 
-def test_motion_stop_freezes_the_planned_stream_and_release_brings_it_back(client, runtime):
+def min_jerk(s):
+    s = np.clip(s, 0.0, 1.0)
+    return 10 * s**3 - 15 * s**4 + 6 * s**5
+
+
+def rarm0_per_tick(runtime, seconds):
+    """RARM_JOINT0 commanded and encoder angles [deg] after each tick of `seconds`."""
+    cmd, meas = [], []
+    for _ in range(round(seconds / runtime.loop.dt_control_s)):
+        step(runtime, runtime.loop.dt_control_s)
+        cmd.append(q_cmd_deg(runtime)[RARM0])
+        meas.append(np.rad2deg(runtime.loop.snapshot.q_meas_rad[RARM0]))
+    return np.array(cmd), np.array(meas)
+
+
+def test_motion_stop_reverts_the_planned_stream_holds_it_and_release_brings_it_back(client, runtime):
+    dt = runtime.loop.dt_control_s
     step(runtime, 2.5)
     assert client.post("/api/motion/release").status_code == 409  # nothing to release
     r = client.post("/api/sequence/joint-angles", json={"angles_deg": {"RARM_JOINT0": -60.0}, "time": 2.0})
     assert r.status_code == 200
-    step(runtime, 0.5)
+    moving, _ = rarm0_per_tick(runtime, 0.5)
+    # the SequencePlayer's minimum-jerk move from 15 to -60 deg over 2 s (measured error 5e-11 deg)
+    t = dt * np.arange(1, len(moving) + 1)
+    np.testing.assert_allclose(moving, 15.0 - 75.0 * min_jerk(t / 2.0), atol=1e-6)
     assert client.post("/api/motion/stop").status_code == 200
-    step(runtime, 1.0)
+    stopped, _ = rarm0_per_tick(runtime, 2.0)
     s = client.get("/api/state").json()
     assert s["emergency"]["motion_stop"] is True and s["emergency"]["motion_stop_reason"] == "operator"
-    held = s["joints"]["RARM_JOINT0"]["cmd_deg"]
-    step(runtime, 1.0)
-    assert client.get("/api/state").json()["joints"]["RARM_JOINT0"]["cmd_deg"] == pytest.approx(held, abs=1e-6)
+    # Eq. 15: back to the plan T1 = 1 s before the stop (15 deg, the move had not begun) in T2 = 0.5 s,
+    # then held there. The revert starts from the motion's velocity (first step -0.1962 deg, the last moving
+    # step -0.1964), carries on down from the 7.24 deg where it was stopped to a single minimum (measured
+    # 4.36 deg, bound 4.36 - 0.5) and rises monotonically to 15 deg; no step over 0.288 deg/tick (measured
+    # 0.238, bound 0.238 + 0.05).
+    t2_ticks = round(0.5 / dt)
+    revert, hold = stopped[:t2_ticks], stopped[t2_ticks:]
+    np.testing.assert_allclose(hold, 15.0, atol=1e-6)
+    assert revert[0] - moving[-1] == pytest.approx(moving[-1] - moving[-2], abs=0.01)
+    low = int(np.argmin(revert))
+    assert np.all(np.diff(revert[:low + 1]) < 0) and np.all(np.diff(revert[low:]) > 0)
+    assert 4.36 - 0.5 < revert[low] < moving[-1] - 1.0
+    assert np.abs(np.diff(np.concatenate((moving[-1:], stopped)))).max() < 0.238 + 0.05
+    assert client.get("/api/state").json()["joints"]["RARM_JOINT0"]["cmd_deg"] == pytest.approx(15.0, abs=1e-4)
     assert client.post("/api/motion/release").status_code == 200
-    step(runtime, 3.0)
+    released, encoder = rarm0_per_tick(runtime, 3.0)
+    # recover: a minimum-jerk blend over 2.5 s from the held 15 deg to the live plan, by now the goal -60 deg
+    # (measured error 5e-11 deg): monotone, and exactly the goal at the end
+    t = dt * np.arange(1, len(released) + 1)
+    np.testing.assert_allclose(released, 15.0 - 75.0 * min_jerk(t / 2.5), atol=1e-6)
+    assert np.all(np.diff(released) <= 0.0)
     s = client.get("/api/state").json()
     assert s["emergency"]["motion_stop"] is False
-    assert s["joints"]["RARM_JOINT0"]["cmd_deg"] == pytest.approx(-60.0, abs=0.1)
+    assert s["joints"]["RARM_JOINT0"]["cmd_deg"] == pytest.approx(-60.0, abs=1e-4)
+    # the joint follows: the encoder in the last 0.5 s within 0.4 deg of the goal (measured at most 0.31 deg
+    # short of it, steady; bound 0.31 + 30 %)
+    np.testing.assert_allclose(encoder[-round(0.5 / dt):], -60.0, atol=0.4)
 
 
 def test_the_state_matches_its_published_schema_generated_from_the_layers_status(client, runtime):

@@ -114,6 +114,7 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     else:
         assert body["cp_error_at_flag_m"] is None and body["edge_margin_at_flag_m"] is None
     assert isinstance(body["outcome"], dict)
+    assert body["faults"] == []  # the run's own fault counter
     # the files are the console's, downloadable; no path of the server is given away
     assert "csv_path" not in body and "png_path" not in body
     png = client.get(body["png_url"])
@@ -121,7 +122,7 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
     csv_text = client.get(body["csv_url"])
     assert csv_text.status_code == 200 and csv_text.headers["content-type"].startswith("text/csv")
     # the run used the threshold asked for; the live robot kept its parameters
-    assert body["params"] == {**live_params, "cp_threshold_m": 0.05}
+    assert body["params"] == {**live_params, "cp_threshold_m": 0.05, "threshold": 0.05}  # (threshold: deprecated alias)
     rows = list(csv.DictReader(io.StringIO(csv_text.text)))
     assert rows and {float(row["threshold_m"]) for row in rows} == {0.05}
     assert client.get("/api/emergency-stopper/params").json()["params"] == live_params

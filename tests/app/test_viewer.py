@@ -70,22 +70,34 @@ def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snap
 
 def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewer, robot):
     from app.viewer import MAX_FOOTSTEPS
+    from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
+    from controller.kinematics.rotations import rpy_to_matrix
 
     handles = dict(viewer._markers)
     robot.run_for(2.5)  # AutoBalancer blended in
     viewer.service.go_pos(0.3, 0.0, math.radians(40.0))
     snap = robot.run_for(0.1)
-    planned = snap.layers["abc"].footsteps
-    assert len(planned) >= 2 and max(abs(f.rpy[2]) for f in planned) > math.radians(10.0)
+    planned = snap.layers["abc"].footsteps  # the AutoBalancer's own plan: FootstepStatus with pos and rpy
+    yaws = sorted({round(math.degrees(f.rpy[2]), 3) for f in planned})
+    assert len(planned) >= 4 and yaws[-1] > 10.0 and len(yaws) >= 3, yaws  # a turn: steps of several yaws
     viewer.apply_snapshot(snap)
     m = viewer._markers
     assert m["footsteps"].visible and m["footsteps"].points.shape == (4 * MAX_FOOTSTEPS, 2, 3)
+    soles = {"rleg": HRP2_RIGHT_SOLE, "lleg": HRP2_LEFT_SOLE}
     for k, f in enumerate(planned[:MAX_FOOTSTEPS]):
-        side = m["footsteps"].points[4 * k]  # the first edge of the k-th sole outline
+        outline = m["footsteps"].points[4 * k:4 * k + 4]  # the k-th sole outline: four edges, corner to corner
+        sole = soles[f.leg]
+        # the sole's corners (rear-right, front-right, front-left, rear-left) turned by the footstep's
+        # rotation and put at its position, worked out here rather than with the viewer's helper
+        local = np.array([[-sole.rear_m, -sole.right_m, 0.0], [sole.front_m, -sole.right_m, 0.0],
+                          [sole.front_m, sole.left_m, 0.0], [-sole.rear_m, sole.left_m, 0.0]])
+        expected = local @ rpy_to_matrix(np.array([0.0, 0.0, f.rpy[2]])).T + np.asarray(f.pos)
+        np.testing.assert_allclose(outline[:, 0, :2], expected[:, :2], atol=1e-5, err_msg=f"footstep {k}")
+        np.testing.assert_allclose(outline[:, 1, :2], np.roll(expected[:, :2], -1, axis=0), atol=1e-5)
+        side = outline[0]  # rear-right -> front-right: the sole's x axis, so its direction is the yaw itself
         drawn = math.atan2(side[1, 1] - side[0, 1], side[1, 0] - side[0, 0])
-        # an edge of a rectangle turned by the footstep's yaw: parallel or perpendicular to its x axis
-        off = (drawn - f.rpy[2]) % (math.pi / 2)
-        assert min(off, math.pi / 2 - off) < 1e-4, f"footstep {k}: drawn at {math.degrees(drawn):.1f} deg"
+        assert abs(math.remainder(drawn - f.rpy[2], 2 * math.pi)) < 1e-4, \
+            f"footstep {k}: drawn at {math.degrees(drawn):.2f} deg, planned {math.degrees(f.rpy[2]):.2f} deg"
         np.testing.assert_allclose(side[:, 2], f.pos[2] + 0.002, atol=1e-6)
     assert all(viewer._markers[k] is handles[k] for k in handles)  # handles updated, never rebuilt
 

@@ -21,28 +21,55 @@ def push_and_watch(impulse_ns: np.ndarray, stabilizer: bool = True, seconds: flo
     return snaps[-1].fallen, worst, snaps
 
 
-@pytest.mark.parametrize("impulse", [(20.0, 0.0, 0.0), (0.0, 30.0, 0.0), (-15.0, 0.0, 0.0)],
+#: Bounds are the measured figure times this (30 % margin): the simulation is deterministic on one machine;
+#: the margin is for another machine's floating point and for small changes of the controller.
+MARGIN = 1.3
+#: [m] the CP error once the robot has settled: measured 1.2-2.3 mm over the pushes below (standing still
+#: it stays under 2 mm), margin 50 %.
+SETTLED_CP_ERROR_M = 0.0035
+
+
+@pytest.mark.parametrize("impulse, measured_tilt_deg", [((20.0, 0.0, 0.0), 2.75), ((0.0, 30.0, 0.0), 4.02),
+                                                         ((-15.0, 0.0, 0.0), 2.60)],
                          ids=["forward-20Ns", "left-30Ns", "backward-15Ns"])
-def test_a_push_on_body_is_absorbed_with_the_stabilizer_on(impulse):
+def test_a_push_on_body_is_absorbed_with_the_stabilizer_on(impulse, measured_tilt_deg):
     fallen, worst, snaps = push_and_watch(np.array(impulse))
     assert not fallen
-    assert worst < 10.0
-    # and it comes back: after 4 s the capture-point error is small again
-    assert snaps[-1].layers["st"].cp_error_norm < 0.02
+    assert worst < MARGIN * measured_tilt_deg, f"worst tilt {worst:.2f} deg, measured {measured_tilt_deg} deg"
+    # and it comes back: 4 s after the push the capture-point error is that of standing again (measured 1.2,
+    # 1.8, 2.0 mm)
+    assert snaps[-1].layers["st"].cp_error_norm < SETTLED_CP_ERROR_M
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("impulse, stabilizer, measured_tilt_deg", [
+    ((26.0, 0.0, 0.0), True, 5.51), ((0.0, 40.0, 0.0), True, 11.22), ((0.0, -40.0, 0.0), True, 11.06),
+    ((22.0, 0.0, 0.0), False, 4.16), ((0.0, 40.0, 0.0), False, 10.18), ((0.0, -40.0, 0.0), False, 10.19)],
+    ids=["st-forward-26Ns", "st-left-40Ns", "st-right-40Ns", "no-st-forward-22Ns", "no-st-left-40Ns",
+         "no-st-right-40Ns"])
+def test_the_largest_pushes_the_readme_claims_are_absorbed(impulse, stabilizer, measured_tilt_deg):
+    # the README's table: 26 N s forward and 40 N s sideways with the Stabilizer, 22 N s forward and 40 N s
+    # sideways without it (45 N s sideways falls either way). Sideways the robot rocks on one sole edge
+    # (tilt up to 11 deg) and settles within 6-7 s.
+    fallen, worst, snaps = push_and_watch(np.array(impulse), stabilizer=stabilizer, seconds=8.0)
+    assert not fallen
+    assert worst < MARGIN * measured_tilt_deg, f"worst tilt {worst:.2f} deg, measured {measured_tilt_deg} deg"
+    settled = max(s.layers["st"].cp_error_norm for s in snaps[-200:])  # the last second (measured 1.6-2.3 mm)
+    assert settled < SETTLED_CP_ERROR_M
 
 
 def test_the_capture_point_error_is_in_every_snapshot_and_the_flag_rises_past_the_threshold():
     fallen, _, snaps = push_and_watch(np.array([20.0, 0.0, 0.0]), seconds=2.0)
     errors = np.array([s.layers["st"].cp_error_norm for s in snaps])
     flags = np.array([s.layers["st"].emergency for s in snaps])
-    threshold = snaps[0].layers["st"].threshold
+    threshold = snaps[0].layers["st"].cp_threshold_m
     # 1. before the push the error is tiny and the flag down
     assert errors[0] < 0.01 and not flags[0]
     # 2. the push drives the error past the threshold and the flag follows it
     assert errors.max() > threshold
     assert flags.any()
     assert np.array_equal(flags, errors > threshold)
-    assert snaps[-1].layers["st"].flag_rise_time is not None
+    assert snaps[-1].layers["st"].flag_rose_at is not None
 
 
 @pytest.mark.slow

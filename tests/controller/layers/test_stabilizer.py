@@ -77,12 +77,12 @@ def test_capture_point_error_over_the_threshold_raises_the_flag_and_records_its_
     st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05, transition_time_s=0.01))
     calm = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
     run_ticks(st, calm, 5)
-    assert not st.emergency and st.flag_rise_time_s is None
+    assert not st.emergency and st.flag_rose_at_s is None
     fast = calm.with_(gait=gait(cog_vel_xy=(0.3, 0.0)))  # reference CP 8.6 cm ahead of the actual one
     run_ticks(st, fast, 5)
     assert st.emergency
     assert st.cp_error[0] == pytest.approx(0.3 / np.sqrt(9.80665 / 0.81), abs=0.01)
-    assert st.status().flag_rise_time is not None
+    assert st.status().flag_rose_at is not None
 
 
 def test_support_polygon_mode_flags_only_a_capture_point_outside_the_shrunk_feet():
@@ -110,7 +110,7 @@ def test_no_flag_while_the_stabilizer_is_still_blending_in():
     st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05, transition_time_s=1.0))
     fast = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait(cog_vel_xy=(0.3, 0.0)))
     run_ticks(st, fast, 100)  # 0.5 s into a 1 s start
-    assert not st.emergency and st.flag_rise_time_s is None
+    assert not st.emergency and st.flag_rose_at_s is None
     run_ticks(st, fast, 120)
     assert st.emergency
 
