@@ -156,6 +156,7 @@ class OperationLayer(Layer):
         self._feet_key: tuple | None = None
         self._feet_poses: FeetPoses | None = None
         self._walking = False
+        self._idle_gait = None  # the gait port of the last idle tick (None: the last tick operated)
         self._time_s = 0.0
         self._version = 0
         self._status = SharedStatus()
@@ -230,9 +231,11 @@ class OperationLayer(Layer):
                 if twist is not None and not twist.is_zero:
                     break
             else:  # idle
+                self._idle_gait = ctx.last_ports.gait  # the view stays current (walking, the feet frame)
                 out = ref if self._reset_blend is None else self._blend_back(ref, ctx.dt_s)
                 self._last_out = out
                 return out
+        self._idle_gait = None
         return self._operate(ctx, ref, total, stopped)
 
     def _motion_twists(self, t: float) -> dict[str, Twist]:
@@ -433,7 +436,13 @@ class OperationLayer(Layer):
         ref = self._last_out or self._last_in
         if ref is None:
             raise InvalidCommand("the operation layer has not ticked yet; no view before the first tick")
-        F_world = self._feet_world or self._reference_frame(ref)
+        idle_gait, walking = self._idle_gait, self._walking
+        if idle_gait is not None:  # idle: the feet frame and the walking flag of the gait, not the last IK's
+            walking = idle_gait.walking
+            F_world = _Frame(*feet_frame(idle_gait.p_rsole_world, idle_gait.R_rsole_world, idle_gait.p_lsole_world,
+                                         idle_gait.R_lsole_world))
+        else:
+            F_world = self._feet_world or self._reference_frame(ref)
         F_ref = self._balanced_kinematics(ref)
         points = {}
         for point, frame in _FRAMES.items():
@@ -444,7 +453,7 @@ class OperationLayer(Layer):
         gaze = GazeAngles.of_direction(points["head"].R_feet_point[:, 0])
         return OperationView(time_s=self._time_s, feet_p_world_m=_ro(F_world.p.copy()), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
-                             waist_height_m=float(points["waist"].p_feet_m[2]), walking=self._walking,
+                             waist_height_m=float(points["waist"].p_feet_m[2]), walking=walking,
                              motion_stopped=self._stopped)
 
     def status(self) -> OperationStatus:
