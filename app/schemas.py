@@ -272,8 +272,9 @@ class ExperimentResponse(BaseModel):
 # ---- the operator's velocities ([OP] Eq. 5's xi_motion) ------------------------------------------------------
 def _component(used: bool, limit: float, unit: str, what: str) -> Any:
     if used:
-        return Annotated[float, Field(ge=-limit, le=limit, description=f"{what} [{unit}], |v| <= {limit:g}")]
-    return Annotated[float, Field(ge=0.0, le=0.0, description="not used by this point: 0")]
+        return Annotated[float, Field(strict=True, ge=-limit, le=limit,
+                                      description=f"{what} [{unit}], |v| <= {limit:g}")]
+    return Annotated[float, Field(strict=True, ge=0.0, le=0.0, description="not used by this point: 0")]
 
 
 def _velocity_model(point: str) -> type[BaseModel]:
@@ -291,8 +292,11 @@ def _velocity_model(point: str) -> type[BaseModel]:
                       for u, axis in zip(ang_mask, "xyz", strict=True))]
     fields: dict[str, Any] = {
         "point": (Literal[point], Field(description="the operational point")),
-        "linear": (lin, Field(default=(0.0, 0.0, 0.0), description="linear velocity, feet frame F [m/s]")),
-        "angular": (ang, Field(default=(0.0, 0.0, 0.0), description="angular velocity, feet frame F [deg/s]")),
+        # (a JSON array of 3: not strict, so that a list is taken for the tuple; its numbers are strict)
+        "linear": (lin, Field(default=(0.0, 0.0, 0.0), strict=False,
+                              description="linear velocity, feet frame F [m/s]")),
+        "angular": (ang, Field(default=(0.0, 0.0, 0.0), strict=False,
+                               description="angular velocity, feet frame F [deg/s]")),
     }
     if point == "walk":
         fields["max_stride"] = (float | None, Field(default=None, ge=MAX_STRIDE_RANGE_M[0], le=MAX_STRIDE_RANGE_M[1],
