@@ -45,6 +45,9 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
     api.state.settings = settings
     api.state.service = service
     install_error_handlers(api)
+    from starlette.exceptions import HTTPException as StarletteHTTPException
+
+    api.add_exception_handler(StarletteHTTPException, behaviors.unknown_behavior_handler)
     for module in (state, emergency, sequence, sim, chain, layers, params, walk, impedance, experiments, operator,
                    behaviors):
         api.include_router(module.router)

@@ -6,13 +6,14 @@ Each behaviour has its own POST route whose body schema is generated from its Pa
 import dataclasses
 from typing import Annotated, Any, Literal, Union
 
-from fastapi import APIRouter, Body, Path
+from fastapi import APIRouter, Body, Path, Request
+from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ConfigDict, Field, create_model
+from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from app.deps import ServiceDep
 from app.errors import errors
 from app.schemas import BehaviorDoc, RunStarted
-from app.service import NotFound
 from app.state import jsonable, run_model
 from behaviors.base import BehaviorParams
 from behaviors.registry import BEHAVIORS
@@ -102,10 +103,15 @@ for _name in sorted(BEHAVIORS):
     _add_run_route(_name)
 
 
-@router.post("/{name}", response_model=RunStarted, responses=errors(404),
-             summary="Any other name: 404 with the valid behaviours")
-def unknown_behavior(name: Annotated[str, Path(description="a behaviour name")]) -> RunStarted:
-    raise NotFound(f"unknown behaviour {name!r}; valid: {', '.join(sorted(BEHAVIORS))}")
+async def unknown_behavior_handler(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+    """FastAPI's 404 for a path no route has; under POST /api/behaviors/ it lists the valid behaviours (a
+    catch-all route would overlap /api/behaviors/runs)."""
+    detail = exc.detail
+    path = request.url.path
+    if exc.status_code == 404 and request.method == "POST" and path.startswith("/api/behaviors/"):
+        name = path.removeprefix("/api/behaviors/")
+        detail = f"unknown behaviour {name!r}; valid: {', '.join(sorted(BEHAVIORS))}"
+    return JSONResponse({"detail": detail}, status_code=exc.status_code, headers=getattr(exc, "headers", None))
 
 
 RunId = Annotated[int, Path(ge=1, le=2**31, description="a run id (POST /api/behaviors/{name} gives it)")]
