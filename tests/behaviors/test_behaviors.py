@@ -41,7 +41,7 @@ def test_look_at_turns_the_gaze_onto_a_world_point():
     assert h.op.gaze[0] == pytest.approx(math.atan2(-d[2], math.hypot(d[0], d[1])), abs=math.radians(0.5))
 
 
-def test_reach_moves_the_hand_to_a_feet_frame_pose_and_orientation():
+def test_reach_plans_a_line_whose_rates_sum_to_the_move_and_an_operator_offset_adds():
     h = harness()
     rid = h.runner.run(make("reach", {"hand": "lhand", "x_m": 0.4, "y_m": 0.2, "z_m": 0.9,
                                       "keep_orientation": False, "yaw_deg": 20.0}))
@@ -52,13 +52,24 @@ def test_reach_moves_the_hand_to_a_feet_frame_pose_and_orientation():
     assert h.op.p["rhand"].tolist() == [0.3, -0.25, 0.8]  # the other hand is not touched
 
 
-def test_reach_that_the_op_layer_clamps_fails_on_overrun_leaving_zero_velocity():
+def test_an_operator_offset_during_a_reach_stays_on_top_of_it():
     h = harness()
-    rid = h.runner.run(make("reach", {"x_m": 0.5}))
+    rid = h.runner.run(make("reach", {"x_m": 0.4, "y_m": -0.25, "z_m": 0.8}))
+    for _ in range(50):  # the operator's part at the same point: 1 mm a tick upward
+        h.op.p["rhand"] = h.op.p["rhand"] + [0.0, 0.0, 0.001]
+        h.tick()
+    status = h.run_until_done(rid)
+    np.testing.assert_allclose(h.op.p["rhand"], [0.4, -0.25, 0.85], atol=1e-9)
+    assert status.state == "failed" and "operator moved it" in status.message
+
+
+def test_reach_that_the_op_layer_clamps_fails_saying_how_far_it_ended():
+    h = harness()
+    rid = h.runner.run(make("reach", {"x_m": 0.5, "y_m": -0.25, "z_m": 0.8}))
     original_tick = h.op.tick
     h.op.tick = lambda: (setattr(h.op, "pending", ({}, None)), original_tick())  # the IK moves nothing
     status = h.run_until_done(rid)
-    assert status.state == "failed" and "50 %" in status.message
+    assert status.state == "failed" and "ended 200.0 mm" in status.message and "IK limited" in status.message
 
 
 def test_walk_to_sends_one_go_pos_relative_to_the_feet_frame_and_checks_where_it_ended():
