@@ -51,9 +51,7 @@ def _walk(service: OperatorService) -> None:
 
 
 def _teleop_walk(service: OperatorService) -> None:
-    """The walking part of `teleop`: goVelocity until the walking point drives the AutoBalancer (branch
-    walkcmd); the op layer publishes the same command as ports.walk_command meanwhile."""
-    service.go_velocity(0.1, 0.0, 0.0)
+    """Nothing to set up: the walking point streamed by `_teleop_stream` drives the AutoBalancer."""
 
 
 def _teleop_stream(loop: ControlLoop) -> None:
@@ -77,8 +75,8 @@ SCENARIOS: dict[str, Scenario] = {
                      needs=("seq",)),
     "walk": Scenario("goVelocity(0.1 m/s, 0, 0) after 2.5 s of standing (not timed)", _walk, warmup_s=2.5,
                      needs=("abc",)),
-    "teleop": Scenario("walk at 0.1 m/s (goVelocity until walkcmd lands) while both hands and the head are "
-                       "streamed through the operation layer every tick, after 2.5 s of standing", _teleop_walk,
+    "teleop": Scenario("walk at 0.1 m/s through the operation layer's walking point while both hands and the "
+                       "head are streamed through it every tick, after 2.5 s of standing", _teleop_walk,
                        warmup_s=2.5, needs=("op", "abc"), stream=_teleop_stream),
 }
 

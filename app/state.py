@@ -71,9 +71,6 @@ def state_document(pub: Published) -> dict[str, Any]:
     layer_docs = {}
     for name, status in layers.items():
         d = plain(status)
-        for key, value in d.items():
-            if isinstance(value, dict):  # (plain does not enter mappings: the op layer's points)
-                d[key] = jsonable(value)
         d["tick_ms"] = round(float(snap.layer_tick_ms.get(name, 0.0)), 5)
         layer_docs[name] = d
     return {

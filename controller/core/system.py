@@ -77,7 +77,7 @@ class ControllerSystem:
         # separate kinematics objects: each user updates its own pinocchio data
         self._kin_est = RobotKinematics()
         self._kin_seq = RobotKinematics()
-        self._operation_ik = OperationIK()  # placo's model is built once (~0.1 s), reset with every chain
+        self._operation_ik = OperationIK(upper_body=True)  # placo's model built once (~0.1 s), reset per chain
         # the one estimator of the actual COG and ZMP, new with every chain: the Stabilizer runs it, the
         # loop only when no layer did (a chain without the Stabilizer)
         self.estimator = ActualStateEstimator(self._kin_est)

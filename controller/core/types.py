@@ -29,6 +29,8 @@ class GaitState:
     cog_vel_world: np.ndarray  # (3,) [m/s]
     cog_pc_world: np.ndarray  # (3,) preview-control COG before the hand-force offset (Eq. 6) [m]
     cog_acc_world: np.ndarray | None = None  # (3,) planned COG acceleration [m/s^2]
+    base_pos_world: np.ndarray | None = None  # (3,) BODY where the AutoBalancer put it this tick [m]
+    base_rpy_rad: np.ndarray | None = None  # (3,) and its roll, pitch, yaw [rad] (op places the upper body on it)
 
 
 @dataclass(frozen=True, slots=True)

@@ -97,6 +97,9 @@ class OperationIKParams(Params):
     com_track_weight: float = field(default=100.0, metadata={"unit": "1/m^2", "min": 0.0, "max": 1e6})
     com_margin_m: float = field(default=0.035, metadata={"unit": "m", "min": 0.0, "max": 0.1})
     com_polygon_weight: float = field(default=1e3, metadata={"unit": "1/m^2", "min": 1.0, "max": 1e8})
+    # upper-body mode: the COM may move at most this far (x and y) from where it was at activation, in the
+    # BODY frame, so the AutoBalancer's BODY correction for what the arms and torso did stays this small
+    com_guard_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.005, "max": 0.2})
     # the torso (the redundancy left once points, feet, BODY and COM are set) pulled to the reference
     posture_weight: float = field(default=1e-3, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e3})
     # damping of every joint step (placo's QP regularisation): no chattering at singularities (straight arm)
@@ -142,6 +145,16 @@ class HandTarget:
         object.__setattr__(self, "p_world", p)
         object.__setattr__(self, "R_world", R)
         object.__setattr__(self, "_floats", (tuple(p.tolist()), tuple(map(tuple, R.tolist()))))
+
+    @classmethod
+    def trusted(cls, p_world: np.ndarray, R_world: np.ndarray) -> HandTarget:
+        """A target from a pose the caller built as a rotation (e.g. one integrated every tick), unchecked:
+        the checks of __init__ cost more than the rest of a tick's bookkeeping."""
+        t = object.__new__(cls)
+        object.__setattr__(t, "p_world", p_world)
+        object.__setattr__(t, "R_world", R_world)
+        object.__setattr__(t, "_floats", (tuple(p_world.tolist()), tuple(map(tuple, R_world.tolist()))))
+        return t
 
 
 @dataclass(frozen=True)
@@ -450,6 +463,19 @@ class _Polygon:
         return best
 
 
+class _GuardBox:
+    """The upper-body mode's COM guard: a square of half-side `half_m` around (x, y), as placo's clockwise
+    vertex list, with the margin to its edges."""
+
+    def __init__(self, x: float, y: float, half_m: float) -> None:
+        ccw = [(x - half_m, y - half_m), (x + half_m, y - half_m), (x + half_m, y + half_m), (x - half_m, y + half_m)]
+        self.clockwise = [np.array(v) for v in ccw[::-1]]
+        self.edges = _edges(ccw)
+
+    def margin(self, x: float, y: float) -> float:
+        return min(nx * x + ny * y - off for nx, ny, off in self.edges)
+
+
 def _edges(ccw) -> list[tuple[float, float, float]]:
     out = []
     for (ax, ay), (bx, by) in zip(ccw, ccw[1:] + ccw[:1], strict=True):
@@ -633,8 +659,13 @@ class OperationIK:
     position limits). A tick without active points returns its inputs untouched, without solving.
     """
 
-    def __init__(self, urdf_path=URDF, params: OperationIKParams | None = None) -> None:
+    def __init__(self, urdf_path=URDF, params: OperationIKParams | None = None, upper_body: bool = False) -> None:
+        """upper_body=True: the floating base and the legs stay where the caller puts them (the
+        AutoBalancer owns them and balance); only the arms, torso and head solve, with no foot, BODY or COM
+        task, the COM kept within com_guard_m of where it was at activation by a guard constraint; no
+        waist point (the caller moves BODY itself)."""
         self.params = params or OperationIKParams()
+        self.upper_body = upper_body
         self.robot = placo.RobotWrapper(str(urdf_path), placo.Flags.ignore_collisions)
         robot = self.robot
         missing = sorted(set(JOINT_NAMES) - set(robot.joint_names()))
@@ -652,13 +683,19 @@ class OperationIK:
         solver = self.solver
         solver.enable_joint_limits(False)  # replaced by the step bounds (velocity limit and braking)
         solver.enable_velocity_limits(False)
-        self._feet = [solver.add_frame_task(f, np.eye(4)) for f in FOOT_FRAMES]
-        self._foot_tasks = [(t.position(), t.orientation()) for t in self._feet]
-        self.body_z_task = solver.add_position_task(BODY_FRAME, np.zeros(3))
-        self.body_z_task.mask.set_axises("z")
-        self.body_R_task = solver.add_orientation_task(BODY_FRAME, np.eye(3))
-        self._com = solver.add_com_task(np.zeros(3))
-        self._com.mask.set_axises("xy")
+        if upper_body:
+            solver.mask_fbase(True)
+            self._feet, self._foot_tasks = [], []
+            self.body_z_task = self.body_R_task = self._com = None
+        else:
+            self._feet = [solver.add_frame_task(f, np.eye(4)) for f in FOOT_FRAMES]
+            self._foot_tasks = [(t.position(), t.orientation()) for t in self._feet]
+            self.body_z_task = solver.add_position_task(BODY_FRAME, np.zeros(3))
+            self.body_z_task.mask.set_axises("z")
+            self.body_R_task = solver.add_orientation_task(BODY_FRAME, np.eye(3))
+            self._com = solver.add_com_task(np.zeros(3))
+            self._com.mask.set_axises("xy")
+        self._base_key: tuple | None = None  # upper-body mode: the base pose last written
         self._com_polygon = None  # the constraint, while the COM is near the edge
         self._com_tracking = False  # the caller gives the COM target (com_track_weight)
         self._com_polygon_hard = True
@@ -695,6 +732,16 @@ class OperationIK:
     def _configure_weights(self) -> None:
         p = self.params
         self.solver.problem.regularization = p.damping_weight
+        if self.upper_body:
+            for name in self._active:
+                self._points[name].configure(p)
+            if self._posture is not None:
+                self._posture.configure("posture", "soft", p.posture_weight)
+            if self._com_polygon is not None:
+                self._com_polygon.margin = 0.0
+                self._configure_com_polygon(True)
+            self._polygon_key = None
+            return
         for side, task in zip(("rfoot", "lfoot"), self._feet, strict=True):
             task.configure(side, "soft", p.foot_position_weight, p.foot_orientation_weight)
         self._com.configure("com", "soft", p.com_track_weight if self._com_tracking else p.com_weight)
@@ -724,7 +771,8 @@ class OperationIK:
         self._active = active
         self._inactive = tuple(n not in active for n in POINTS)
         hands = [n for n in ("rhand", "lhand") if n in active]
-        free = set(_LEGS) | (set(_TORSO) if hands else set()) | (set(_HEAD) if "head" in active else set())
+        free = (set() if self.upper_body else set(_LEGS)) | (set(_TORSO) if hands else set())
+        free |= set(_HEAD) if "head" in active else set()
         for name in hands:
             free |= set(_ARM[name])
         for i, _ in self._masked:
@@ -829,10 +877,20 @@ class OperationIK:
         q_ref = np.asarray(q_rad, dtype=float).tolist()
         lower, upper = self._lower, self._upper
         seeding = not self._seeded
+        seeding_base = False
         if seeding:
             q_clip = np.minimum(np.maximum(np.asarray(q_rad, dtype=float), self.q_lower), self.q_upper)
             self.q = self.to_placo(q_clip, base_pos_world, rpy_to_rows(*np.asarray(base_rpy_rad).tolist()))
             self._hold = None
+        elif self.upper_body:  # the base where the caller has it now (the AutoBalancer moves it)
+            key = (*np.asarray(base_pos_world, dtype=float).tolist(), *np.asarray(base_rpy_rad, dtype=float).tolist())
+            if key != self._base_key:
+                self.q[:3] = key[:3]
+                self.q[3:7] = pin.Quaternion(np.array(rpy_to_rows(*key[3:]))).coeffs()
+                self._base_key = None  # written below with the masked chains' forward kinematics
+                seeding_base = True
+        if self.upper_body and targets.waist is not None:
+            raise InvalidCommand("OperationIK(upper_body=True) has no waist point: the caller moves BODY itself")
         active = self._active
         inactive = (targets.rhand is None, targets.lhand is None, targets.head is None, targets.waist is None)
         if inactive != self._inactive:
@@ -841,7 +899,7 @@ class OperationIK:
         q = self.q
         step = p.joint_velocity_limit_rad_s * p.dt_s
         # the chains nobody operates, and the grippers: toward the reference, no faster than the limit
-        moved = seeding
+        moved = seeding or seeding_base
         for i, j in self._masked:
             d = min(upper[i], max(lower[i], q_ref[i])) - q[j]
             if d:
@@ -850,6 +908,8 @@ class OperationIK:
         if moved:
             robot.state.q = q
             self._forward_kinematics()
+        if self.upper_body:
+            return self._solve_upper_body(targets, q, q_ref, seeding, base_pos_world, base_rpy_rad)
         if seeding:
             self._com_ref = tuple(self._com_now()[:2])
             if feet is None:  # the soles stay where the reference has them
@@ -905,6 +965,68 @@ class OperationIK:
             q_rad=_frozen(self.q[self.idx_q]), base_pos_world=_frozen(np.array((x, y, z))),
             base_rpy_rad=_frozen(np.array(_quat_rpy(*self.q[3:7].tolist()))), points=MappingProxyType(points),
             active=True, ok=ok, com_world=_frozen(np.array(com)), com_margin_m=self._polygon.margin(com[0], com[1]))
+
+    def _solve_upper_body(self, targets, q, q_ref, seeding, base_pos_world, base_rpy_rad) -> OperationIKResult:
+        """The rest of solve() with the base and legs fixed: the points, the torso posture, the COM guard."""
+        p, robot = self.params, self.robot
+        lower, upper = self._lower, self._upper
+        step = p.joint_velocity_limit_rad_s * p.dt_s
+        self._base_key = (*np.asarray(base_pos_world, dtype=float).tolist(),
+                          *np.asarray(base_rpy_rad, dtype=float).tolist())
+        if seeding:  # the guard around the COM as it is at activation, in the BODY frame
+            x, y, _ = self._com_in_base()
+            self._polygon = _GuardBox(x, y, p.com_guard_m)
+            if self._com_polygon is not None:
+                self.solver.remove_constraint(self._com_polygon)
+                self._com_polygon = None
+        self._seeded = True
+        if self._posture is not None:  # torso posture toward the reference
+            torso = q_ref[_TORSO_SLICE]
+            if torso != self._posture_ref:
+                self._posture.set_joints({n: min(upper[i], max(lower[i], q_ref[i]))
+                                          for n, i in zip(_TORSO_NAMES, _TORSO, strict=True)})
+                self._posture_ref = torso
+        for name in self._active:
+            self._points[name].servo(self, getattr(targets, name))
+        # the guard: a hard constraint, there only while the COM is within 1 cm of its edge
+        x, y, _ = self._com_in_base()
+        margin = self._polygon.margin(x, y)
+        if margin > 0.01:
+            if self._com_polygon is not None:
+                self.solver.remove_constraint(self._com_polygon)
+                self._com_polygon = None
+        elif self._com_polygon is None:
+            base = self._base_key
+            R = rpy_to_rows(*base[3:])  # the box in the world: the guard is in the BODY frame
+            self._com_polygon = self.solver.add_com_polygon_constraint(
+                [np.array((base[0] + R[0][0] * v[0] + R[0][1] * v[1], base[1] + R[1][0] * v[0] + R[1][1] * v[1]))
+                 for v in self._polygon.clockwise], 0.0)
+            self._configure_com_polygon(True)
+        Q = q[self._bound_q] * self._bound_sign
+        self._bounds.b = np.minimum((1.0 - self._bound_k) * Q + self._bound_K, Q + step)
+        ok = True
+        try:
+            for it in range(p.iterations):
+                if it:
+                    self._forward_kinematics()
+                self.solver.solve(True)
+        except RuntimeError:  # placo's QPError: keep the previous tick's posture
+            ok = False
+            robot.state.q = q
+        self._forward_kinematics()
+        q_prev, self.q = q, robot.state.q.copy()
+        points = self._results(targets, q_prev, step, ok)
+        com = self._com_now()
+        cx, cy, _ = self._com_in_base()
+        return OperationIKResult(
+            q_rad=_frozen(self.q[self.idx_q]), base_pos_world=_frozen(np.array(self._base_key[:3])),
+            base_rpy_rad=_frozen(np.array(self._base_key[3:])), points=MappingProxyType(points),
+            active=True, ok=ok, com_world=_frozen(np.array(com)), com_margin_m=self._polygon.margin(cx, cy))
+
+    def _com_in_base(self) -> tuple[float, float, float]:
+        """The COM in the BODY frame [m] (upper-body mode: the frame of the COM guard)."""
+        base = self._base_key
+        return _tmulv(rpy_to_rows(*base[3:]), _sub(self._com_now(), base[:3]))
 
     def _set_feet(self, feet: FeetPoses) -> None:
         last = self._feet_poses._keys if self._feet_poses is not None else (None, None)

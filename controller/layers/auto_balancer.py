@@ -369,6 +369,9 @@ class AutoBalancer(Layer):
         com_z = float(res.com_world[2])
         cog_abc = cog_abc_xy.tolist() if isinstance(cog_abc_xy, np.ndarray) else cog_abc_xy
         cog_pc = cog_xy.tolist() if isinstance(cog_xy, np.ndarray) else cog_xy
+        w = self._weight
+        q = res.q_rad if w >= 1.0 else (1.0 - w) * ref.q_rad + w * res.q_rad
+        base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         gait = GaitState(
             walking=g.walking, support=g.support, contact=g.contact,
             p_rsole_world=g.p_rfoot_world, R_rsole_world=g.R_rfoot_world,
@@ -377,11 +380,9 @@ class AutoBalancer(Layer):
             cog_vel_world=np.array((cog_vel_xy[0], cog_vel_xy[1], 0.0)),
             cog_pc_world=np.array((cog_pc[0], cog_pc[1], com_z)),
             cog_acc_world=np.array((cog_acc_xy[0], cog_acc_xy[1], 0.0)),
+            base_pos_world=base, base_rpy_rad=base_rpy,
         )
         self.last_gait = gait
-        w = self._weight
-        q = res.q_rad if w >= 1.0 else (1.0 - w) * ref.q_rad + w * res.q_rad
-        base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         zmp_base = R_body.T @ (zmp - base)
         # all fresh arrays of this tick: frozen in place rather than copied
         self._last_out = ref.with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,

@@ -17,17 +17,10 @@ from controller.core.types import Reference, TickContext
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
-from controller.kinematics.operation_ik import (
-    FeetPoses,
-    GazeTarget,
-    HandTarget,
-    OperationIK,
-    OperationTargets,
-    WaistTarget,
-)
+from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
 from controller.operation.deadman import deadman_factor
-from controller.operation.limits import MOTION_STOP, VELOCITY, clamp_to_achieved, limit_twist
+from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist
 from controller.operation.points import (
     POINTS,
     ZERO_TWIST,
@@ -39,11 +32,16 @@ from controller.operation.points import (
     sum_per_point,
 )
 from controller.operation.targets import GazeAngles, HandPose, WaistPose, feet_frame, yaw_rotation
+from robot.names import JOINT_GROUPS, JOINT_NAMES
 
 IK_POINTS = ("rhand", "lhand", "head", "waist")  # the points the IK realises ("walk" goes to the AutoBalancer)
 _FRAMES = {"rhand": "rarm_end", "lhand": "larm_end", "head": "HEAD_LINK1", "waist": "BODY"}
 _NECK = "HEAD_LINK0"  # the gaze ray's origin
 _LOOK_AT_DISTANCE_M = 100.0  # a gaze direction becomes a point this far along it (neck drift: < 0.03 deg)
+_LEGS = np.array(JOINT_GROUPS["rleg"] + JOINT_GROUPS["lleg"])
+_UPPER = np.array([i for i in range(len(JOINT_NAMES)) if i not in set(_LEGS.tolist())])  # torso, head, arms
+_ZERO3 = np.zeros(3)
+_ZERO3.setflags(write=False)
 
 
 @dataclass(frozen=True)
@@ -128,9 +126,10 @@ class OperationLayer(Layer):
         super().__init__()
         self.params = params or OperationParams()
         self.dt_s = dt_s
-        self.ik = ik or OperationIK()
-        self.kin = RobotKinematics()  # the reference's own kinematics (seeding, view)
-        # the AutoBalancer's closed-form legs, to see the reference as it balances it (seeding, view)
+        # the upper body only: the AutoBalancer owns balance, the legs and BODY's place
+        self.ik = ik or OperationIK(upper_body=True)
+        self.kin = RobotKinematics()  # the reference's own kinematics in F (seeding, view)
+        # the AutoBalancer's closed-form legs: can they carry the waist target?
         self._balanced = FullbodyIK(RobotKinematics())
         self._gait = None
         self._motion: dict[str, tuple[Twist, float]] = {}  # point -> (twist, control time it arrived)
@@ -153,10 +152,12 @@ class OperationLayer(Layer):
         self._last_out: Reference | None = None
         self._last_in: Reference | None = None
         self._feet_world: _Frame | None = None
-        self._feet_key: tuple | None = None
-        self._feet_poses: FeetPoses | None = None
+        self._ref_kin = RobotKinematics()  # the upstream reference's own soles (F without a gait)
+        self._ref_frame: _Frame | None = None
+        self._ref_frame_key: tuple | None = None
+        self._waist_checked = None  # the waist target last found reachable by the AutoBalancer's legs
+        self._anchored_walking = False  # the hand targets are held relative to BODY (walking), else to F
         self._walking = False
-        self._idle_gait = None  # the gait port of the last idle tick (None: the last tick operated)
         self._time_s = 0.0
         self._version = 0
         self._status = SharedStatus()
@@ -231,11 +232,11 @@ class OperationLayer(Layer):
                 if twist is not None and not twist.is_zero:
                     break
             else:  # idle
-                self._idle_gait = ctx.last_ports.gait  # the view stays current (walking, the feet frame)
+                gait = self._gait = ctx.last_ports.gait  # the view stays current: the feet frame, walking
+                self._walking = gait is not None and gait.walking
                 out = ref if self._reset_blend is None else self._blend_back(ref, ctx.dt_s)
                 self._last_out = out
                 return out
-        self._idle_gait = None
         return self._operate(ctx, ref, total, stopped)
 
     def _motion_twists(self, t: float) -> dict[str, Twist]:
@@ -270,9 +271,13 @@ class OperationLayer(Layer):
     # ---- the operated tick -------------------------------------------------------------------------
     def _operate(self, ctx: TickContext, ref: Reference, total: dict[str, Twist], stopped: bool) -> Reference:
         p, dt = self.params, ctx.dt_s
-        F_ref = self._reference_frame(ref)
-        self._update_feet(ctx, F_ref)
-        base_feet, R_feet_base = F_ref.to_local(ref.base_pos_world, rpy_to_matrix(ref.base_rpy_rad))
+        gait = self._gait = ctx.last_ports.gait
+        self._walking = gait is not None and gait.walking
+        F, p_body, R_body = self._body_in_feet(ref, gait)
+        self._feet_world = F
+        if self._walking != self._anchored_walking:
+            self._re_anchor(p_body if self._walking else -p_body)
+        anchor = p_body if self._walking else _ZERO3
         if self._active_since_s is None:
             self._active_since_s = ctx.time_s
         seeded = False
@@ -283,9 +288,9 @@ class OperationLayer(Layer):
                     continue
                 if point not in self._targets:
                     if not seeded:
-                        F_seed = self._balanced_kinematics(ref)
+                        self.kin.update(p_body, R_body, ref.q_rad)  # FK in F of the posture as balanced
                         seeded = True
-                    self._targets[point] = self._seed(point, F_seed)
+                    self._targets[point] = self._seed(point, anchor, float(F.p[2]) - self._ground_z(gait, F))
                 limits = {"rhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
                           "lhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
                           "head": (1.0, p.head_angular_speed_rad_s),
@@ -295,107 +300,138 @@ class OperationLayer(Layer):
                 self._limited[point] = VELOCITY if limited.scale < 1.0 else None
             if self._reset_blend is not None:  # a new motion during a reset: from where the blend is
                 self._reset_blend = None
-        res = self.ik.solve(ref.q_rad, base_feet, matrix_to_rpy(R_feet_base), self._ik_targets(), self._feet_poses,
-                            self._com_xy)
-        for point, r in res.points.items():
-            achieved = self._achieved_of(point, r.T_world)
-            self._achieved[point] = achieved
-            if stopped:
-                self._limited[point] = MOTION_STOP
-            elif r.limited is not None:
-                self._limited[point] = r.limited
-                self._targets[point] = clamp_to_achieved(self._targets[point], achieved, r.limited)
-            elif self._limited.get(point) != VELOCITY:
-                self._limited[point] = None
+        q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
+        if "waist" in self._targets:
+            base_out, rpy_out = self._waist(ref, gait, F, stopped)
+        ik_targets = self._ik_targets(p_body - anchor, R_body)
+        if ik_targets.active:
+            res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, ik_targets)
+            q_out = np.array(ref.q_rad, dtype=float)
+            q_out[_UPPER] = res.q_rad[_UPPER]
+            for point, r in res.points.items():
+                T = r.T_world
+                achieved = self._achieved_of(point, p_body - anchor + R_body @ T[:3, 3], R_body @ T[:3, :3])
+                self._achieved[point] = achieved
+                if stopped:
+                    self._limited[point] = MOTION_STOP
+                elif r.limited is not None:
+                    self._limited[point] = r.limited
+                    self._targets[point] = clamp_to_achieved(self._targets[point], achieved, r.limited)
+                elif self._limited.get(point) != VELOCITY:
+                    self._limited[point] = None
+        else:
+            self.ik.reset()  # the next hand or head starts the IK afresh from the reference
         self._version += 1
         if p.history_s > 0.0 and not stopped:
             h = self._history
             h.append((ctx.time_s, dict(self._targets), self.ik.q.copy()))
             while len(h) > 1 and h[0][0] < ctx.time_s - p.history_s:
                 h.popleft()
-        base_w, R_w = F_ref.to_world(res.base_pos_world, rpy_to_matrix(res.base_rpy_rad))
-        out = ref.with_owned(q_rad=np.array(res.q_rad, dtype=float), base_pos_world=base_w,
-                             base_rpy_rad=matrix_to_rpy(R_w))
+        out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
         self._last_out = out
         return out
 
-    def _reference_frame(self, ref: Reference) -> _Frame:
-        """F of the upstream reference (its own soles), where its base pose is expressed for the IK."""
-        kin = self.kin
-        kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
-        (pr, Rr), (pl, Rl) = kin.frame_pose("rleg_end"), kin.frame_pose("lleg_end")
-        return _Frame(*feet_frame(pr, Rr, pl, Rl))
+    def _re_anchor(self, shift: np.ndarray) -> None:
+        """Walking started (shift = BODY in F) or stopped (shift = -BODY in F): the hand targets and the
+        neck re-expressed relative to the new anchor, the same place in the world at this tick. Standing
+        they are held in F; walking relative to BODY (in F's axes), so the hands go along with the body
+        instead of sweeping against its sway from sole to sole and its bobbing with the swing foot."""
+        self._anchored_walking = self._walking
+        for store in (self._targets, self._achieved):
+            for point in ("rhand", "lhand"):
+                if point in store:
+                    store[point] = HandPose.of(store[point].p_feet_m - shift, store[point].R_feet_hand)
+        if self._neck_feet is not None:
+            self._neck_feet = self._neck_feet - shift
+        self._history.clear()  # its targets are in the old anchor: a release restarts from the present
 
-    def _update_feet(self, ctx: TickContext, F_ref: _Frame) -> None:
-        """The soles in F (from the AutoBalancer's gait of the last tick, else the reference's), the COM
-        target in F (the gait's COG, so the IK and the AutoBalancer agree on BODY's place)."""
-        gait = self._gait = ctx.last_ports.gait
-        if gait is None:
-            self._walking = False
-            self._feet_world = F_ref
-            self._com_xy = None
-            kin = self.kin  # updated on the reference by _reference_frame
-            soles = [F_ref.to_local(*kin.frame_pose(f)) for f in ("rleg_end", "lleg_end")]
-            contact = (True, True)
-        else:
-            self._walking = gait.walking
+    def _body_in_feet(self, ref: Reference, gait) -> tuple[_Frame, np.ndarray, np.ndarray]:
+        """F in the world and BODY in F as the AutoBalancer put it last tick (its gait port: BODY x-y where
+        the COG balances, legs on the soles); without a gait, F and BODY of the reference itself."""
+        if gait is not None and gait.base_pos_world is not None:
             F = _Frame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
-            self._feet_world = F
-            soles = [F.to_local(gait.p_rsole_world, gait.R_rsole_world), F.to_local(gait.p_lsole_world,
-                                                                                  gait.R_lsole_world)]
-            contact = gait.contact
-            self._com_xy = F.to_local(gait.cog_world)[:2]
-        key = (tuple(np.round(np.concatenate([soles[0][0], soles[0][1].ravel(), soles[1][0], soles[1][1].ravel()]),
-                              9).tolist()), tuple(contact))
-        if key != self._feet_key:
-            self._feet_key = key
-            self._feet_poses = FeetPoses(soles[0][0], soles[0][1], soles[1][0], soles[1][1], contact)
+            p_body, R_body = F.to_local(gait.base_pos_world, rpy_to_matrix(gait.base_rpy_rad))
+            return F, p_body, R_body
+        F = self._reference_frame(ref)
+        p_body, R_body = F.to_local(ref.base_pos_world, rpy_to_matrix(ref.base_rpy_rad))
+        return F, p_body, R_body
 
-    def _balanced_kinematics(self, ref: Reference) -> _Frame:
-        """self.kin on `ref` as the AutoBalancer balances it (the legs and BODY x-y that put the gait's COG
-        over its soles, BODY yaw along the feet), and F of that posture: so a point starts from where the
-        robot has it, not from the unbalanced plan. Without a gait: the reference as it is."""
-        gait = self._gait
-        if gait is None:
-            return self._reference_frame(ref)
-        F = _Frame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
-        roll, pitch, yaw = ref.base_rpy_rad.tolist()
-        R_body = rpy_to_matrix((roll, pitch, yaw + F.yaw))
-        res = self._balanced.solve(ref.q_rad, float(ref.base_pos_world[2]), R_body, gait.cog_world[:2],
-                                   (gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
-        self.kin.update(res.base_pos_world, R_body, res.q_rad)
-        return F
+    def _reference_frame(self, ref: Reference) -> _Frame:
+        """F of the upstream reference (its own soles); cached while its base and legs do not move."""
+        key = (*ref.base_pos_world.tolist(), *ref.base_rpy_rad.tolist(), *ref.q_rad[_LEGS].tolist())
+        if key != self._ref_frame_key:
+            kin = self._ref_kin
+            kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
+            (pr, Rr), (pl, Rl) = kin.frame_pose("rleg_end"), kin.frame_pose("lleg_end")
+            self._ref_frame = _Frame(*feet_frame(pr, Rr, pl, Rl))
+            self._ref_frame_key = key
+        return self._ref_frame
 
-    def _seed(self, point: str, F_ref: _Frame):
-        """A point's first target: where the reference has it now, in F (self.kin is on the reference)."""
-        p, R = F_ref.to_local(*self.kin.frame_pose(_FRAMES[point]))
+    def _waist(self, ref: Reference, gait, F: _Frame, stopped: bool) -> tuple[np.ndarray, np.ndarray]:
+        """BODY height and orientation of the waist target, as the reference's base pose: the AutoBalancer
+        keeps them and balances on the legs. A height or tilt its legs cannot reach is clamped to the last
+        reachable one (reason "reach")."""
+        target = self._targets["waist"]
+        R_F = rpy_to_matrix(target.rpy_rad)
+        if gait is not None and not stopped and target is not self._waist_checked:
+            R_w = F.R @ R_F
+            res = self._balanced.solve(ref.q_rad, float(F.p[2] + target.height_m), R_w, gait.cog_world[:2],
+                                       (gait.p_rsole_world, gait.R_rsole_world),
+                                       (gait.p_lsole_world, gait.R_lsole_world))
+            if not res.reachable and "waist" in self._achieved:
+                target = self._targets["waist"] = self._achieved["waist"]
+                self._limited["waist"] = REACH
+                R_F = rpy_to_matrix(target.rpy_rad)
+            self._waist_checked = target
+        if stopped:
+            self._limited["waist"] = MOTION_STOP
+        self._achieved["waist"] = target
+        if gait is not None:  # the AutoBalancer turns BODY yaw by the feet's: the rpy are F's
+            rpy = np.array(target.rpy_rad, dtype=float)
+        else:
+            rpy = matrix_to_rpy(F.R @ R_F)
+        base = np.array(ref.base_pos_world, dtype=float)
+        base[2] = self._ground_z(gait, F) + target.height_m
+        return base, rpy
+
+    @staticmethod
+    def _ground_z(gait, F: _Frame) -> float:
+        """The height the waist's is counted from: F's, or while one sole swings the other's (F would bob)."""
+        if gait is None or all(gait.contact):
+            return float(F.p[2])
+        return float(gait.p_rsole_world[2] if gait.contact[0] else gait.p_lsole_world[2])
+
+    def _seed(self, point: str, anchor: np.ndarray, ground_in_feet_m: float = 0.0):
+        """A point's first target: where the posture has it now, in F (self.kin is on it, in F), the hands
+        and the neck relative to `anchor` (F's origin standing, BODY walking)."""
+        p, R = self.kin.frame_pose(_FRAMES[point])
+        if point != "waist":
+            p = p - anchor
         if point in ("rhand", "lhand"):
             return HandPose.of(p, R)
         if point == "head":
-            self._neck_feet = F_ref.to_local(self.kin.frame_pose(_NECK)[0])
+            self._neck_feet = self.kin.frame_pose(_NECK)[0] - anchor
             return GazeAngles.of_direction(R[:, 0])
-        return WaistPose(float(p[2]), tuple(matrix_to_rpy(R).tolist()))
+        return WaistPose(float(p[2]) + ground_in_feet_m, tuple(matrix_to_rpy(R).tolist()))
 
-    def _ik_targets(self) -> OperationTargets:
+    def _ik_targets(self, p_body: np.ndarray, R_body: np.ndarray) -> OperationTargets:
+        """The hand and gaze targets in the BODY frame (where the upper-body IK works)."""
         t = self._targets
         kw = {}
         for point in ("rhand", "lhand"):
             if point in t:
-                kw[point] = HandTarget(t[point].p_feet_m, t[point].R_feet_hand)
+                kw[point] = HandTarget.trusted(R_body.T @ (t[point].p_feet_m - p_body), R_body.T @ t[point].R_feet_hand)
         if "head" in t:
             neck = self._neck_feet if self._neck_feet is not None else np.zeros(3)
-            kw["head"] = GazeTarget(look_at_world=neck + _LOOK_AT_DISTANCE_M * t["head"].direction_feet())
-        if "waist" in t:
-            kw["waist"] = WaistTarget(t["waist"].height_m, np.array(t["waist"].rpy_rad))
+            look = neck + _LOOK_AT_DISTANCE_M * t["head"].direction_feet()
+            kw["head"] = GazeTarget(look_at_world=R_body.T @ (look - p_body))
         return OperationTargets(**kw)
 
     @staticmethod
-    def _achieved_of(point: str, T: np.ndarray):
+    def _achieved_of(point: str, p_feet: np.ndarray, R_feet: np.ndarray):
         if point in ("rhand", "lhand"):
-            return HandPose.of(T[:3, 3], T[:3, :3])
-        if point == "head":
-            return GazeAngles.of_direction(T[:3, 0])
-        return WaistPose(float(T[2, 3]), tuple(matrix_to_rpy(T[:3, :3]).tolist()))
+            return HandPose.of(p_feet, R_feet)
+        return GazeAngles.of_direction(R_feet[:, 0])
 
     def _on_release(self) -> None:
         """The EmergencyStopper released the motion: restart from the targets its revert went back to."""
@@ -436,24 +472,18 @@ class OperationLayer(Layer):
         ref = self._last_out or self._last_in
         if ref is None:
             raise InvalidCommand("the operation layer has not ticked yet; no view before the first tick")
-        idle_gait, walking = self._idle_gait, self._walking
-        if idle_gait is not None:  # idle: the feet frame and the walking flag of the gait, not the last IK's
-            walking = idle_gait.walking
-            F_world = _Frame(*feet_frame(idle_gait.p_rsole_world, idle_gait.R_rsole_world, idle_gait.p_lsole_world,
-                                         idle_gait.R_lsole_world))
-        else:
-            F_world = self._feet_world or self._reference_frame(ref)
-        F_ref = self._balanced_kinematics(ref)
+        F_world, p_body, R_body = self._body_in_feet(ref, self._gait)
+        self.kin.update(p_body, R_body, ref.q_rad)  # in F, BODY where the AutoBalancer has it
         points = {}
         for point, frame in _FRAMES.items():
-            p_f, R_f = F_ref.to_local(*self.kin.frame_pose(frame))
+            p_f, R_f = self.kin.frame_pose(frame)
             p_w, R_w = F_world.to_world(p_f, R_f)
             points[point] = PointPose(p_world_m=_ro(p_w), R_world_point=_ro(R_w), p_feet_m=_ro(p_f),
                                       R_feet_point=_ro(R_f))
         gaze = GazeAngles.of_direction(points["head"].R_feet_point[:, 0])
         return OperationView(time_s=self._time_s, feet_p_world_m=_ro(F_world.p.copy()), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
-                             waist_height_m=float(points["waist"].p_feet_m[2]), walking=walking,
+                             waist_height_m=float(points["waist"].p_feet_m[2]), walking=self._walking,
                              motion_stopped=self._stopped)
 
     def status(self) -> OperationStatus:

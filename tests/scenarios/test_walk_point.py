@@ -1,5 +1,6 @@
-"""The walking point in simulation: Ports.walk_command published before the AutoBalancer (by a test-only
-stand-in for the operation layer) walks the robot with goVelocity semantics; goPos while walking re-plans.
+"""The walking point in simulation: the operator's walk setpoint streamed into the operation layer
+(op.set_motion("walk", ...)), published as Ports.walk_command, walks the robot with goVelocity semantics,
+also while the hands and the head are teleoperated; goPos while walking re-plans.
 
 Distances and poses are measured on the simulated soles (MuJoCo sites), which the controller never reads."""
 
@@ -36,7 +37,7 @@ def feet_side_by_side(w):
 @pytest.fixture
 def walker():
     w = Walker()
-    w.point = walk_point.install(w.system.chain)
+    w.point = walk_point.install(w.loop)
     return w
 
 
@@ -59,6 +60,25 @@ def test_walking_point_at_0_1_m_s_for_10_s_walks_1_m_upright_and_stops_with_the_
     dx, dy, dyaw = feet_side_by_side(w)
     assert abs(dx) < 0.01 and abs(dy - 0.19) < 0.01 and abs(dyaw) < 1.0
     assert w.abc.status().walk_point == "idle"
+
+
+@pytest.mark.slow
+def test_walking_at_0_1_m_s_for_10_s_while_the_hands_and_head_are_teleoperated_stays_upright(walker):
+    """[OP] V-A / issue 10 Done-when: walk through op.set_motion while both hands and the head are moved."""
+    w = walker
+    x0, _, _ = measured_mid(w)
+    w.point.also = walk_point.hands_and_head
+    w.point.command = WalkCommand(0.1, 0.0, 0.0)
+    w.run(10.0)  # Walker.run asserts no fall at every tick
+    w.point.command = None
+    w.walk_until_stopped(10.0)
+    x1, _, _ = measured_mid(w)
+    op = w.system.chain["op"].status().to_dict()["points"]
+    assert op["rhand"]["target"] is not None and op["head"]["target"] is not None  # they were operated
+    # measured 1.02 m, as without the hands; bound 1.0 +- 0.05 m
+    assert abs((x1 - x0) - 1.0) < 0.05
+    # measured worst tilt 0.78 deg (plain walking 0.67); bound: plain + 0.5 deg
+    assert w.worst_deg < PLAIN_GO_VELOCITY_TILT_DEG + TILT_MARGIN_DEG
 
 
 def mid_strides(steps, leg_offset_y_m=0.095):

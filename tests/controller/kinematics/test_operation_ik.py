@@ -386,3 +386,34 @@ def test_new_parameters_take_effect_on_the_next_tick():
     ik.set_params(ik.params.replaced(joint_velocity_limit_rad_s=0.2, head_angular_speed_rad_s=5.0))
     q2 = ik.solve(HALF_SITTING, BASE, RPY, gaze).q_rad[head]
     assert q2 - q1 == pytest.approx(0.2 * DT, rel=1e-6)
+
+
+# ---- upper-body mode (what the operation layer runs: the AutoBalancer owns the legs and BODY) ----------------
+
+
+def test_upper_body_mode_reaches_with_the_arm_and_never_moves_the_base_or_the_legs():
+    ik = OperationIK(upper_body=True)
+    p0, R0 = reference_pose("rarm_end")
+    legs = [joint_index(n) for n in JOINT_NAMES if "LEG" in n]
+    res = run(ik, OperationTargets(rhand=HandTarget(p0 + (0.15, 0.0, 0.05), R0)), 200)[-1]
+    assert np.array_equal(res.base_pos_world, BASE) and np.array_equal(res.base_rpy_rad, RPY)
+    assert np.array_equal(res.q_rad[legs], HALF_SITTING[legs])
+    p, R = fk(res).frame_pose("rarm_end")
+    assert np.linalg.norm(p - (p0 + (0.15, 0.0, 0.05))) < 1e-3 and math.degrees(_angle(R.tolist(), R0.tolist())) < 0.5
+
+
+def test_upper_body_mode_guard_keeps_the_com_near_where_it_was_and_refuses_the_waist():
+    ik = OperationIK(upper_body=True)
+    KIN.update_rpy(BASE, RPY, HALF_SITTING)
+    com0 = KIN.com_world()[:2].copy()
+    pr, Rr = reference_pose("rarm_end")
+    pl, Rl = reference_pose("larm_end")
+    # both hands 0.6 m forward and down: the torso would bend far, the COM goes forward until the guard
+    far = OperationTargets(rhand=HandTarget(pr + (0.6, 0.0, -0.3), Rr), lhand=HandTarget(pl + (0.6, 0.0, -0.3), Rl))
+    results = run(ik, far, 400)
+    guard = OperationIKParams().com_guard_m
+    worst = max(np.abs(r.com_world[:2] - com0).max() for r in results)
+    assert worst <= guard + 1e-3  # measured 0.040 m: at the guard, not past it
+    assert results[-1].points["rhand"].limited is not None
+    with pytest.raises(InvalidCommand, match="waist"):
+        ik.solve(HALF_SITTING, BASE, RPY, OperationTargets(waist=WaistTarget(0.6, np.zeros(3))))
