@@ -148,3 +148,15 @@ def test_an_operator_command_during_a_reach_adds_to_it_seamlessly():
     print(f"seamless: operator offset {offset.round(5)}")
     assert offset[2] == pytest.approx(0.10, abs=0.01)  # measured 0.09997 m; the 1 cm
     assert np.linalg.norm(offset[:2]) < 0.01  # measured 0.05 mm; bound 1 cm
+
+
+def test_a_behaviour_run_at_max_speed_is_the_same_every_time():
+    def squat_posture() -> np.ndarray:
+        rig = Rig()
+        try:
+            rig.run("squat", {"depth_m": 0.05})
+            return np.array(rig.robot.loop.snapshot.q_meas_rad)
+        finally:
+            rig.close()
+
+    np.testing.assert_array_equal(squat_posture(), squat_posture())
