@@ -103,7 +103,7 @@ def test_reach_puts_the_right_hand_at_a_feet_frame_position_keeping_its_orientat
     p, R = rig.measured("rarm_end")
     turned = math.degrees(math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(R0.T @ R) - 1.0)))))
     print(f"reach: {np.linalg.norm(p - goal) * 1000:.1f} mm off ({(p - goal).round(4)}), turned {turned:.2f} deg")
-    assert np.linalg.norm(p - goal) < 0.01  # measured 2.2 mm (5.2 mm before the op layer seeded from the gait); bound 10 mm
+    assert np.linalg.norm(p - goal) < 0.01  # measured 2.2 mm; bound 10 mm
     assert turned < 2.0  # measured 0.18 deg; the 2 deg
 
 
