@@ -12,12 +12,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
-from behaviors.servo import rotation_vector
+from behaviors.servo import min_jerk_duration_s, min_jerk_rate, rotation_vector
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.kinematics.rotations import rpy_to_matrix
 from controller.operation.points import OperationView, Twist
 
-MIN_JERK_PEAK = 1.875  # peak rate of the minimum-jerk ratio 10 s^3 - 15 s^4 + 6 s^5 over its mean
 SETTLE_S = 0.3  # [s] after the plan, for the IK to catch up before the check
 
 
@@ -61,9 +60,9 @@ class Reach(Behavior):
         self.R0 = np.array(pose.R_feet_point)
         self.R_goal = None if p.keep_orientation else rpy_to_matrix(np.radians([p.roll_deg, p.pitch_deg, p.yaw_deg]))
         self.dp_m, self.dw_rad = self._errors(ctx.view)  # the whole move, in F
-        linear_s = float(np.linalg.norm(self.dp_m)) / p.speed_m_s
-        angular_s = float(np.linalg.norm(self.dw_rad)) / math.radians(p.angular_speed_deg_s)
-        self.plan_s = max(MIN_JERK_PEAK * max(linear_s, angular_s), 2.0 * ctx.dt_s)
+        self.plan_s = max(min_jerk_duration_s(float(np.linalg.norm(self.dp_m)), p.speed_m_s, ctx.dt_s),
+                          min_jerk_duration_s(float(np.linalg.norm(self.dw_rad)), math.radians(p.angular_speed_deg_s),
+                                              ctx.dt_s))
 
     def nominal_duration_s(self) -> float:
         return getattr(self, "plan_s", 1.0) + SETTLE_S + 0.5
@@ -74,7 +73,7 @@ class Reach(Behavior):
     def step(self, ctx: Context) -> Output:
         t, dt = ctx.elapsed_s, ctx.dt_s
         if t < self.plan_s:
-            rate = (min_jerk((t + dt) / self.plan_s) - min_jerk(t / self.plan_s)) / dt  # [1/s], sums to 1
+            rate = min_jerk_rate(t, dt, self.plan_s)  # [1/s], sums to 1
             return Output({self.params.hand: Twist.of(self.dp_m * rate, self.dw_rad * rate)})
         if t < self.plan_s + SETTLE_S:
             return NOTHING

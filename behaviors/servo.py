@@ -46,3 +46,19 @@ def rot_z(yaw_rad: float) -> np.ndarray:
     c, s = math.cos(yaw_rad), math.sin(yaw_rad)
     return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
 
+
+
+MIN_JERK_PEAK = 1.875  # peak rate of the minimum-jerk ratio 10 s^3 - 15 s^4 + 6 s^5 over its mean
+
+
+def min_jerk_duration_s(distance: float, max_speed: float, dt_s: float) -> float:
+    """The shortest minimum-jerk move over `distance` whose peak speed is `max_speed` (same units) [s]."""
+    return max(MIN_JERK_PEAK * abs(distance) / max_speed, 2.0 * dt_s)
+
+
+def min_jerk_rate(t_s: float, dt_s: float, duration_s: float) -> float:
+    """The ratio's increase over the tick [t, t + dt] divided by dt [1/s]: summed over the ticks of a plan,
+    times dt, exactly 1 (a feed-forward velocity that integrates to the whole move)."""
+    from controller.interpolation.hoff_arbib import min_jerk
+
+    return float(min_jerk((t_s + dt_s) / duration_s) - min_jerk(t_s / duration_s)) / dt_s
