@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -26,6 +27,8 @@ class Scenario:
     setup: Callable[[OperatorService], None]
     warmup_s: float = 0.0
     needs: tuple[str, ...] = ()  # layers the scenario commands
+    #: called with the loop at every tick boundary of the timed part (streamed setpoints), not timed
+    stream: Callable[[ControlLoop], None] | None = None
 
 
 def _stand(service: OperatorService) -> None:
@@ -47,6 +50,24 @@ def _walk(service: OperatorService) -> None:
     service.go_velocity(0.1, 0.0, 0.0)
 
 
+def _teleop_walk(service: OperatorService) -> None:
+    """Nothing to set up: the walking point streamed by `_teleop_stream` drives the AutoBalancer."""
+
+
+def _teleop_stream(loop: ControlLoop) -> None:
+    """Both hands on slow circles (0.05 m/s) and the head sweeping (20 deg/s), streamed through
+    op.set_motion every tick, with the walk point at 0.1 m/s."""
+    from controller.operation.points import Twist
+
+    op = loop.chain["op"]
+    t = loop.plant.time_s
+    c, s_ = math.cos(1.0 * t), math.sin(1.0 * t)
+    op.set_motion("rhand", Twist.of((0.05 * c, 0.0, 0.05 * s_)), t)
+    op.set_motion("lhand", Twist.of((0.05 * c, 0.0, -0.05 * s_)), t)
+    op.set_motion("head", Twist.of(angular_rad_s=(0.0, 0.0, math.radians(20.0) * c)), t)
+    op.set_motion("walk", Twist.of((0.1, 0.0, 0.0)), t)
+
+
 #: Benchmark scenarios by name.
 SCENARIOS: dict[str, Scenario] = {
     "stand": Scenario("hold half-sitting", _stand),
@@ -54,6 +75,9 @@ SCENARIOS: dict[str, Scenario] = {
                      needs=("seq",)),
     "walk": Scenario("goVelocity(0.1 m/s, 0, 0) after 2.5 s of standing (not timed)", _walk, warmup_s=2.5,
                      needs=("abc",)),
+    "teleop": Scenario("walk at 0.1 m/s through the operation layer's walking point while both hands and the "
+                       "head are streamed through it every tick, after 2.5 s of standing", _teleop_walk,
+                       warmup_s=2.5, needs=("op", "abc"), stream=_teleop_stream),
 }
 
 
@@ -216,7 +240,10 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         last = min(n, first + chunk)
         _clear_timers(loop)
         t0 = clock()
+        stream = spec.stream
         for i in range(first, last):
+            if stream is not None:
+                stream(loop)
             t_step = clock()
             step()
             step_ms[i] = (clock() - t_step) * 1e3

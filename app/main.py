@@ -11,7 +11,20 @@ from fastapi.staticfiles import StaticFiles
 
 from app.errors import ErrorBody, install_error_handlers
 from app.hot_paths import HotPaths
-from app.routers import chain, emergency, experiments, impedance, layers, params, sequence, sim, state, walk
+from app.routers import (
+    behaviors,
+    chain,
+    emergency,
+    experiments,
+    impedance,
+    layers,
+    operator,
+    params,
+    sequence,
+    sim,
+    state,
+    walk,
+)
 from app.security import ConsoleGuard, allowed_hosts_for
 from app.service import OperatorService
 from app.settings import Settings
@@ -25,14 +38,20 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
     api = FastAPI(title="HRP-2 operator console", version="0.1.0",
                   description="Operator API of the simulated HRP-2 No.10: state, e-stop, motion stop, "
                               "sequence player, walking, layer parameters, impedance, experiments, "
-                              "simulation controls. Units: m, s, deg, N. Control requests (POST, PUT) must be "
-                              "sent as JSON (Content-Type: application/json); only POST /api/estop is "
+                              "simulation controls, the operator's velocities at the operational points "
+                              "(feet frame) and the behaviours. Units: m, s, deg, N. Control requests (POST, PUT) "
+                              "must be sent as JSON (Content-Type: application/json); only POST /api/estop is "
                               "accepted without. Bodies are limited to 64 kB.")
     api.state.settings = settings
     api.state.service = service
     install_error_handlers(api)
-    for module in (state, emergency, sequence, sim, chain, layers, params, walk, impedance, experiments):
+    from starlette.exceptions import HTTPException as StarletteHTTPException
+
+    api.add_exception_handler(StarletteHTTPException, behaviors.unknown_behavior_handler)
+    for module in (state, emergency, sequence, sim, chain, layers, params, walk, impedance, experiments, operator,
+                   behaviors):
         api.include_router(module.router)
+    api.include_router(operator.ws_router)
     api.include_router(emergency.motion_router)
     api.include_router(emergency.params_router)
     _publish_error_schema(api)

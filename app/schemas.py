@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field
 
@@ -267,3 +267,89 @@ class ExperimentResponse(BaseModel):
     png_url: str | None = Field(default=None, description="where the run's Fig. 10-style PNG is (with save)")
     wall_time_s: float = Field(description="wall-clock time the run took [s]")
     real_time_factor: float = Field(description="simulated time / wall time spent simulating (no set-up, no files)")
+
+
+# ---- the operator's velocities ([OP] Eq. 5's xi_motion) ------------------------------------------------------
+def _component(used: bool, limit: float, unit: str, what: str) -> Any:
+    if used:
+        return Annotated[float, Field(strict=True, ge=-limit, le=limit,
+                                      description=f"{what} [{unit}], |v| <= {limit:g}")]
+    return Annotated[float, Field(strict=True, ge=0.0, le=0.0, description="not used by this point: 0")]
+
+
+def _velocity_model(point: str) -> type[BaseModel]:
+    from pydantic import create_model
+
+    from app.service.setpoints import FOOT_DISTANCE_RANGE_M, MAX_ANGULAR_RAD_S, MAX_LINEAR_M_S, MAX_STRIDE_RANGE_M
+    from controller.operation.points import USED_COMPONENTS
+
+    lin_mask, ang_mask = USED_COMPONENTS[point]
+    lin_limit = MAX_VELOCITY_M_S if point == "walk" else MAX_LINEAR_M_S
+    ang_limit = round(math.degrees(MAX_VELOCITY_RAD_S if point == "walk" else MAX_ANGULAR_RAD_S), 6)
+    lin = tuple[tuple(_component(u, lin_limit, "m/s", f"{axis} velocity")
+                      for u, axis in zip(lin_mask, "xyz", strict=True))]
+    ang = tuple[tuple(_component(u, ang_limit, "deg/s", f"rate about {axis}")
+                      for u, axis in zip(ang_mask, "xyz", strict=True))]
+    fields: dict[str, Any] = {
+        "point": (Literal[point], Field(description="the operational point")),
+        # (a JSON array of 3: not strict, so that a list is taken for the tuple; its numbers are strict)
+        "linear": (lin, Field(default=(0.0, 0.0, 0.0), strict=False,
+                              description="linear velocity, feet frame F [m/s]")),
+        "angular": (ang, Field(default=(0.0, 0.0, 0.0), strict=False,
+                               description="angular velocity, feet frame F [deg/s]")),
+    }
+    if point == "walk":
+        fields["max_stride"] = (float | None, Field(default=None, ge=MAX_STRIDE_RANGE_M[0], le=MAX_STRIDE_RANGE_M[1],
+                                                    description="step length limit [m] (null: the gait's own)"))
+        fields["foot_distance"] = (float | None, Field(
+            default=None, ge=FOOT_DISTANCE_RANGE_M[0], le=FOOT_DISTANCE_RANGE_M[1],
+            description="distance between the feet's centres [m] (null: the gait's own)"))
+    docs = {"rhand": "right hand: linear (x, y, z) [m/s], angular (x, y, z) [deg/s]",
+            "lhand": "left hand: linear (x, y, z) [m/s], angular (x, y, z) [deg/s]",
+            "head": "gaze: angular (0, pitch, yaw) [deg/s], pitch > 0 looks down; linear unused",
+            "waist": "waist: linear (0, 0, height rate) [m/s], angular BODY (roll, pitch, yaw) rates [deg/s]",
+            "walk": "walking (goVelocity): linear (vx, vy, 0) [m/s], angular (0, 0, vtheta) [deg/s], and the "
+                    "step parameters"}
+    return create_model(f"{point.capitalize()}Velocity", __base__=_Body, __doc__=docs[point], **fields)
+
+
+def _velocity_request() -> Any:
+    from controller.operation.points import POINTS
+
+    models = tuple(_velocity_model(p) for p in POINTS)
+    return Annotated[Union[models], Field(discriminator="point")]  # noqa: UP007 - built at run time
+
+OperatorVelocityRequest = _velocity_request()
+
+
+class OperatorAck(BaseModel):
+    ok: bool = True
+    point: str = Field(description="the operational point")
+    seq: int = Field(description="this setpoint's sequence number")
+    applied_seq: int = Field(description="the newest setpoint of the point the robot has applied (>= seq)")
+    tick: int = Field(description="the control tick it was applied before")
+    time_s: float = Field(description="that tick's control time, the dead-man's stamp [s]")
+
+
+# ---- behaviours -----------------------------------------------------------------------------------------------
+class RunStarted(BaseModel):
+    ok: bool = True
+    id: int = Field(description="the run id (GET /api/behaviors/runs/{id})")
+    message: str = ""
+
+
+class BehaviorParamDoc(BaseModel):
+    name: str
+    type: Literal["number", "integer", "boolean", "string", "array"]
+    default: Any = None
+    unit: str | None = None
+    min: float | None = None
+    max: float | None = None
+    choices: list[Any] | None = None
+    doc: str | None = None
+
+
+class BehaviorDoc(BaseModel):
+    name: str
+    summary: str
+    params: list[BehaviorParamDoc]

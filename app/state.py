@@ -108,7 +108,18 @@ def state_document(pub: Published) -> dict[str, Any]:
         "loop_ms": round(float(snap.loop_ms), 4),
         "loop": {"lateness_p99_ms": pub.timing.lateness_p99_ms, "lateness_max_ms": pub.timing.lateness_max_ms,
                  "speed_last": pub.timing.speed_last},
+        "operation": _operation(layers.get("op")),
+        "runs": [r.to_dict() for r in pub.runs],
+        "operator_acks": {p: {"seq": a.seq, "tick": a.tick, "time_s": a.time_s} for p, a in pub.setpoint_acks.items()},
     }
+
+
+def _operation(status) -> dict[str, Any] | None:
+    """The operation layer's status per operational point (its own to_dict), or None without the layer."""
+    if status is None:
+        return None
+    to_dict = getattr(status, "to_dict", None)
+    return jsonable(to_dict() if callable(to_dict) else plain(status))
 
 
 def state_json(pub: Published) -> tuple[dict[str, Any], bytes]:
@@ -246,4 +257,43 @@ def state_model() -> type[BaseModel]:
         scene=(str, Field(description="the simulated scene")),
         loop_ms=(float, Field(description="wall time of the last tick, chain + physics [ms]")),
         loop=(loop, Field(description="how the loop keeps its deadlines")),
+        operation=(dict[str, Any] | None, Field(
+            description="the operation layer per operational point (rhand, lhand, head, waist, walk): target, "
+                        "achieved, limited (null, 'reach', 'joint_limit', 'velocity' or 'motion_stop'), the "
+                        "operator's (motion) and the behaviours' twists, feet frame F; null without the layer")),
+        runs=(list[run_model()], Field(description="the behaviour runs kept, oldest first")),
+        operator_acks=(dict[str, ack_model()], Field(
+            description="per operational point, the operator's newest setpoint the robot applied")),
     )
+
+
+def run_model() -> type[BaseModel]:
+    """A behaviour run (behaviors.runner.RunStatus) as the API gives it."""
+    if "RunStatus" not in _NAMED:
+        _NAMED["RunStatus"] = create_model(
+            "RunStatus", __base__=_Doc,
+            id=(int, Field(description="run id")),
+            behavior=(str, Field(description="the behaviour's name")),
+            params=(dict[str, Any], Field(description="its parameters (SI units, as GET /api/behaviors lists)")),
+            state=(Literal["running", "succeeded", "failed", "cancelled"], Field(description="where the run is")),
+            progress=(float, Field(description="0..1: elapsed vs nominal time, or distance vs tolerance")),
+            message=(str, Field(description="what happened, in words")),
+            result=(dict[str, Any], Field(description="what the behaviour measured at the end")),
+            points=(list[str], Field(description="what it needs alone: operational points, '<hand>.gripper'")),
+            started_s=(float, Field(description="control time it started [s]")),
+            ended_s=(float | None, Field(description="control time it ended [s]")),
+            nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")))
+    return _NAMED["RunStatus"]
+
+
+def ack_model() -> type[BaseModel]:
+    if "SetpointAckState" not in _NAMED:
+        _NAMED["SetpointAckState"] = create_model(
+            "SetpointAckState", __base__=_Doc,
+            seq=(int, Field(description="the setpoint's sequence number (the console numbers them)")),
+            tick=(int, Field(description="the control tick it was applied before")),
+            time_s=(float, Field(description="that tick's control time: the dead-man's stamp [s]")))
+    return _NAMED["SetpointAckState"]
+
+
+_NAMED: dict[str, type[BaseModel]] = {}

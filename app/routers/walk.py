@@ -17,10 +17,15 @@ router = APIRouter(prefix="/api/walk", tags=["walk"])
 
 _WALK_ERRORS = errors(404, 409, 422, e409="refused: the e-stop, a fall, the AutoBalancer not running, or "
                                           "already walking a footstep list (`reason` says which)")
+_GO_POS_ERRORS = errors(404, 409, 422, e409="refused: the e-stop, a fall, the AutoBalancer not running, the "
+                                            "emergency walking stop in force, or the stop after an e-stop still "
+                                            "playing (`reason` says which)")
 
 
-@router.post("/go-pos", response_model=Ok, responses=_WALK_ERRORS,
-             summary="Walk to (x, y, theta) relative to the current feet (goPos)")
+@router.post("/go-pos", response_model=Ok, responses=_GO_POS_ERRORS,
+             summary="Walk to (x, y, theta) relative to the current feet (goPos); while walking, as hrpsys, "
+                     "relative to the feet where the walk began, replacing the rest of the plan from the next "
+                     "free footstep")
 def go_pos(req: GoPosRequest, service: ServiceDep) -> Ok:
     return Ok(message=service.go_pos(req.x, req.y, math.radians(req.theta_deg)))
 

@@ -14,7 +14,9 @@ import numpy as np
 
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError, Unavailable
 from app.service.host import EstopAck, Observation, Published
+from app.service.setpoints import Setpoint, SetpointAck
 from app.service.verbs import (
+    CancelRun,
     ChainTiming,
     ClearSequence,
     EnableLayers,
@@ -22,13 +24,16 @@ from app.service.verbs import (
     GetFootsteps,
     GetLoopTiming,
     GetParams,
+    GetRun,
     GoPos,
     GoVelocity,
+    ListRuns,
     Push,
     ReleaseEstop,
     ReleaseMotion,
     Reset,
     RobotInfo,
+    RunBehavior,
     SequenceStatus,
     SetFootsteps,
     SetGroupSequence,
@@ -55,6 +60,7 @@ __all__ = ["InvalidArgument", "NotFound", "OperatorService", "Refused", "RobotBa
            "Unavailable"]
 
 VERB_TIMEOUT_S = 5.0  # [s] a verb not answered by then is reported (the loop may be stuck or gone)
+ACK_TIMEOUT_S = 0.5  # [s] a setpoint whose acknowledgement has not come back by then is reported
 
 
 class RobotBackend(Protocol):
@@ -71,6 +77,7 @@ class RobotBackend(Protocol):
     def info(self) -> RobotInfo: ...
     def refresh_info(self, timeout_s: float = 10.0) -> RobotInfo: ...
     def log_rows(self) -> np.ndarray: ...
+    def put_setpoint(self, setpoint: Setpoint) -> Setpoint: ...
     def reset(self, scene: str | None = None, timeout_s: float = 30.0) -> RobotInfo: ...
     def close(self, timeout_s: float = 10.0) -> dict | None: ...
 
@@ -197,6 +204,61 @@ class OperatorService:
         changed them since the info was taken)."""
         owners = tuple(o for o in changes if o in self._info.params)
         return _with_params(self._info, self.run(GetParams(owners))) if owners else self._info
+
+    # ---- the operator's velocities and the behaviours ([OP] Eq. 5) -------------------------------------------
+    def _refuse_setpoint(self) -> None:
+        """What refuses a motion verb refuses a setpoint too (the robot's latest published safety state)."""
+        if "op" not in self._info.chain:
+            raise NotFound(f"the chain has no operation layer ('op'); present: {', '.join(self._info.chain)}")
+        safety = self.published().snapshot.safety
+        if safety.fall is not None:
+            raise Refused("fallen", f"operator velocity refused: the robot has fallen ({safety.fall}); reset the "
+                                    "simulation")
+        if safety.hard_stop:
+            raise Refused("hard_stop", "operator velocity refused: the hard e-stop is engaged; release it first")
+
+    def put_setpoint(self, setpoint: Setpoint) -> Setpoint:
+        """Hand the operator's newest velocity for one point to the robot's latest-value channel (no queue);
+        returns it numbered. `setpoint_ack` tells when it reached the loop."""
+        self._refuse_setpoint()
+        return self.robot.put_setpoint(setpoint)
+
+    def setpoint_ack(self, point: str) -> SetpointAck | None:
+        """The newest setpoint of `point` the robot has applied (as last published)."""
+        return self.published().setpoint_acks.get(point)
+
+    def operator_velocity(self, setpoint: Setpoint, timeout_s: float = ACK_TIMEOUT_S) -> SetpointAck:
+        """Put a setpoint and wait until the robot has applied it (the tick it reached)."""
+        import time
+
+        numbered = self.put_setpoint(setpoint)
+        deadline = time.monotonic() + timeout_s
+        while True:
+            ack = self.setpoint_ack(setpoint.point)
+            if ack is not None and ack.seq >= numbered.seq:
+                return ack
+            if time.monotonic() > deadline:
+                raise Unavailable(f"the robot did not acknowledge the {setpoint.point} setpoint within "
+                                  f"{timeout_s:g} s")
+            time.sleep(0.002)
+
+    def run_behavior(self, name: str, params: Mapping[str, Any] | None = None) -> int:
+        """Start a behaviour; its run id. Parameters are plain JSON values (see list_behaviors)."""
+        return self.run(RunBehavior(name, tuple((params or {}).items())))
+
+    def cancel_run(self, run_id: int):
+        return self.run(CancelRun(int(run_id)))
+
+    def get_run(self, run_id: int):
+        return self.run(GetRun(int(run_id)))
+
+    def runs(self):
+        return self.run(ListRuns())
+
+    def list_behaviors(self) -> list[dict]:
+        from app.service.verbs import list_behaviors
+
+        return list_behaviors()
 
     # ---- the simulation --------------------------------------------------------------------------------
     def push(self, body: str, force_n: Sequence[float], duration_s: float) -> str:

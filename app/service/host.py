@@ -4,6 +4,7 @@ thread or a test in one process)."""
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import time
 from collections.abc import Mapping
@@ -12,9 +13,12 @@ from typing import Any
 
 import numpy as np
 
+from app.service.commands import HostCommands
 from app.service.data_logger import DataLogger
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
+from app.service.setpoints import LocalSource, Setpoint, SetpointAck
 from app.service.verbs import RobotInfo, SetParams, Verb
+from behaviors.runner import BehaviorRunner
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
 from controller.core.layer import Params
 from controller.core.loop import Snapshot
@@ -92,6 +96,8 @@ class Published:
     stats: dict[str, Any]
     chain: str  # "kf -> rmfo -> ..."
     published_at_monotonic_s: float
+    runs: tuple = ()  # behaviors.runner.RunStatus of the runs kept, oldest first
+    setpoint_acks: dict = dataclasses.field(default_factory=dict)  # point -> SetpointAck of its newest setpoint
 
 
 #: Owners of parameters: a layer name, or "ic:<limb>" for one hand's impedance.
@@ -104,9 +110,11 @@ class RobotHost:
 
     def __init__(self, scene: str = "default", dt_control_s: float = 0.005, speed: float | None = 1.0,
                  logger: DataLogger | None = None, start_auto_balancer: bool = True,
-                 params: Mapping[str, Mapping[str, Any]] | None = None) -> None:
+                 params: Mapping[str, Mapping[str, Any]] | None = None, setpoints=None) -> None:
         """`params`: a parameter document {owner: {field: value}} (as GET /api/params gives) the chain starts
-        with, and starts with again after every reset; checked as a PUT of it would be (InvalidArgument)."""
+        with, and starts with again after every reset; checked as a PUT of it would be (InvalidArgument).
+        `setpoints`: where the operator's streamed setpoints come from (a `poll()` giving the newest table or
+        None; default: a LocalSource for a console in this process)."""
         self.scene = scene
         self.dt_control_s = dt_control_s
         self.logger = logger if logger is not None else DataLogger(12000)
@@ -120,7 +128,51 @@ class RobotHost:
         self.observation = Observation(self.loop.snapshot, self.plant.ground_truth())
         self.loop.speed = speed
         self.startup_params = {owner: dict(fields) for owner, fields in (params or {}).items()}
+        self.setpoints = setpoints if setpoints is not None else LocalSource()
+        self.setpoint_acks: dict[str, SetpointAck] = {}
+        self._info: RobotInfo | None = None
+        self._runs_cache: tuple[int, tuple] = (-1, ())
+        self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
+        self._install_before_tick()
         self._load_startup_params()
+
+    # ---- behaviours and the operator's setpoints, at every tick boundary ----------------------------------
+    def _install_before_tick(self) -> None:
+        """Behaviours and setpoints step at the loop's tick boundaries (again after a reset's new chain)."""
+        self.loop.before_tick = self._before_tick
+
+    def _operation_layer(self):
+        return self.loop.chain.layers.get("op")
+
+    def _before_tick(self, time_s: float) -> None:
+        table = self.setpoints.poll()
+        if table:
+            self.apply_setpoints(table, time_s)
+        self.runner.step(time_s)
+
+    def apply_setpoints(self, table: Mapping[str, Setpoint], time_s: float | None = None) -> list[SetpointAck]:
+        """Hand each point's setpoint that is newer than the last one applied to the operation layer,
+        stamped with the control time `time_s` (default: now, at this boundary)."""
+        op = self._operation_layer()
+        if op is None:
+            raise NotFound(f"the chain has no operation layer ('op'); present: {self.loop.chain.order()}")
+        time_s = float(self.loop.plant.time_s if time_s is None else time_s)
+        tick = int(self.loop.tick_count)
+        acks = []
+        for point, sp in table.items():
+            last = self.setpoint_acks.get(point)
+            if last is not None and sp.seq and sp.seq <= last.seq:
+                continue
+            op.set_motion(point, sp.twist(), time_s, sp.walk())
+            self.setpoint_acks[point] = ack = SetpointAck(point, sp.seq, tick, time_s)
+            acks.append(ack)
+        return acks
+
+    def cached_info(self) -> RobotInfo:
+        """info(), kept until the next reset or parameter change (for checks inside the loop)."""
+        if self._info is None:
+            self._info = self.info()
+        return self._info
 
     def __repr__(self) -> str:
         return f"RobotHost(scene={self.scene!r}, speed={self.loop.speed}, generation={self.generation})"
@@ -209,6 +261,7 @@ class RobotHost:
         return p
 
     def set_params(self, owner: str, params: Params) -> None:
+        self._info = None
         if _is_limb_owner(owner):
             self.layer("ic").set_params(owner[3:], params)
         else:
@@ -222,7 +275,10 @@ class RobotHost:
             raise InvalidArgument("scene", f"unknown scene {scene!r}; available scenes: "
                                            f"{', '.join(available_scenes())}")
         plant = MujocoPlant(scene)
+        self.runner.cancel_all("cancelled: the simulation was reset")
         self.loop.replace_plant(plant)
+        self._info = None
+        self._install_before_tick()
         self.plant = plant
         self.observation = Observation(self.loop.snapshot, plant.ground_truth())
         self.scene = scene
@@ -268,4 +324,11 @@ class RobotHost:
         return Published(seq=self._seq, generation=self.generation, snapshot=obs.snapshot, truth=obs.truth,
                          timing=self.timing(),
                          scene=self.scene, speed=loop.speed, stats=self.stats.summary(),
-                         chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic())
+                         chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic(),
+                         runs=self._runs(), setpoint_acks=dict(self.setpoint_acks))
+
+    def _runs(self) -> tuple:
+        version = self.runner.version
+        if self._runs_cache[0] != version:
+            self._runs_cache = (version, self.runner.runs())
+        return self._runs_cache[1]

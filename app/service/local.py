@@ -9,6 +9,7 @@ import numpy as np
 
 from app.service.errors import ServiceError
 from app.service.host import EstopAck, Published, RobotHost
+from app.service.setpoints import Setpoint, SetpointTable
 from app.service.verbs import Reset, RobotInfo, Verb
 
 
@@ -22,6 +23,7 @@ class LocalRobot:
         self.exit_reason: str | None = None
         self.priority = "default"
         self._published: Published | None = None
+        self._setpoints = SetpointTable(self.host.setpoints.put)
 
     def __repr__(self) -> str:
         return f"LocalRobot({self.host!r}, running={self.loop.running})"
@@ -97,6 +99,16 @@ class LocalRobot:
             fut.set_exception(exc)
         return fut
 
+    def put_setpoint(self, setpoint: Setpoint) -> Setpoint:
+        """The operator's newest setpoint for a point (latest value: the loop takes it at its next boundary;
+        without the loop thread, at once). Returns it numbered."""
+        numbered = self._setpoints.put(setpoint)
+        if not self.loop.running:
+            table = self.host.setpoints.poll()
+            if table:
+                self.host.apply_setpoints(table)
+        return numbered
+
     def estop(self, timeout_s: float = 1.0) -> EstopAck:
         if self.loop.running:
             return self.loop.call(self.host.engage_estop, timeout_s=timeout_s)
@@ -105,7 +117,8 @@ class LocalRobot:
     def latest(self) -> Published:
         snap = self.loop.snapshot
         cached = self._published
-        if cached is None or cached.snapshot is not snap or cached.generation != self.host.generation:
+        if (cached is None or cached.snapshot is not snap or cached.generation != self.host.generation
+                or cached.setpoint_acks != self.host.setpoint_acks or cached.runs is not self.host._runs()):
             cached = self._published = self.host.publish()
         return cached
 

@@ -26,6 +26,7 @@ from app.service.board import Board, attach
 from app.service.data_logger import DataLogger
 from app.service.errors import ServiceError, Unavailable
 from app.service.host import EstopAck, Published, RobotHost
+from app.service.setpoints import BOARD_BYTES, BoardSource, Setpoint, SetpointTable
 from app.service.verbs import GetInfo, Reset, RobotInfo, Shutdown, Verb
 
 log = logging.getLogger(__name__)
@@ -75,7 +76,7 @@ def _raise_priority() -> str:
 
 
 def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.Connection, board_name: str,
-               log_name: str) -> None:
+               log_name: str, setpoints_name: str | None = None) -> None:
     """The robot process's main: build, announce, tick until Shutdown, publish the last snapshot."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the console decides
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
@@ -83,9 +84,10 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     board = Board(name=board_name)
     log_shm = attach(log_name)
     storage = np.ndarray(DataLogger.storage_shape(cfg.log_length), dtype=np.float64, buffer=log_shm.buf)
+    setpoints = None if setpoints_name is None else BoardSource(Board(name=setpoints_name))
     try:
         host = RobotHost(cfg.scene, cfg.dt_control_s, cfg.speed, logger=DataLogger(cfg.log_length, storage),
-                         params=cfg.params)
+                         params=cfg.params, setpoints=setpoints)
     except ServiceError as exc:  # e.g. a bad parameter document: the console says which field
         cmd.send(("failed", str(exc)))
         return
@@ -188,6 +190,9 @@ class RobotProcess:
         cfg = self.config
         ctx = multiprocessing.get_context("spawn")
         self.board = Board()
+        # the operator's streamed setpoints: this side writes the newest table, the robot reads it each tick
+        self.setpoints_board = Board(size=BOARD_BYTES)
+        self._setpoints = SetpointTable(self.setpoints_board.put)
         from multiprocessing import shared_memory
 
         shape = DataLogger.storage_shape(cfg.log_length)
@@ -198,7 +203,8 @@ class RobotProcess:
         estop_here, estop_there = ctx.Pipe(duplex=True)
         self._cmd, self._estop_conn = cmd_here, estop_here
         self.process = ctx.Process(target=robot_main, name="hrp2-robot",
-                                   args=(cfg, cmd_there, estop_there, self.board.name, self._log_shm.name))
+                                   args=(cfg, cmd_there, estop_there, self.board.name, self._log_shm.name,
+                                         self.setpoints_board.name))
         # one BLAS/OpenMP thread in the robot: its matrices are tiny, and idle worker threads spin on the
         # other core (measured 3-6 % of it) where the console answers requests
         saved = {k: os.environ.get(k) for k in _SINGLE_THREADED}
@@ -319,6 +325,12 @@ class RobotProcess:
     def latest(self) -> Published | None:
         return None if self.board is None else self.board.get()
 
+    def put_setpoint(self, setpoint: Setpoint) -> Setpoint:
+        """The operator's newest setpoint for a point, on the latest-value board (no queue, no reply: the
+        robot's acknowledgement comes back in the published snapshot's setpoint_acks)."""
+        self._require_alive()
+        return self._setpoints.put(setpoint)
+
     def info(self) -> RobotInfo:
         return self._info
 
@@ -353,6 +365,9 @@ class RobotProcess:
         if self.board is not None:
             self.board.close()
             self.board = None
+        if getattr(self, "setpoints_board", None) is not None:
+            self.setpoints_board.close()
+            self.setpoints_board = None
         if self._log_shm is not None:
             self._log_storage = None
             try:

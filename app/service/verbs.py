@@ -130,7 +130,8 @@ class ReleaseMotion(Verb):
 # ---- walking (hrpsys AutoBalancerService) --------------------------------------------------------------
 @dataclass(frozen=True)
 class GoPos(Verb):
-    """Walk to (x, y, theta) relative to the current feet's mid-coords."""
+    """Walk to (x, y, theta) relative to the current feet's mid-coords; while walking (hrpsys), relative to
+    the feet's mid-coords where the walk began, replacing the rest of the plan from the next free footstep."""
 
     name = "go_pos"
     motion = True
@@ -144,9 +145,16 @@ class GoPos(Verb):
         _bounded("theta_deg", self.theta_rad, -MAX_GO_POS_RAD, MAX_GO_POS_RAD, "deg", _deg)
 
     def run(self, host: RobotHost) -> str:
-        n = host.layer("abc").go_pos(self.x_m, self.y_m, self.theta_rad)
-        return (f"walking to ({self.x_m:g} m, {self.y_m:g} m, {math.degrees(self.theta_rad):g} deg) "
-                f"in {n} footsteps")
+        abc = host.layer("abc")
+        was_walking = abc.gait.walking
+        n = abc.go_pos(self.x_m, self.y_m, self.theta_rad)
+        goal = f"({self.x_m:g} m, {self.y_m:g} m, {math.degrees(self.theta_rad):g} deg)"
+        if not was_walking:
+            return f"walking to {goal} in {n} footsteps"
+        if n == 0:
+            return (f"re-planned: walking to {goal} relative to where this walk began, from where its last "
+                    "step lands")
+        return f"re-planned: walking to {goal} relative to where this walk began; {n} footsteps to go"
 
 
 @dataclass(frozen=True)
@@ -690,3 +698,104 @@ class Call(Verb):
 
     def run(self, host: RobotHost) -> Any:
         return self.fn(host)
+
+
+# ---- the operation layer and the behaviours ([OP] Eq. 5) ----------------------------------------------------
+@dataclass(frozen=True)
+class SetOperatorVelocity(Verb):
+    """The operator's velocity for one operational point (through the command queue; the streamed path is
+    app.service.setpoints), stamped with the control time of the boundary it is applied at."""
+
+    name = "set_operator_velocity"
+    motion = True
+    setpoint: Any  # app.service.setpoints.Setpoint, checked where it was made
+
+    def run(self, host: RobotHost):
+        return host.apply_setpoints({self.setpoint.point: self.setpoint})[0]
+
+
+@dataclass(frozen=True)
+class ResetOperationTargets(Verb):
+    """The operation layer's targets back onto the current reference (nothing offset any more)."""
+
+    name = "reset_operation_targets"
+    motion = True
+
+    def run(self, host: RobotHost) -> str:
+        host.layer("op").reset_targets()
+        return "operation targets back on the reference"
+
+
+def _behavior_argument(exc: InvalidCommand) -> InvalidArgument:
+    """An InvalidCommand from behaviors.registry ("field: message") as the service's field-named error."""
+    field_name, sep, message = str(exc).partition(": ")
+    return InvalidArgument(field_name if sep and " " not in field_name else "params", message if sep else str(exc))
+
+
+@dataclass(frozen=True)
+class RunBehavior(Verb):
+    """Start a behaviour with parameters (plain JSON values); the result is its run id."""
+
+    name = "run_behavior"
+    motion = True
+    behavior: str
+    params: tuple[tuple[str, Any], ...] = ()
+
+    def __post_init__(self) -> None:
+        self.build()  # checked where it is made: the field-named errors come back before anything is sent
+
+    def build(self):
+        from behaviors.registry import BEHAVIORS, make
+
+        if self.behavior not in BEHAVIORS:
+            raise NotFound(f"unknown behaviour {self.behavior!r}; valid: {', '.join(sorted(BEHAVIORS))}")
+        try:
+            return make(self.behavior, dict(self.params))
+        except InvalidCommand as exc:
+            raise _behavior_argument(exc) from None
+
+    def run(self, host: RobotHost) -> int:
+        return host.runner.run(self.build(), host.loop.plant.time_s)
+
+
+@dataclass(frozen=True)
+class CancelRun(Verb):
+    name = "cancel_run"
+    run_id: int
+
+    def run(self, host: RobotHost):
+        return host.runner.cancel(self.run_id)
+
+
+@dataclass(frozen=True)
+class GetRun(Verb):
+    name = "get_run"
+    run_id: int
+
+    def run(self, host: RobotHost):
+        return host.runner.get(self.run_id)
+
+
+@dataclass(frozen=True)
+class ListRuns(Verb):
+    name = "list_runs"
+
+    def run(self, host: RobotHost):
+        return host.runner.runs()
+
+
+@dataclass(frozen=True)
+class ListBehaviors(Verb):
+    """Every behaviour with its parameters' types, units and ranges (from each behaviour's Params class)."""
+
+    name = "list_behaviors"
+
+    def run(self, host: RobotHost) -> list[dict]:
+        return list_behaviors()
+
+
+def list_behaviors() -> list[dict]:
+    from behaviors.base import describe
+    from behaviors.registry import BEHAVIORS
+
+    return [describe(cls) for _, cls in sorted(BEHAVIORS.items())]

@@ -13,10 +13,10 @@ from controller.core.layer import Layer
 from controller.core.types import Reference, TickContext
 
 #: The order of the real-time layers ([MLC] Fig. 3, hrpsys getJointAngleControllerList).
-#: kf: KalmanFilter, rmfo: RemoveForceOffset, seq: SequencePlayer, es: EmergencyStopper,
-#: ic: ImpedanceController, abc: AutoBalancer, st: Stabilizer, co: CollisionDetector,
+#: kf: KalmanFilter, rmfo: RemoveForceOffset, seq: SequencePlayer, op: OperationLayer ([OP] Eq. 5),
+#: es: EmergencyStopper, ic: ImpedanceController, abc: AutoBalancer, st: Stabilizer, co: CollisionDetector,
 #: hes: HardEmergencyStopper, el: SoftErrorLimiter. Layers not built yet are skipped.
-CHAIN_ORDER: tuple[str, ...] = ("kf", "rmfo", "seq", "es", "ic", "abc", "st", "co", "hes", "el")
+CHAIN_ORDER: tuple[str, ...] = ("kf", "rmfo", "seq", "op", "es", "ic", "abc", "st", "co", "hes", "el")
 
 _TIMING_WINDOW = 4096  # ticks kept per layer for p50 / p99
 

@@ -65,11 +65,13 @@ def described(doc: str, unit: str | None = None) -> dict[str, str]:
 
 
 def plain(value: Any) -> Any:
-    """A status value as JSON-shaped Python: dataclasses to dicts, tuples to lists (no deep copies of leaves)."""
+    """A status value as JSON-shaped Python: dataclasses and dicts to dicts, tuples to lists (leaves not copied)."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return {f.name: plain(getattr(value, f.name)) for f in dataclasses.fields(value)}
     if isinstance(value, (tuple, list)):
         return [plain(v) for v in value]
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items()}
     return value
 
 

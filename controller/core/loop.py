@@ -90,7 +90,8 @@ class ControlLoop:
                  dt_control_s: float = 0.005,
                  state_estimator: StateEstimatorFn | None = None,
                  on_snapshot: Callable[[Snapshot], None] | None = None,
-                 fall_detector_factory: Callable[[], FallDetector] | None = None) -> None:
+                 fall_detector_factory: Callable[[], FallDetector] | None = None,
+                 before_tick: Callable[[float], None] | None = None) -> None:
         if dt_control_s <= 0:
             raise InvalidCommand(f"dt_control_s must be > 0, got {dt_control_s}")
         self._chain_factory = chain_factory
@@ -106,6 +107,9 @@ class ControlLoop:
         self.lateness = LatenessMeter()
         self.nap_s = 0.0  # [s] run_paced waits for the next tick in naps this long (0: one sleep)
         self._fall_detector_factory = fall_detector_factory
+        #: called with the control time [s] at the start of every step(), after the command queue is drained
+        #: (behaviours and the operator's streamed setpoints step here); an exception is logged, never fatal
+        self.before_tick: Callable[[float], None] | None = before_tick
         self._attach(plant)
 
     # ---- construction / reset -------------------------------------------------------------
@@ -164,6 +168,12 @@ class ControlLoop:
     def step(self) -> Snapshot:
         t_start = time.perf_counter()
         self._drain()
+        hook = self.before_tick
+        if hook is not None:
+            try:
+                hook(self.plant.time_s)
+            except Exception:  # noqa: BLE001 - a behaviour or a setpoint never kills the loop
+                log.exception("before_tick failed at t=%.3f s", self.plant.time_s)
         sensors = self.plant.read()
         est = Estimate.for_tick()
         ctx = TickContext(tick=self.tick_count, time_s=sensors.time_s, dt_s=self.dt_control_s,

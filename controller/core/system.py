@@ -14,6 +14,7 @@ from controller.core.layer import Params
 from controller.core.loop import ControlLoop, Plant, Snapshot
 from controller.core.types import Reference
 from controller.kinematics.model import RobotKinematics
+from controller.kinematics.operation_ik import OperationIK
 from controller.kinematics.rotations import rpy_to_matrix
 from controller.layers.auto_balancer import AutoBalancer
 from controller.layers.collision_detector import CollisionDetector
@@ -21,6 +22,7 @@ from controller.layers.emergency_stopper import EmergencyStopper
 from controller.layers.hard_emergency_stopper import HardEmergencyStopper
 from controller.layers.impedance_controller import ImpedanceController
 from controller.layers.kalman_filter import AttitudeKalmanFilter, KalmanFilter
+from controller.layers.operation import OperationLayer
 from controller.layers.remove_force_offset import RemoveForceOffset
 from controller.layers.sequence_player import SequencePlayer
 from controller.layers.soft_error_limiter import SoftErrorLimiter
@@ -30,8 +32,8 @@ from robot.sensors import Sensors
 
 def layer_classes() -> dict[str, type]:
     """Layer name -> class of every layer this system builds (chain order)."""
-    classes = (KalmanFilter, RemoveForceOffset, SequencePlayer, EmergencyStopper, ImpedanceController, AutoBalancer,
-               Stabilizer, CollisionDetector, HardEmergencyStopper, SoftErrorLimiter)
+    classes = (KalmanFilter, RemoveForceOffset, SequencePlayer, OperationLayer, EmergencyStopper, ImpedanceController,
+               AutoBalancer, Stabilizer, CollisionDetector, HardEmergencyStopper, SoftErrorLimiter)
     return {cls.name: cls for cls in classes}
 
 
@@ -75,6 +77,7 @@ class ControllerSystem:
         # separate kinematics objects: each user updates its own pinocchio data
         self._kin_est = RobotKinematics()
         self._kin_seq = RobotKinematics()
+        self._operation_ik = OperationIK(upper_body=True)  # placo's model built once (~0.1 s), reset per chain
         # the one estimator of the actual COG and ZMP, new with every chain: the Stabilizer runs it, the
         # loop only when no layer did (a chain without the Stabilizer)
         self.estimator = ActualStateEstimator(self._kin_est)
@@ -92,6 +95,7 @@ class ControllerSystem:
             KalmanFilter(rpy0=(tilt[0], tilt[1], 0.0)),
             RemoveForceOffset(RobotKinematics()),
             SequencePlayer(ref0, dt_s, ik_solver=self._solve_limb_ik),
+            OperationLayer(dt_s, ik=self._operation_ik),
             EmergencyStopper(dt_s),
             ImpedanceController(),
             AutoBalancer(ref0, dt_s, active=self.start_auto_balancer),

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from controller.operation.points import WalkCommand
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
@@ -28,6 +29,8 @@ class GaitState:
     cog_vel_world: np.ndarray  # (3,) [m/s]
     cog_pc_world: np.ndarray  # (3,) preview-control COG before the hand-force offset (Eq. 6) [m]
     cog_acc_world: np.ndarray | None = None  # (3,) planned COG acceleration [m/s^2]
+    base_pos_world: np.ndarray | None = None  # (3,) BODY where the AutoBalancer put it this tick [m]
+    base_rpy_rad: np.ndarray | None = None  # (3,) and its roll, pitch, yaw [rad] (op places the upper body on it)
 
 
 @dataclass(frozen=True, slots=True)
@@ -144,6 +147,10 @@ class Ports:
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
+    gait: GaitState | None = None  # abc: this tick's gait state (soles, contacts, COG); op reads the feet frame from it
+    walk_command: WalkCommand | None = None  # op: the walking point, read by abc; None: not driven this tick
+    motion_stopped: bool = False  # es: it holds or reverts the motion (op freezes its integration)
+    motion_reverted_to_s: float | None = None  # es: while stopped, the plan time its revert goes back to [s]
 
 
 @dataclass(slots=True)

@@ -14,14 +14,15 @@ import pinocchio as pin
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
 from controller.balance.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.core.constants import GRAVITY_M_S2
-from controller.core.errors import InvalidState
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
 from controller.core.types import GaitState, Reference, TickContext, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rpy_to_rows
-from controller.walking.footsteps import StepParams
+from controller.operation.points import WalkCommand
+from controller.walking.footsteps import FootstepParams, StepParams, StrideLimits
 from controller.walking.gait_generator import GaitGenerator, GaitParams
 from controller.walking.preview_control import PreviewController, PreviewControlParams
 from controller.walking.toe_heel import ToeHeelParams
@@ -32,14 +33,80 @@ REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this f
 FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
 #: [N] a swing foot reading more has touched down (the Stabilizer's contact threshold)
 SWING_FOOT_LOADED_N = 25.0
+#: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it
+MAX_STRIDE_RANGE_M = (0.0, 0.3)
+#: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
+#: edges at 0.19 m) keep >= 2 cm apart at the low end
+FOOT_DISTANCE_RANGE_M = (0.14, 0.30)
+#: [m/s], [rad/s] the walking point's velocity bounds (the goVelocity verb's); the stride limits clamp the steps
+WALK_VELOCITY_LIMIT_M_S = 0.5
+WALK_VELOCITY_LIMIT_RAD_S = math.radians(45.0)
+
+
+def check_walk_command(cmd: WalkCommand) -> None:
+    """Raise InvalidCommand naming the field and the allowed range when the walking point's command is not
+    one the AutoBalancer takes (what the operation layer and the verbs check before it reaches the loop)."""
+    for name, value, limit, unit in (("vx_m_s", cmd.vx_m_s, WALK_VELOCITY_LIMIT_M_S, "m/s"),
+                                     ("vy_m_s", cmd.vy_m_s, WALK_VELOCITY_LIMIT_M_S, "m/s"),
+                                     ("vtheta_rad_s", cmd.vtheta_rad_s, WALK_VELOCITY_LIMIT_RAD_S, "rad/s")):
+        if not (math.isfinite(value) and abs(value) <= limit):
+            raise InvalidCommand(f"walk.{name}={value!r} [{unit}]; allowed: [{-limit:g}, {limit:g}]")
+    for name, value, (lo, hi) in (("max_stride_m", cmd.max_stride_m, MAX_STRIDE_RANGE_M),
+                                  ("foot_distance_m", cmd.foot_distance_m, FOOT_DISTANCE_RANGE_M)):
+        if value is not None and not (math.isfinite(value) and lo <= value <= hi):
+            raise InvalidCommand(f"walk.{name}={value!r} [m]; allowed: [{lo:g}, {hi:g}] or null (the gait's own)")
+
+
+def _walk_command_valid(cmd: WalkCommand) -> bool:
+    try:
+        check_walk_command(cmd)
+    except InvalidCommand:
+        return False
+    return True
 
 
 @dataclass(frozen=True)
 class AutoBalancerParams(Params):
+    """The AutoBalancer's parameters, the gait generator's among them (hrpsys setGaitGeneratorParam): a change
+    applies to the footsteps planned from then on (a velocity walk's at its next mid-step check)."""
+
     transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
     use_hand_force_offset: bool = field(default=True, metadata={"unit": "-"})
     preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6})
     preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0})
+    # gait (hrpsys default_step_time, rounded to whole control ticks; default_step_height; toe/heel angles)
+    step_time_s: float = field(default=1.0, metadata={"unit": "s", "min": 0.4, "max": 5.0})
+    step_height_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.2})
+    toe_angle_rad: float = field(default=0.0, metadata={"unit": "rad", "min": 0.0, "max": 0.6})
+    heel_angle_rad: float = field(default=0.0, metadata={"unit": "rad", "min": 0.0, "max": 0.6})
+    # share of each step's time in double support at its start and at its end (hrpsys default_double_support_ratio_*)
+    double_support_ratio_before: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
+    double_support_ratio_after: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
+    # largest feet mid-coords displacement per step (hrpsys stride_parameter); "inside": towards the support foot
+    stride_fwd_x_m: float = field(default=0.15, metadata={"unit": "m", "min": 0.0, "max": 0.4})
+    stride_bwd_x_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.3})
+    stride_outside_y_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.3})
+    stride_inside_y_m: float = field(default=0.025, metadata={"unit": "m", "min": 0.0, "max": 0.3})
+    stride_outside_th_rad: float = field(default=math.radians(10.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
+    stride_inside_th_rad: float = field(default=math.radians(5.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
+    # distance between the feet's centres when walking (hrpsys leg_default_translate_pos, both legs)
+    foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": 0.14, "max": 0.30})
+
+    def gait_params(self, base: GaitParams | None = None) -> GaitParams:
+        return (base or GaitParams()).replaced(double_support_ratio_before=self.double_support_ratio_before,
+                                               double_support_ratio_after=self.double_support_ratio_after)
+
+    def footstep_params(self, dt_s: float, base: FootstepParams | None = None) -> FootstepParams:
+        step_time = max(1, round(self.step_time_s / dt_s)) * dt_s  # a whole number of control ticks
+        return (base or FootstepParams()).replaced(step_time_s=step_time, step_height_m=self.step_height_m,
+                                                   toe_angle_rad=self.toe_angle_rad,
+                                                   heel_angle_rad=self.heel_angle_rad,
+                                                   leg_offset_y_m=0.5 * self.foot_distance_m)
+
+    def stride_limits(self) -> StrideLimits:
+        return StrideLimits(fwd_x_m=self.stride_fwd_x_m, outside_y_m=self.stride_outside_y_m,
+                            outside_th_rad=self.stride_outside_th_rad, bwd_x_m=self.stride_bwd_x_m,
+                            inside_y_m=self.stride_inside_y_m, inside_th_rad=self.stride_inside_th_rad)
 
 
 @dataclass(frozen=True, slots=True)
@@ -62,6 +129,8 @@ class AutoBalancerStatus(Status):
     walking_stop: bool = field(metadata=described("the emergency walking stop is in force (stepping in place)"))
     has_ik_failed: bool = field(metadata=described("the whole-body IK could not reach its targets this tick"))
     footsteps: tuple[FootstepStatus, ...] = field(metadata=described("the footsteps not landed yet"))
+    walk_point: str = field(default="idle", metadata=described(
+        "the walking point (Ports.walk_command): 'idle', 'walking' (abc walks at it), or 'ignored: <why>'"))
 
 
 class AutoBalancer(Layer):
@@ -84,7 +153,9 @@ class AutoBalancer(Layer):
         T_r, T_l = (_homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
         # toe and heel edges of HRP-2's sole (the model's sole box), not HRP2-JSKNT's 0.137 / -0.10
         toe_heel = ToeHeelParams(toe_offset_x_m=HRP2_RIGHT_SOLE.front_m, heel_offset_x_m=-HRP2_RIGHT_SOLE.rear_m)
-        self.gait = GaitGenerator(GaitParams(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l, toe_heel=toe_heel)
+        p = self.params
+        self.gait = GaitGenerator(p.gait_params(), dt_s, T_world_rfoot=T_r, T_world_lfoot=T_l, toe_heel=toe_heel,
+                                  footstep_params=p.footstep_params(dt_s), stride_limits=p.stride_limits())
         com = self.kin.com_world()
         ground_z = 0.5 * (T_r[2, 3] + T_l[2, 3])
         self.com_height_m = float(com[2] - ground_z)
@@ -104,6 +175,9 @@ class AutoBalancer(Layer):
         self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
         self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
         self._holding = False  # the hard e-stop holds the chain
+        self._port_walking = False  # the walk in progress is driven by the walking point (Ports.walk_command)
+        self._walk_armed = True  # False after an e-stop or walking stop, until the walking point reads zero
+        self._walk_point = "idle"
         if active:
             self.start()
 
@@ -121,7 +195,12 @@ class AutoBalancer(Layer):
         self._blend = Transition(self._weight, 0.0, self.params.transition_time_s, "min_jerk")
 
     def set_params(self, params: AutoBalancerParams) -> None:
+        """New parameters; the gait's apply to the footsteps planned from now on (hrpsys setGaitGeneratorParam)."""
         self.params = params
+        gait = self.gait
+        gait.configure(params=params.gait_params(gait.params),
+                       footstep_params=params.footstep_params(self.dt_s, gait.footstep_params),
+                       stride_limits=params.stride_limits())
 
     @property
     def walking_stop(self) -> bool:
@@ -133,12 +212,23 @@ class AutoBalancer(Layer):
             raise InvalidState(f"{what}: the AutoBalancer must be running (start it first)")
 
     def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> int:
-        """hrpsys goPos relative to the current feet mid-coords; returns the number of footsteps."""
+        """hrpsys goPos relative to the current feet mid-coords; returns the number of footsteps to go.
+
+        While walking it replaces the rest of the plan (hrpsys): the goal is then relative to the feet's
+        mid-coords where this walk began (`gait.walk_origin`), the new steps start at the next free footstep,
+        and a velocity walk (the walking point's too) ends in it. Returns 0 when the walk is in its last
+        step: the new goal is then walked to from where the robot stands at its end."""
         self._require_active("goPos")
-        if self.gait.walking:
-            raise InvalidState("goPos while walking: stop first (goStop) or use goVelocity")
+        if self.walking_stop:
+            raise InvalidState("goPos: the emergency walking stop is in force (stepping in place); "
+                               "goPos again once the robot stands")
+        was_walking = self.gait.walking
+        steps = self.gait.go_pos(x_m, y_m, theta_rad)
         self._walking_stop_requested = False
-        return len(self.gait.go_pos(x_m, y_m, theta_rad))
+        self._port_walking = False  # the footsteps win; the walking point may drive the next walk
+        if not was_walking:
+            return len(steps)
+        return len(self.gait.remaining_footsteps()) if steps else 0
 
     def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
         self._require_active("goVelocity")
@@ -149,9 +239,55 @@ class AutoBalancer(Layer):
         self.gait.go_stop()
 
     def emergency_stop_walking(self) -> None:
-        """Remaining footsteps replaced so the robot stops in place (manipulation is left alone)."""
+        """Remaining footsteps replaced so the robot stops in place (manipulation is left alone). The walking
+        point is ignored from now until it reads zero (a held stick does not walk on after the stop)."""
         self.gait.emergency_stop()
         self._walking_stop_requested = True
+        self._disarm_walk_point()
+
+    def _disarm_walk_point(self) -> None:
+        self._port_walking = False
+        self._walk_armed = False
+
+    def _walk_at(self, cmd: WalkCommand | None) -> None:
+        """The walking point this tick (hrpsys goVelocity each tick): a non-zero command walks at it, the
+        velocity and step parameters taken by the velocity steps planned at the next mid-step check (the
+        gait goes on); zero or None after a walk it drove ends that walk as goStop does. Ignored (said in
+        status().walk_point) under the emergency walking stop, before the AutoBalancer runs, while a
+        footstep list is walked, while a stop from rest after the e-stop plays, and, after a stop, until it
+        has read zero once. Never raises: an invalid command is ignored too."""
+        if cmd is None or cmd.is_zero:
+            self._walk_armed = True
+            if self._port_walking:
+                self._port_walking = False
+                self.gait.go_stop()
+            self._walk_point = "idle"
+            return
+        why = self._walk_point_refusal(cmd)
+        if why is not None:
+            self._walk_point = why
+            return
+        gait = self.gait
+        gait.set_velocity_step(cmd.max_stride_m, cmd.foot_distance_m)
+        gait.go_velocity(cmd.vx_m_s, cmd.vy_m_s, cmd.vtheta_rad_s)
+        self._walking_stop_requested = False
+        self._port_walking = True
+        self._walk_point = "walking"
+
+    def _walk_point_refusal(self, cmd: WalkCommand) -> str | None:
+        if not self._walk_armed:
+            return "ignored: stopped; the walking point must read zero once before walking again"
+        if self.walking_stop:
+            return "ignored: the emergency walking stop is in force"
+        if not self.active or self._blend is not None:
+            return "ignored: the AutoBalancer is not running"
+        gait = self.gait
+        if gait.walking and gait.velocity_mode not in ("walking", "ending"):
+            return ("ignored: the walk is ending after the e-stop" if gait.stopping_from_rest
+                    else "ignored: walking a footstep list (goPos / setFootSteps)")
+        if not _walk_command_valid(cmd):
+            return "ignored: out of range (see check_walk_command)"
+        return None
 
     def set_footsteps(self, footsteps: list[tuple], step_params: list[StepParams | None] | None = None) -> int:
         """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
@@ -198,6 +334,7 @@ class AutoBalancer(Layer):
             out = self._hold()
             if out.gait is not None:
                 ctx.ports.cog_acc_world = out.gait.cog_acc_world
+            ctx.ports.gait = out.gait
             return out
         if self._holding:
             self._resume(ctx)
@@ -208,6 +345,11 @@ class AutoBalancer(Layer):
         if self._weight <= 0.0 and not self.active:
             self.last_gait = None
             return ref
+        cmd = ctx.ports.walk_command
+        if cmd is not None or self._port_walking or not self._walk_armed:
+            self._walk_at(cmd)
+        elif self._walk_point != "idle":
+            self._walk_point = "idle"
         future = self.gait.zmp_preview(self.preview.preview_length)
         cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
         g = self.gait.tick()
@@ -227,6 +369,9 @@ class AutoBalancer(Layer):
         com_z = float(res.com_world[2])
         cog_abc = cog_abc_xy.tolist() if isinstance(cog_abc_xy, np.ndarray) else cog_abc_xy
         cog_pc = cog_xy.tolist() if isinstance(cog_xy, np.ndarray) else cog_xy
+        w = self._weight
+        q = res.q_rad if w >= 1.0 else (1.0 - w) * ref.q_rad + w * res.q_rad
+        base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         gait = GaitState(
             walking=g.walking, support=g.support, contact=g.contact,
             p_rsole_world=g.p_rfoot_world, R_rsole_world=g.R_rfoot_world,
@@ -235,16 +380,15 @@ class AutoBalancer(Layer):
             cog_vel_world=np.array((cog_vel_xy[0], cog_vel_xy[1], 0.0)),
             cog_pc_world=np.array((cog_pc[0], cog_pc[1], com_z)),
             cog_acc_world=np.array((cog_acc_xy[0], cog_acc_xy[1], 0.0)),
+            base_pos_world=base, base_rpy_rad=base_rpy,
         )
         self.last_gait = gait
-        w = self._weight
-        q = res.q_rad if w >= 1.0 else (1.0 - w) * ref.q_rad + w * res.q_rad
-        base = res.base_pos_world if w >= 1.0 else (1.0 - w) * ref.base_pos_world + w * res.base_pos_world
         zmp_base = R_body.T @ (zmp - base)
         # all fresh arrays of this tick: frozen in place rather than copied
         self._last_out = ref.with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
                                          gait=gait)
         ctx.ports.cog_acc_world = gait.cog_acc_world
+        ctx.ports.gait = gait
         return self._last_out
 
     def _resume(self, ctx: TickContext) -> None:
@@ -264,6 +408,8 @@ class AutoBalancer(Layer):
         foot goes down, the ZMP comes to the feet's middle), played after the release."""
         if not self._holding:
             self._holding = True
+            self._disarm_walk_point()
+            self._walk_point = "ignored: the hard e-stop holds"
             if self.gait.walking:
                 self._walking_stop_requested = True
                 self.gait.stop_from_rest(self._rest_zmp_xy(self._last_out.gait))
@@ -280,7 +426,8 @@ class AutoBalancer(Layer):
         return AutoBalancerStatus(enabled=self.enabled, active=self.active, weight=round(self._weight, 4),
                                   walking=bool(g.walking) if g else False, support=g.support if g else "both",
                                   walking_stop=self.walking_stop, has_ik_failed=self.has_ik_failed,
-                                  footsteps=self._status_footsteps() if self.gait.walking else ())
+                                  footsteps=self._status_footsteps() if self.gait.walking else (),
+                                  walk_point=self._walk_point)
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes

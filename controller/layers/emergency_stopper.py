@@ -167,6 +167,9 @@ class EmergencyStopper(Layer):
         else:
             x = x_seq
         self._prev_out, self._last_out = self._last_out, x
+        if self.stopped:  # the layers before (op) freeze their motion and know where the revert went back to
+            ctx.ports.motion_stopped = True
+            ctx.ports.motion_reverted_to_s = self.reverter.t_emer - self.params.t1_s
         return ref if x is x_seq else unpack(ref, x)
 
     def status(self) -> EmergencyStopperStatus:

@@ -21,8 +21,10 @@ __all__ = [
     "StepParams",
     "StrideLimits",
     "VelocityStepper",
+    "capped_stride_limits",
     "clamp_stride",
     "go_pos",
+    "go_pos_from",
     "mid_coords",
     "other_leg",
     "set_footsteps",
@@ -225,8 +227,33 @@ def go_pos(T_world_rfoot: np.ndarray, T_world_lfoot: np.ndarray, dx_m: float, dy
     goal = _compose(start, (dx_m, dy_m, dtheta_rad))
     support = "rleg" if dy_m > 0.0 else "lleg"
     steps = [_first_node(rfoot if support == "rleg" else lfoot, params)]
-    mids = [start]
-    mid = start
+    _walk_to(steps, [start], goal, z, params, limits)
+    return steps
+
+
+def go_pos_from(kept: Sequence[Footstep], goal_mid: Sequence[float], params: FootstepParams | None = None,
+                limits: StrideLimits | None = None) -> list[Footstep]:
+    """hrpsys goPos while walking: `kept` (the footsteps not replaced, the last one the support foot of the
+    first new step) followed by the steps to the mid-coords `goal_mid` (x [m], y [m], yaw [rad], world).
+
+    As hrpsys, the walk goes on from the mid-coords under the last kept footstep (that foot moved back by
+    its leg offset), with the same clamped steps and aligning steps as `go_pos`."""
+    params = params or FootstepParams()
+    limits = limits or StrideLimits()
+    if not kept:
+        raise InvalidCommand("go_pos_from needs at least one kept footstep (the support foot)")
+    steps = list(kept)
+    last = steps[-1]
+    start = _compose((last.x, last.y, last.yaw), (0.0, -_leg_sign(last.leg) * params.leg_offset_y_m, 0.0))
+    goal = (float(goal_mid[0]), float(goal_mid[1]), _wrap(float(goal_mid[2])))
+    _walk_to(steps, [start], goal, last.z, params, limits)
+    return steps
+
+
+def _walk_to(steps: list[Footstep], mids: list[tuple], goal: tuple, z: float, params: FootstepParams,
+             limits: StrideLimits) -> None:
+    """Append clamped steps from mids[-1] until the goal mid-coords is reached, then the aligning step(s)."""
+    mid = mids[-1]
     for _ in range(10000):
         rem = _relative(mid, goal)
         if math.hypot(rem[0], rem[1]) < _GO_POS_POS_TOL_M and abs(rem[2]) < _GO_POS_TH_TOL_RAD:
@@ -236,9 +263,18 @@ def go_pos(T_world_rfoot: np.ndarray, T_world_lfoot: np.ndarray, dx_m: float, dy
         steps.append(_foot_at(mid, swing, z, params))
         mids.append(mid)
     else:  # pragma: no cover - the clamped steps always converge
-        raise InvalidCommand(f"go_pos({dx_m}, {dy_m}, {dtheta_rad}) did not converge")
+        raise InvalidCommand(f"goPos to the mid-coords {goal} did not converge")
     _align(steps, mids, goal, z, params)
-    return steps
+
+
+def capped_stride_limits(limits: StrideLimits, max_stride_m: float | None) -> StrideLimits:
+    """The limits with every translation (forward, backward, outside, inside) capped at `max_stride_m`
+    [m], the step length limit [OP] V-A lets the operator set; None: the limits as they are."""
+    if max_stride_m is None:
+        return limits
+    m = float(max_stride_m)
+    return limits.replaced(fwd_x_m=min(limits.fwd_x_m, m), bwd_x_m=min(limits.bwd_x_m, m),
+                           outside_y_m=min(limits.outside_y_m, m), inside_y_m=min(limits.inside_y_m, m))
 
 
 def set_footsteps(footsteps: Sequence[tuple], T_world_rfoot: np.ndarray, T_world_lfoot: np.ndarray,
@@ -332,6 +368,17 @@ class VelocityStepper:
     def set_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
         """New velocity for the steps computed at the next `replan()` (hrpsys: at the mid-step check)."""
         self._velocity = (float(vx_m_s), float(vy_m_s), float(vtheta_rad_s))
+
+    def set_params(self, params: FootstepParams, limits: StrideLimits) -> None:
+        """New step parameters and stride limits for the steps computed from the next `replan()` on."""
+        self.params = params
+        self.limits = limits
+
+    def resume(self) -> None:
+        """Back from "ending" (goStop asked, the aligning steps not yet replaced) to "walking": the next
+        `replan()` puts velocity steps after the overwritable index again. No effect in other states."""
+        if self.state == "ending":
+            self.state = "walking"
 
     def advance_to(self, index: int) -> None:
         """`footsteps[index]` is now being stepped on; everything before it has landed."""

@@ -17,7 +17,10 @@ from controller.walking.footsteps import (
     StepParams,
     StrideLimits,
     VelocityStepper,
+    capped_stride_limits,
     go_pos,
+    go_pos_from,
+    mid_coords,
     other_leg,
     set_footsteps,
     stop_in_place,
@@ -86,6 +89,9 @@ class _Segment:
     start_tick: int  # absolute tick of its first sample
     q_start: np.ndarray  # (2, 6) feet (x, y, z, roll, pitch, yaw) at its start
     q_end: np.ndarray | None = None
+    # the GaitParams the segment was planned with: a parameter change applies to the segments planned
+    # after it, a replan that resamples this segment keeps its timing (no jump of the ZMP mid-step)
+    params: GaitParams | None = None
 
 
 def _rpy_matrices(rpy: np.ndarray) -> np.ndarray:
@@ -103,6 +109,21 @@ def _ry(theta: np.ndarray) -> np.ndarray:
     c, s = np.cos(theta), np.sin(theta)
     z, o = np.zeros_like(theta), np.ones_like(theta)
     return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], axis=1)
+
+
+def _compose_planar(a: tuple, b: tuple) -> tuple[float, float, float]:
+    """Planar pose a composed with b: (x [m], y [m], yaw [rad])."""
+    c, s = np.cos(a[2]), np.sin(a[2])
+    yaw = (a[2] + b[2] + np.pi) % (2.0 * np.pi) - np.pi
+    return (float(a[0] + c * b[0] - s * b[1]), float(a[1] + s * b[0] + c * b[1]), float(yaw))
+
+
+def _relative_planar(a: tuple, b: tuple) -> tuple[float, float, float]:
+    """b in the frame of a: (x [m], y [m], yaw [rad])."""
+    c, s = np.cos(a[2]), np.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    yaw = (b[2] - a[2] + np.pi) % (2.0 * np.pi) - np.pi
+    return (float(c * dx + s * dy), float(-s * dx + c * dy), float(yaw))
 
 
 def _q_of(step: Footstep) -> np.ndarray:
@@ -149,6 +170,9 @@ class GaitGenerator:
         self._stopping_from_rest = False  # the rest of the walk is a stop_from_rest plan
         self._plan_version = 0
         self._rest_from: tuple | None = None  # the pose stop_from_rest planned from (feet p, R, support, footstep)
+        self._walk_origin = mid_coords(self._feet["rleg"], self._feet["lleg"])  # (x, y, yaw) where the walk began
+        self._pending_goal: tuple[float, float, float] | None = None  # goPos goal mid-coords for after this walk
+        self._velocity_step: tuple[float | None, float | None] = (None, None)  # (max stride, foot distance) [m]
         self._idle = self._idle_sample()
 
     def __repr__(self) -> str:
@@ -178,6 +202,24 @@ class GaitGenerator:
     def T_world_lfoot(self) -> np.ndarray:
         return self._feet["lleg"].T_world_foot
 
+    @property
+    def walk_origin(self) -> tuple[float, float, float]:
+        """Mid-coords (x [m], y [m], yaw [rad], world) of the feet where the current (or last) walk began:
+        what goPos while walking is relative to (hrpsys initial_foot_mid_coords)."""
+        return self._walk_origin
+
+    @property
+    def velocity_mode(self) -> str:
+        """"idle" (no velocity walk), "walking", "ending" (goStop asked) or "stopped" (emergency stop)."""
+        if not self._walking or self._stepper is None:
+            return "idle"
+        return self._stepper.state
+
+    @property
+    def stopping_from_rest(self) -> bool:
+        """The rest of the walk is the stop from rest planned after the hard e-stop (nothing may replan it)."""
+        return self._walking and self._stopping_from_rest
+
     def remaining_footsteps(self) -> list[Footstep]:
         """Footsteps not landed yet (the one being stepped on included)."""
         if not self._walking:
@@ -200,19 +242,41 @@ class GaitGenerator:
         self._footsteps = footsteps
         self._plan_version += 1
         self._stopping_from_rest = False
+        self._walk_origin = mid_coords(self._feet["rleg"], self._feet["lleg"])
         q0 = np.stack([_q_of(self._feet["rleg"]), _q_of(self._feet["lleg"])])
-        self._segments = [_Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0)]
+        self._segments = [_Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0,
+                                   params=self.params)]
         self._tick = self._origin = 0
         self._arrays = None
         self._walking = True
         self._resample_from(0)
 
     def go_pos(self, dx_m: float, dy_m: float, dtheta_rad: float) -> list[Footstep]:
-        """hrpsys goPos from the current feet; returns the planned footsteps."""
-        steps = go_pos(self.T_world_rfoot, self.T_world_lfoot, dx_m, dy_m, dtheta_rad,
-                       self.footstep_params, self.stride_limits)
+        """hrpsys goPos: from rest, to the current feet's mid-coords composed with (dx, dy, dtheta).
+
+        While walking (a goPos, a footstep list or velocity mode), as hrpsys does, the goal is relative to
+        where this walk began (`walk_origin`) and it replaces the rest of the plan from the next free
+        footstep: the one after the footstep being stepped on, or the one after that once the current
+        step's mid-step check has passed (its successor's ZMP is then committed, as in hrpsys). When no
+        footstep is free any more (the last step's second half, the final double support) the new walk
+        starts from the feet where this one ends. Returns the footsteps planned (the new plan; empty when
+        it waits for the end of the walk)."""
+        if not self._walking:
+            steps = go_pos(self.T_world_rfoot, self.T_world_lfoot, dx_m, dy_m, dtheta_rad,
+                           self.footstep_params, self.stride_limits)
+            self._stepper = None
+            self.plan(steps)
+            return steps
+        if self._stopping_from_rest:
+            raise InvalidState("the walk is ending (a stop from rest after the e-stop): goPos once it stands")
+        goal = _compose_planar(self._walk_origin, (dx_m, dy_m, dtheta_rad))
+        k = self._free_index()
+        if k > len(self._footsteps):
+            self._pending_goal = goal
+            return []
+        steps = go_pos_from(self._footsteps[:k], goal, self.footstep_params, self.stride_limits)
         self._stepper = None
-        self.plan(steps)
+        self.replan(steps, k)
         return steps
 
     def set_footsteps(self, footsteps: Sequence[tuple], step_params: Sequence[StepParams | None] | None = None
@@ -224,18 +288,64 @@ class GaitGenerator:
         return steps
 
     def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
-        """hrpsys goVelocity: start velocity mode, or change the velocity of the steps planned at the next check."""
+        """hrpsys goVelocity: start velocity mode, or change the velocity of the steps planned at the next
+        mid-step check (the gait goes on; nothing restarts). After goStop, while the aligning steps are not
+        being stepped yet, the walk resumes at the new velocity instead of ending."""
         if self._walking:
-            if self._stepper is None or self._stepper.state != "walking":
+            if self._stepper is None or self._stepper.state not in ("walking", "ending"):
                 raise InvalidState("walking a fixed footstep list: go_velocity needs idle or velocity mode")
+            self._stepper.resume()
             self._stepper.set_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
             return
-        self._stepper = VelocityStepper(self.T_world_rfoot, self.T_world_lfoot, self.footstep_params,
-                                        self.stride_limits)
+        self._pending_goal = None
+        self._stepper = VelocityStepper(self.T_world_rfoot, self.T_world_lfoot, *self._velocity_params())
         self.plan(self._stepper.start(vx_m_s, vy_m_s, vtheta_rad_s))
 
+    def set_velocity_step(self, max_stride_m: float | None, foot_distance_m: float | None) -> None:
+        """The walking point's step parameters ([OP] V-A) for the velocity steps planned from now on: the step
+        length limit [m] (caps the stride limits' translations) and the distance between the feet's centres
+        [m]; None keeps the footstep parameters' own."""
+        if (max_stride_m, foot_distance_m) == self._velocity_step:
+            return
+        if max_stride_m is not None and not max_stride_m >= 0.0:
+            raise InvalidCommand(f"max_stride_m={max_stride_m!r} [m]; must be >= 0")
+        if foot_distance_m is not None and not foot_distance_m > 0.0:
+            raise InvalidCommand(f"foot_distance_m={foot_distance_m!r} [m]; must be > 0")
+        self._velocity_step = (max_stride_m, foot_distance_m)
+        if self._stepper is not None:
+            self._stepper.set_params(*self._velocity_params())
+
+    def configure(self, params: GaitParams | None = None, footstep_params: FootstepParams | None = None,
+                  stride_limits: StrideLimits | None = None) -> None:
+        """hrpsys setGaitGeneratorParam: new timing/ZMP, step and stride parameters, applied to the footsteps
+        and segments planned from now on (what is planned already, and the velocity steps up to the next
+        mid-step check, keep theirs)."""
+        if params is not None:
+            self.params = params
+            p = params
+            self._zmp_offsets = np.array([[p.rleg_zmp_offset_x_m, p.rleg_zmp_offset_y_m, 0.0],
+                                          [p.lleg_zmp_offset_x_m, p.lleg_zmp_offset_y_m, 0.0]])
+            if not self._walking:
+                self._idle = self._idle_sample()
+        if footstep_params is not None:
+            self.footstep_params = footstep_params
+        if stride_limits is not None:
+            self.stride_limits = stride_limits
+        if self._stepper is not None:
+            self._stepper.set_params(*self._velocity_params())
+
+    def _velocity_params(self) -> tuple[FootstepParams, StrideLimits]:
+        """The footstep parameters and stride limits of velocity steps: the gait's with the walking point's."""
+        max_stride, distance = self._velocity_step
+        params = self.footstep_params
+        if distance is not None:
+            params = params.replaced(leg_offset_y_m=0.5 * distance)
+        return params, capped_stride_limits(self.stride_limits, max_stride)
+
     def go_stop(self) -> None:
-        """hrpsys goStop: in velocity mode, the steps after the overwritable one become the aligning steps."""
+        """hrpsys goStop: in velocity mode, the steps after the overwritable one become the aligning steps
+        (a goPos waiting for the end of the walk is dropped)."""
+        self._pending_goal = None
         if self._walking and self._stepper is not None and self._stepper.state == "walking":
             k = self._overwritable_index()
             self._stepper.advance_to(k - 1)
@@ -243,6 +353,7 @@ class GaitGenerator:
 
     def emergency_stop(self) -> None:
         """hrpsys emergencyStop: the steps after the overwritable one are replaced by steps in place."""
+        self._pending_goal = None
         if not self._walking or self._stopping_from_rest:
             return
         k = self._overwritable_index()
@@ -274,6 +385,7 @@ class GaitGenerator:
         replans from the same pose (e.g. once the robot's measured state is known)."""
         if not self._walking or self._tick == 0:
             return
+        self._pending_goal = None
         a = self._arrays
         j = self._tick - 1 - self._origin  # the sample handed out last: where the plan is now
         if j >= 0:
@@ -360,9 +472,12 @@ class GaitGenerator:
     # ----- per tick -------------------------------------------------------------------------------------
 
     def tick(self) -> GaitSample:
-        """The plan at the next tick (the idle pose when not walking). O(1): slices precomputed samples."""
+        """The plan at the next tick (the idle pose when not walking). O(1): slices precomputed samples
+        (except the tick that starts a goPos left waiting for the end of the previous walk)."""
         if not self._walking:
-            return self._idle
+            if self._pending_goal is None:
+                return self._idle
+            self._start_pending_goal()
         if self._tick in self._checks:
             self._velocity_check(self._checks[self._tick])
         j = self._tick - self._origin
@@ -425,6 +540,22 @@ class GaitGenerator:
     def _overwritable_index(self) -> int:
         return self._current_segment().index + 1
 
+    def _free_index(self) -> int:
+        """The first footstep a goPos while walking may replace: the overwritable one before the current
+        segment's mid-step check, the one after it from the check on (hrpsys go_pos_param_2_footstep_nodes_list)."""
+        seg = self._current_segment()
+        check = seg.start_tick + seg.n_ticks // 2 - 1
+        return seg.index + (1 if self._tick < check else 2)
+
+    def _start_pending_goal(self) -> None:
+        """Plan the goPos that waited for the walk's end: to its goal mid-coords from the feet as they stand."""
+        goal, self._pending_goal = self._pending_goal, None
+        start = mid_coords(self._feet["rleg"], self._feet["lleg"])
+        dx, dy, dth = _relative_planar(start, goal)
+        origin = self._walk_origin
+        self.go_pos(dx, dy, dth)
+        self._walk_origin = origin  # still the same walk as far as the next goPos is concerned
+
     def _velocity_check(self, segment_index: int) -> None:
         """hrpsys mid-step overwrite check: the velocity steps after the next footstep are recomputed."""
         stepper = self._stepper
@@ -467,7 +598,7 @@ class GaitGenerator:
             prev = segs[-1]
             duration = self._footsteps[k].step_time_s if k < n_steps else self.params.final_double_support_s
             segs.append(_Segment("step" if k < n_steps else "end", k, duration, self._n_ticks(duration),
-                                 prev.start_tick + prev.n_ticks, None))
+                                 prev.start_tick + prev.n_ticks, None, params=self.params))
         self._segments = segs
         blocks = []
         for k in range(seg_index, len(segs)):
@@ -503,7 +634,8 @@ class GaitGenerator:
         R_flat = R.copy()  # sole orientation without the toe-heel pitch (COP frame)
         p_flat = p.copy()
         steps, k = self._footsteps, seg.index
-        ds_b, ds_a = self.params.double_support_ratio_before, self.params.double_support_ratio_after
+        gp = seg.params or self.params
+        ds_b, ds_a = gp.double_support_ratio_before, gp.double_support_ratio_after
         if seg.kind == "start":
             w = self._weight(1) if len(steps) > 1 else 0.5
             r = 0.5 + (w - 0.5) * t / T
@@ -525,7 +657,7 @@ class GaitGenerator:
             support[(t > tb) & (t < ta)] = 1 - sw
             q_dst = _q_of(fs)
             s = np.clip((t - tb) / max(ta - tb, 1e-12), 0.0, 1.0)
-            p_sw = swing_position(s, q[sw, :3], q_dst[:3], fs.step_height_m, self.params.orbit_type)
+            p_sw = swing_position(s, q[sw, :3], q_dst[:3], fs.step_height_m, gp.orbit_type)
             rpy_sw = swing_rpy(s, q[sw, 3:], q_dst[3:])
             R_sw = _rpy_matrices(rpy_sw)
             p_flat[sw], R_flat[sw] = p_sw, R_sw

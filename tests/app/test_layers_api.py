@@ -64,6 +64,13 @@ PARAM_ERRORS = [
     ("stabilizer", {}, ["cp_threshold_m", "at least one"]),
     ("auto-balancer", {"transition_time_s": 20.0}, ["transition_time_s", "[0.01, 10] s"]),
     ("auto-balancer", {"nope": 0}, ["nope", "transition_time_s", "preview_q"]),
+    ("auto-balancer", {"step_time_s": 0.1}, ["step_time_s", "[0.4, 5] s"]),
+    ("auto-balancer", {"step_height_m": 0.5}, ["step_height_m", "[0, 0.2] m"]),
+    ("auto-balancer", {"stride_fwd_x_m": -0.1}, ["stride_fwd_x_m", "[0, 0.4] m"]),
+    ("auto-balancer", {"stride_inside_th_rad": 2.0}, ["stride_inside_th_rad", "[0, 0.8] rad"]),
+    ("auto-balancer", {"double_support_ratio_before": 0.5}, ["double_support_ratio_before", "[0, 0.45]"]),
+    ("auto-balancer", {"toe_angle_rad": "steep"}, ["toe_angle_rad", "number"]),
+    ("auto-balancer", {"foot_distance_m": 0.1}, ["foot_distance_m", "[0.14, 0.3] m"]),
 ]
 
 
@@ -115,3 +122,35 @@ def test_the_layer_endpoints_are_documented(client):
     for segment in ("auto-balancer", "stabilizer"):
         assert {"get", "put"} <= set(paths[f"/api/{segment}/params"])
         assert "post" in paths[f"/api/{segment}/start"] and "post" in paths[f"/api/{segment}/stop"]
+
+
+GAIT_PARAMS = {"step_time_s": 0.8, "step_height_m": 0.07, "toe_angle_rad": 0.1, "heel_angle_rad": 0.05,
+               "double_support_ratio_before": 0.15, "double_support_ratio_after": 0.15, "stride_fwd_x_m": 0.1,
+               "stride_bwd_x_m": 0.04, "stride_outside_y_m": 0.04, "stride_inside_y_m": 0.02,
+               "stride_outside_th_rad": 0.1, "stride_inside_th_rad": 0.05, "foot_distance_m": 0.21}
+
+
+def test_the_gait_parameters_are_in_the_schema_with_units_and_ranges(client):
+    schema = {f["name"]: f for f in client.get("/api/auto-balancer/params").json()["schema"]}
+    for name in GAIT_PARAMS:
+        f = schema[name]
+        assert f["unit"] in ("s", "m", "rad", "-") and f["min"] < f["max"], f
+    assert schema["step_time_s"]["unit"] == "s" and schema["stride_fwd_x_m"]["unit"] == "m"
+
+
+def test_put_gait_parameters_applies_them_to_the_next_footsteps_planned(client, runtime):
+    step(runtime, 2.5)  # the AutoBalancer blended in
+    r = client.put("/api/auto-balancer/params", json=GAIT_PARAMS)
+    assert r.status_code == 200, r.text
+    assert {k: r.json()["params"][k] for k in GAIT_PARAMS} == GAIT_PARAMS
+    gait = runtime.loop.chain["abc"].gait
+    assert gait.params.double_support_ratio_before == 0.15
+    assert client.post("/api/walk/go-pos", json={"x": 0.3, "y": 0.0, "theta_deg": 0.0}).status_code == 200
+    steps = client.get("/api/walk/footsteps").json()["footsteps"]
+    assert [round(f["pos"][0] - steps[0]["pos"][0], 6) for f in steps[1:3]] == [0.1, 0.2]  # 0.1 m strides
+    for f in steps[1:]:
+        assert f["step_time_s"] == pytest.approx(0.8) and f["step_height_m"] == pytest.approx(0.07)
+    assert abs(steps[-1]["pos"][1] - steps[-2]["pos"][1]) == pytest.approx(0.21)
+    # a step time between two control ticks is rounded to a whole number of them (5 ms)
+    assert client.put("/api/auto-balancer/params", json={"step_time_s": 0.8012}).status_code == 200
+    assert runtime.loop.chain["abc"].gait.footstep_params.step_time_s == pytest.approx(0.8)

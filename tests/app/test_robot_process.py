@@ -71,3 +71,20 @@ def test_a_crash_of_the_robot_process_is_reported_and_a_reset_starts_a_new_one()
         assert service.state()["emergency"]["hard_stop"] is False
     finally:
         robot.close()
+
+
+def test_streamed_setpoints_cross_on_their_board_and_behaviours_run_in_the_robot_process(robot):
+    from app.service.setpoints import Setpoint
+
+    service = OperatorService(robot)
+    wait_for(lambda: service.snapshot().time_s > 0.2)
+    acks = []
+    for _ in range(5):  # a stream: every setpoint acknowledged with the tick it reached, in order
+        acks.append(service.operator_velocity(Setpoint("head", (0.0, 0.0, 0.0), (0.0, 0.0, 0.1))))
+    assert [a.seq for a in acks] == sorted(a.seq for a in acks)
+    assert all(b.tick >= a.tick for a, b in zip(acks, acks[1:], strict=False))
+    assert acks[-1].time_s == pytest.approx(acks[-1].tick * 0.005, abs=1e-9)
+    run_id = service.run_behavior("release", {"time_s": 0.3})
+    status = wait_for(lambda: (s := service.get_run(run_id)).state != "running" and s)
+    assert status.state == "succeeded", status.message
+    assert [r["id"] for r in service.state()["runs"]][-1] == run_id

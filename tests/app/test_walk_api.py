@@ -31,9 +31,21 @@ def test_go_pos_walks_and_lists_the_remaining_footsteps(standing, runtime):
     for f in body["footsteps"]:
         assert f["leg"] in ("rleg", "lleg")
         assert len(f["pos"]) == 3 and len(f["rpy"]) == 3 and len(f["rpy_deg"]) == 3
-    # a second goPos while walking is a conflict, said as such
+    # a second goPos while walking replaces the rest of the plan (hrpsys), relative to where the walk began
     r = standing.post("/api/walk/go-pos", json={"x": 0.1, "y": 0.0, "theta_deg": 0.0})
-    assert r.status_code == 409 and "walking" in r.json()["detail"]
+    assert r.status_code == 200, r.text
+    assert "re-planned" in r.json()["message"] and "where this walk began" in r.json()["message"]
+    last = standing.get("/api/walk/footsteps").json()["footsteps"][-1]
+    origin_x = runtime.chain["abc"].gait.walk_origin[0]
+    assert last["pos"][0] == pytest.approx(origin_x + 0.1, abs=1e-4)
+
+
+def test_go_pos_during_the_emergency_walking_stop_is_a_conflict(standing, runtime):
+    assert standing.post("/api/walk/go-velocity", json={"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0}).status_code == 200
+    step(runtime, 1.0)
+    assert standing.post("/api/walk/emergency-stop").status_code == 200
+    r = standing.post("/api/walk/go-pos", json={"x": 0.1, "y": 0.0, "theta_deg": 0.0})
+    assert r.status_code == 409 and "emergency walking stop" in r.json()["detail"]
 
 
 def test_go_velocity_then_stop_ends_the_walk(standing, runtime):

@@ -103,7 +103,7 @@ def test_chain_runs_layers_in_the_declared_order_whatever_the_mapping_order():
     chain = Chain({"hes": Freeze(), "seq": Ramp()})
     assert chain.order() == ["seq", "hes"]
     assert chain.describe() == "seq -> hes"
-    assert CHAIN_ORDER == ("kf", "rmfo", "seq", "es", "ic", "abc", "st", "co", "hes", "el")
+    assert CHAIN_ORDER == ("kf", "rmfo", "seq", "op", "es", "ic", "abc", "st", "co", "hes", "el")
 
 
 def test_chain_rejects_unknown_layer_names_listing_the_valid_ones():
@@ -177,3 +177,22 @@ def test_paced_and_unpaced_runs_give_the_same_trajectory():
 def test_reference_from_arrays_validates_shapes():
     with pytest.raises(ValueError):
         Reference.from_arrays(np.zeros(29))
+
+
+def test_before_tick_runs_with_the_control_time_after_the_commands_of_that_boundary():
+    seen = []
+    loop, plant, _ = make_loop(before_tick=lambda t: seen.append(("tick", t)))
+    loop.step()
+    loop.submit(lambda: seen.append(("command", plant.time_s)))  # not running: applied at once
+    loop.step()
+    assert seen == [("tick", 0.0), ("command", 0.005), ("tick", 0.005)]
+
+
+def test_an_exception_in_before_tick_never_stops_the_loop():
+    def boom(t):
+        raise RuntimeError("behaviour bug")
+
+    loop, plant, _ = make_loop(before_tick=boom)
+    for _ in range(3):
+        loop.step()
+    assert loop.tick_count == 3 and loop.fault is None

@@ -186,3 +186,94 @@ def test_footsteps_0_must_be_the_current_support_foot():
     gg = GaitGenerator(dt_s=DT)
     with pytest.raises(InvalidCommand, match="current rleg pose"):
         gg.plan([Footstep("rleg", 0.1, -0.095, step_height_m=0.0)])
+
+
+# ---- the walking point (goVelocity every tick with step parameters), goPos while walking, parameters ------
+
+def feet_mid(gg):
+    """Planar mid-coords (x, y, yaw) of the feet where they stand (idle)."""
+    Tr, Tl = gg.T_world_rfoot, gg.T_world_lfoot
+    yr, yl = math.atan2(Tr[1, 0], Tr[0, 0]), math.atan2(Tl[1, 0], Tl[0, 0])
+    return (0.5 * (Tr[0, 3] + Tl[0, 3]), 0.5 * (Tr[1, 3] + Tl[1, 3]), math.atan2(math.sin(yr) + math.sin(yl),
+                                                                                math.cos(yr) + math.cos(yl)))
+
+
+def test_velocity_step_parameters_apply_to_the_steps_planned_after_the_next_check():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_velocity(0.2, 0.0, 0.0)  # 0.2 m per 1 s step, clamped to the 0.15 m forward stride limit
+    planned = gg.footsteps
+    samples = run(gg, {300: lambda g: g.set_velocity_step(0.08, 0.24), 1900: lambda g: g.go_stop()})
+    steps = gg.footsteps
+    check_walk(gg, samples, steps)
+    # what was planned before the change kept the default stride; steps planned later took the new ones
+    assert steps[:3] == planned[:3]
+    strides = np.diff([f.x for f in steps[1:-2]])  # one footstep lands one mid-coords stride beyond the last
+    assert strides[0] == pytest.approx(0.15, abs=1e-9)
+    assert max(abs(d) for d in strides[4:]) == pytest.approx(0.08, abs=1e-9)
+    assert steps[-1].y - steps[-2].y == pytest.approx(0.24 * (1 if steps[-1].leg == "lleg" else -1), abs=1e-9)
+
+
+def test_go_velocity_after_go_stop_resumes_the_walk_instead_of_ending_it():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_velocity(0.1, 0.0, 0.0)
+    stopped_at = []
+    samples = run(gg, {500: lambda g: g.go_stop(), 520: lambda g: (stopped_at.append(g.velocity_mode),
+                                                                   g.go_velocity(0.0, 0.05, 0.0)),
+                       1500: lambda g: g.go_stop()})
+    assert stopped_at == ["ending"]
+    check_walk(gg, samples, gg.footsteps)
+    assert len(samples) * DT > 7.0  # it walked on after the first goStop
+    assert feet_mid(gg)[1] > 0.05  # and sideways at the new velocity
+
+
+def test_go_pos_while_walking_replaces_the_rest_of_the_plan_relative_to_where_the_walk_began():
+    gg = GaitGenerator(dt_s=DT)
+    origin = gg.walk_origin
+    first = gg.go_pos(1.0, 0.0, 0.0)
+    goal = (0.3, 0.2, math.radians(20.0))
+    replaced = []
+    samples = run(gg, {400: lambda g: replaced.append(g.go_pos(*goal))})
+    steps = gg.footsteps
+    check_walk(gg, samples, steps)
+    # the footsteps up to the free one are kept, the rest replaced
+    k = next(i for i, (a, b) in enumerate(zip(first, steps, strict=False)) if a != b)
+    assert k >= 3 and replaced[0] == list(steps)
+    x, y, yaw = feet_mid(gg)
+    c, s = math.cos(origin[2]), math.sin(origin[2])
+    assert (c * goal[0] - s * goal[1] + origin[0], s * goal[0] + c * goal[1] + origin[1]) == pytest.approx(
+        (x, y), abs=1e-4)
+    assert yaw - origin[2] == pytest.approx(goal[2], abs=math.radians(0.5))
+
+
+def test_go_pos_during_a_velocity_walk_ends_the_velocity_mode_on_the_goal():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_velocity(0.1, 0.0, math.radians(5.0))
+    samples = run(gg, {700: lambda g: g.go_pos(0.5, -0.1, 0.0)})
+    assert gg.velocity_mode == "idle"
+    check_walk(gg, samples, gg.footsteps)
+    assert feet_mid(gg) == pytest.approx((0.5, -0.1, 0.0), abs=1e-4)
+
+
+def test_go_pos_in_the_last_step_waits_and_walks_to_the_goal_from_where_the_walk_ends():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_pos(0.1, 0.0, 0.0)  # node 0, one step, the aligning step: 3 s and the final double support
+    n = int(round(2.8 / DT))
+    assert run(gg, {n: lambda g: g.go_pos(-0.1, 0.1, 0.0) == []})
+    assert gg.tick().walking  # the waiting goPos starts on the tick after the walk's end
+    run(gg)
+    assert feet_mid(gg) == pytest.approx((-0.1, 0.1, 0.0), abs=1e-4)
+    assert gg.walk_origin == pytest.approx((0.0, 0.0, 0.0))  # still the first walk's origin
+
+
+def test_gait_parameters_changed_mid_walk_apply_to_later_steps_without_a_jump():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_velocity(0.1, 0.0, 0.0)
+    new = GaitParams(double_support_ratio_before=0.2, double_support_ratio_after=0.2)
+
+    def change(g):
+        g.configure(params=new, footstep_params=g.footstep_params.replaced(step_height_m=0.08, step_time_s=0.8))
+
+    samples = run(gg, {450: change, 2000: lambda g: g.go_stop()})
+    steps = gg.footsteps
+    check_walk(gg, samples, steps)
+    assert steps[2].step_time_s == 1.0 and steps[-1].step_time_s == 0.8 and steps[-2].step_height_m == 0.08

@@ -1,0 +1,158 @@
+"""The operator's velocities at the operational points ([OP] II-III, Eq. 5's xi_motion): one PUT per setpoint
+or a WebSocket stream of them at up to 50 Hz, each acknowledged with the control tick it reached; and the
+operation layer's parameters. Twists are in the feet frame F (controller.operation.points): linear [m/s],
+angular [deg/s]."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import math
+import time
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Body, WebSocket, WebSocketDisconnect
+from pydantic import TypeAdapter, ValidationError
+
+from app.deps import ServiceDep, get_service
+from app.errors import errors
+from app.routers.params import params_changes_body
+from app.schemas import OperatorAck, OperatorVelocityRequest
+from app.service import ServiceError
+from app.service.setpoints import Setpoint, SetpointAck
+from app.state import jsonable
+
+router = APIRouter(prefix="/api/operator", tags=["operator"])
+ws_router = APIRouter(tags=["operator"])
+
+MAX_MESSAGE_BYTES = 4096  # a setpoint is ~150 bytes
+ACK_POLL_S = 0.003  # [s] how often the stream looks for the robot's acknowledgements
+ACK_GIVE_UP_S = 1.0  # [s] a setpoint not acknowledged by then is answered with an error
+
+
+def setpoint_of(req: OperatorVelocityRequest) -> Setpoint:
+    """The request in SI units (deg/s -> rad/s), checked once more by Setpoint itself."""
+    return Setpoint(req.point, tuple(float(v) for v in req.linear), tuple(math.radians(v) for v in req.angular),
+                    getattr(req, "max_stride", None), getattr(req, "foot_distance", None))
+
+
+def ack_body(ack: SetpointAck, seq: int) -> dict[str, Any]:
+    return {"ok": True, "point": ack.point, "seq": seq, "applied_seq": ack.seq, "tick": ack.tick,
+            "time_s": ack.time_s}
+
+
+@router.put("/velocity", response_model=OperatorAck, responses=errors(404, 409, 422, e404="the chain has no "
+            "operation layer"),
+            summary="The operator's velocity of one operational point (feet frame F: linear [m/s], angular "
+                    "[deg/s]; walk: linear (vx, vy, 0), angular (0, 0, vtheta) and the step parameters). A "
+                    "setpoint older than 200 ms counts as zero (ramped down over 100 ms): stream it (WS "
+                    "/ws/operator) to keep moving. Answers with the control tick it reached.")
+def put_velocity(req: OperatorVelocityRequest, service: ServiceDep) -> OperatorAck:
+    sp = setpoint_of(req)
+    ack = service.operator_velocity(sp)
+    return OperatorAck(**ack_body(ack, ack.seq))
+
+
+def _operation_params_class():
+    from controller.core.system import layer_params_classes
+
+    return layer_params_classes().get("op")
+
+
+_OP_PARAMS = _operation_params_class()
+
+
+@router.get("/params", responses=errors(404),
+            summary="The operation layer's parameters (per-point speed limits, dead-man, ...) and their schema")
+def get_params(service: ServiceDep) -> dict[str, Any]:
+    from app.routers.params import params_document
+
+    return params_document(service.params("op")["op"])
+
+
+@router.put("/params", responses=errors(404, 422),
+            openapi_extra=params_changes_body(_OP_PARAMS) if _OP_PARAMS is not None else None,
+            summary="Replace some of the operation layer's parameters (all or none, at one tick boundary)")
+def put_params(service: ServiceDep,
+               changes: Annotated[dict[str, Any], Body(description="{field: value}")]) -> dict[str, Any]:
+    from app.routers.params import params_document
+
+    new = service.set_params({"op": changes})
+    return params_document(new["op"])
+
+
+_REQUEST = TypeAdapter(OperatorVelocityRequest)
+
+
+def _error(detail: str, field: str | None = None, reason: str | None = None, seq: int | None = None) -> str:
+    return json.dumps({k: v for k, v in {"ok": False, "detail": detail, "field": field, "reason": reason,
+                                         "seq": seq}.items() if v is not None})
+
+
+@ws_router.websocket("/ws/operator")
+async def operator_stream(ws: WebSocket) -> None:
+    """Setpoints as JSON text messages, each the body of PUT /api/operator/velocity; every message is
+    answered with {"ok": true, "point", "seq", "applied_seq", "tick", "time_s"} once the robot has applied
+    it (or a newer setpoint of the same point), or {"ok": false, "detail", "field"?, "reason"?}."""
+    try:
+        service = get_service(ws)
+    except ServiceError as exc:
+        await ws.close(code=1011, reason=str(exc)[:120])
+        return
+    await ws.accept()
+    pending: list[tuple[str, int, float]] = []  # (point, seq, monotonic time put)
+    lock = asyncio.Lock()
+
+    async def send(text: str) -> None:
+        async with lock:
+            await ws.send_text(text)
+
+    async def acker() -> None:
+        while True:
+            await asyncio.sleep(ACK_POLL_S)
+            if not pending:
+                continue
+            now = time.monotonic()
+            try:
+                acks = service.published().setpoint_acks
+            except ServiceError as exc:
+                while pending:
+                    point, seq, _ = pending.pop(0)
+                    await send(_error(str(exc), seq=seq))
+                continue
+            still = []
+            for point, seq, put_at in pending:
+                ack = acks.get(point)
+                if ack is not None and ack.seq >= seq:
+                    await send(json.dumps(jsonable(ack_body(ack, seq))))
+                elif now - put_at > ACK_GIVE_UP_S:
+                    await send(_error(f"the robot did not acknowledge setpoint {seq} within {ACK_GIVE_UP_S:g} s",
+                                      seq=seq))
+                else:
+                    still.append((point, seq, put_at))
+            pending[:] = still
+
+    task = asyncio.create_task(acker())
+    try:
+        while True:
+            text = await ws.receive_text()
+            if len(text) > MAX_MESSAGE_BYTES:
+                await send(_error(f"message of {len(text)} bytes; the limit is {MAX_MESSAGE_BYTES}", field="body"))
+                continue
+            try:
+                req = _REQUEST.validate_json(text)
+            except ValidationError as exc:
+                err = exc.errors()[0]
+                field = ".".join(str(p) for p in err.get("loc", ()) if "[" not in str(p)) or "body"
+                await send(_error(f"{field}: {err.get('msg', 'invalid')}", field=field))
+                continue
+            try:
+                numbered = service.put_setpoint(setpoint_of(req))
+            except ServiceError as exc:
+                await send(_error(str(exc), field=getattr(exc, "field", None), reason=getattr(exc, "reason", None)))
+                continue
+            pending.append((numbered.point, numbered.seq, time.monotonic()))
+    except WebSocketDisconnect:
+        pass
+    finally:
+        task.cancel()

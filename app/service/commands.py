@@ -1,0 +1,72 @@
+"""The behaviours' command interface (behaviors.base.Commands) as the robot host implements it: every
+command is one of the operator service's own verbs applied through RobotHost.apply, so a behaviour is
+refused exactly when the operator would be (e-stop, motion stop, a fall, the CollisionDetector)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import TYPE_CHECKING, Any
+
+from app.service.errors import InvalidArgument, Refused
+from app.service.verbs import (
+    GetFootsteps,
+    GoPos,
+    ResetOperationTargets,
+    SequenceStatus,
+    SetSomeJointAngles,
+    Verb,
+    WalkStop,
+)
+from behaviors.base import JointReading
+from robot.names import joint_index
+
+if TYPE_CHECKING:
+    from app.service.host import RobotHost
+
+
+class HostCommands:
+    """behaviors.base.Commands over a RobotHost (called inside the loop, at a tick boundary). A command the
+    behaviour computed that a verb finds invalid (a goal beyond goPos's 5 m) is refused (409, reason
+    "state"): the request that started the behaviour was valid."""
+
+    def __init__(self, host: RobotHost) -> None:
+        self.host = host
+
+    def _apply(self, verb: Verb) -> Any:
+        try:
+            return self.host.apply(verb)
+        except InvalidArgument as exc:
+            raise Refused("state", f"the behaviour's {verb.name} was refused: {exc}") from None
+
+    def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> float:
+        try:
+            verb = GoPos(x_m, y_m, theta_rad)
+        except InvalidArgument as exc:
+            raise Refused("state", f"the behaviour's go_pos was refused: {exc}") from None
+        self._apply(verb)
+        _, footsteps = self._apply(GetFootsteps())
+        return float(sum(f.step_time_s for f in footsteps))
+
+    def walk_stop(self) -> None:
+        self._apply(WalkStop())
+
+    def set_joint_angles(self, angles_rad: Mapping[str, float], time_s: float) -> None:
+        try:
+            verb = SetSomeJointAngles(tuple((n, float(v)) for n, v in angles_rad.items()), float(time_s))
+            verb.check(self.host.cached_info())
+        except InvalidArgument as exc:
+            raise Refused("state", f"the behaviour's set_some_joint_angles was refused: {exc}") from None
+        self._apply(verb)
+
+    def is_interpolating(self) -> bool:
+        return bool(self._apply(SequenceStatus()))
+
+    def reset_operation_targets(self) -> None:
+        self._apply(ResetOperationTargets())
+
+    def joint(self, name: str) -> JointReading:
+        i = joint_index(name)
+        snap = self.host.loop.snapshot
+        kin = self.host.system.kin
+        return JointReading(float(snap.q_cmd_rad[i]), float(snap.q_meas_rad[i]), float(kin.q_lower[i]),
+                            float(kin.q_upper[i]))

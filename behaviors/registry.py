@@ -1,0 +1,33 @@
+"""The behaviours by name, and a behaviour built from plain (JSON) parameters."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from behaviors.base import Behavior, params_from
+from behaviors.grasp import Grasp
+from behaviors.look_at import LookAt
+from behaviors.reach import Reach
+from behaviors.release import Release
+from behaviors.sequence import Sequence
+from behaviors.squat import Squat
+from behaviors.stand import Stand
+from behaviors.walk_to import WalkTo
+from controller.core.errors import UnknownName
+
+BEHAVIORS: dict[str, type[Behavior]] = {cls.name: cls for cls in (
+    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Sequence)}
+
+
+def behavior_class(name: str) -> type[Behavior]:
+    try:
+        return BEHAVIORS[name]
+    except KeyError:
+        raise UnknownName(f"unknown behaviour {name!r}; valid: {sorted(BEHAVIORS)}") from None
+
+
+def make(name: str, params: Mapping[str, Any] | None = None, prefix: str = "params.") -> Behavior:
+    """The behaviour `name` with `params` checked against its Params class (InvalidCommand names the field)."""
+    cls = behavior_class(name)
+    return cls(params_from(cls.Params, dict(params or {}), prefix))

@@ -1,0 +1,21 @@
+"""The streamed setpoint's dead-man: a setpoint older than the timeout counts as zero, reached by a ramp."""
+
+from __future__ import annotations
+
+from controller.core.errors import InvalidCommand
+
+DEADMAN_TIMEOUT_S = 0.2  # a setpoint older than this [s] of control time no longer counts in full
+DEADMAN_RAMP_S = 0.1  # ... and fades to zero over this [s] after the timeout, instead of snapping
+
+
+def deadman_factor(age_s: float, timeout_s: float = DEADMAN_TIMEOUT_S, ramp_s: float = DEADMAN_RAMP_S) -> float:
+    """The weight [0, 1] of a setpoint `age_s` [s] old: 1 up to `timeout_s`, then linearly down to 0 over
+    `ramp_s` (0 from timeout_s + ramp_s on; ramp_s = 0 snaps). A setpoint from the future (age < 0) counts."""
+    if timeout_s < 0.0 or ramp_s < 0.0:
+        raise InvalidCommand(f"deadman timeout_s={timeout_s}, ramp_s={ramp_s}: both must be >= 0 [s]")
+    over = age_s - timeout_s
+    if over <= 0.0:
+        return 1.0
+    if over >= ramp_s - 1e-12:  # (0.3 - 0.2 is a hair under 0.1 in floats)
+        return 0.0
+    return 1.0 - over / ramp_s

@@ -1,0 +1,50 @@
+"""Per-point speed limits (one scale factor that keeps the direction) and the reach clamp of the targets."""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+from controller.core.errors import InvalidCommand
+from controller.operation.points import Twist
+
+#: Why a point did less than it was asked (the status' `limited`).
+REACH = "reach"  # the IK cannot get there (workspace, singularity, balance, another point)
+JOINT_LIMIT = "joint_limit"  # a joint of the point's limb brakes at its position limit
+VELOCITY = "velocity"  # the commanded speed is over the point's limit (or a joint runs at its velocity limit)
+MOTION_STOP = "motion_stop"  # the EmergencyStopper holds the motion: nothing integrates until it is released
+LIMIT_REASONS = (REACH, JOINT_LIMIT, VELOCITY, MOTION_STOP)
+
+
+class Limited(NamedTuple):
+    """A twist after the speed limits: `twist` = the input times `scale` in [0, 1] (same direction)."""
+
+    twist: Twist
+    scale: float
+
+
+def speed_scale(speed: float, limit: float) -> float:
+    """The factor [0, 1] that brings `speed` (>= 0) down to `limit` (> 0); 1 when it is under it."""
+    if not limit > 0.0:
+        raise InvalidCommand(f"speed limit {limit!r}: must be > 0")
+    return 1.0 if speed <= limit else limit / speed
+
+
+def limit_twist(twist: Twist, max_linear_m_s: float, max_angular_rad_s: float) -> Limited:
+    """One scale factor for the whole twist: the smaller of the linear and the angular ones, so the point
+    slows down along the direction it was asked to go (linear [m/s] and angular [rad/s] norms)."""
+    lin = math.sqrt(float(twist.linear_m_s @ twist.linear_m_s))
+    ang = math.sqrt(float(twist.angular_rad_s @ twist.angular_rad_s))
+    scale = min(speed_scale(lin, max_linear_m_s), speed_scale(ang, max_angular_rad_s))
+    return Limited(twist if scale == 1.0 else twist.scaled(scale), scale)
+
+
+def clamp_to_achieved(target, achieved, limited: str | None):
+    """The target for the next tick: the achieved pose when the IK could not follow (`limited` is REACH,
+    JOINT_LIMIT or VELOCITY from the IK), so the integrated target never runs away from the robot; else the
+    target itself. Works on any pose representation (the caller's)."""
+    if limited is None:
+        return target
+    if limited not in LIMIT_REASONS:
+        raise InvalidCommand(f"limit reason {limited!r}; valid: {list(LIMIT_REASONS)} or None")
+    return achieved if limited in (REACH, JOINT_LIMIT, VELOCITY) else target

@@ -1,0 +1,86 @@
+"""Operational-point targets in the feet frame F, and their integration from a twist (one tick)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from controller.operation.points import Twist
+from robot.sensors import frozen_array
+
+
+def feet_frame(p_rsole_world: np.ndarray, R_rsole_world: np.ndarray, p_lsole_world: np.ndarray,
+               R_lsole_world: np.ndarray) -> tuple[np.ndarray, float]:
+    """The feet frame F (points.py): origin (3,) [m] midway between the soles, yaw [rad] their mean yaw
+    (of the summed x axes, as the AutoBalancer turns BODY)."""
+    yaw = math.atan2(float(R_rsole_world[1, 0] + R_lsole_world[1, 0]), float(R_rsole_world[0, 0] + R_lsole_world[0, 0]))
+    return 0.5 * (np.asarray(p_rsole_world, dtype=float) + np.asarray(p_lsole_world, dtype=float)), yaw
+
+
+def yaw_rotation(yaw_rad: float) -> np.ndarray:
+    """Rz(yaw) (3, 3)."""
+    c, s = math.cos(yaw_rad), math.sin(yaw_rad)
+    return np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
+
+
+@dataclass(frozen=True, slots=True)
+class HandPose:
+    """A hand target in F: position [m] and rotation (F <- hand)."""
+
+    p_feet_m: np.ndarray  # (3,)
+    R_feet_hand: np.ndarray  # (3, 3)
+
+    @staticmethod
+    def of(p_feet_m, R_feet_hand) -> HandPose:
+        return HandPose(frozen_array(p_feet_m, (3,)), frozen_array(R_feet_hand, (3, 3)))
+
+    def integrated(self, twist: Twist, dt_s: float) -> HandPose:
+        """One tick of `twist` (F axes): p += v dt, R = exp([w] dt) R."""
+        if twist.is_zero:
+            return self
+        R = pin.exp3(np.asarray(twist.angular_rad_s, dtype=float) * dt_s) @ self.R_feet_hand
+        return HandPose.of(self.p_feet_m + twist.linear_m_s * dt_s, R)
+
+
+@dataclass(frozen=True, slots=True)
+class GazeAngles:
+    """The gaze in F: pitch [rad] (> 0 looks down) and yaw [rad] (> 0 to the left)."""
+
+    pitch_rad: float
+    yaw_rad: float
+
+    def integrated(self, twist: Twist, dt_s: float) -> GazeAngles:
+        _, w_pitch, w_yaw = twist.angular_rad_s.tolist()
+        if not (w_pitch or w_yaw):
+            return self
+        return GazeAngles(self.pitch_rad + w_pitch * dt_s, self.yaw_rad + w_yaw * dt_s)
+
+    def direction_feet(self) -> np.ndarray:
+        """Unit gaze axis (3,) in F."""
+        cp = math.cos(self.pitch_rad)
+        return np.array((cp * math.cos(self.yaw_rad), cp * math.sin(self.yaw_rad), -math.sin(self.pitch_rad)))
+
+    @staticmethod
+    def of_direction(d_feet: np.ndarray) -> GazeAngles:
+        """The angles of a gaze axis (3,) in F (need not be unit)."""
+        x, y, z = (float(v) for v in d_feet)
+        return GazeAngles(math.atan2(-z, math.hypot(x, y)), math.atan2(y, x))
+
+
+@dataclass(frozen=True, slots=True)
+class WaistPose:
+    """The waist (BODY) target: height above F [m] and roll, pitch, yaw [rad] in F."""
+
+    height_m: float
+    rpy_rad: tuple[float, float, float]
+
+    def integrated(self, twist: Twist, dt_s: float) -> WaistPose:
+        if twist.is_zero:
+            return self
+        r, p, y = self.rpy_rad
+        wr, wp, wy = twist.angular_rad_s.tolist()
+        return WaistPose(self.height_m + float(twist.linear_m_s[2]) * dt_s,
+                         (r + wr * dt_s, p + wp * dt_s, y + wy * dt_s))

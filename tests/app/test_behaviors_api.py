@@ -1,0 +1,88 @@
+"""The behaviour API: the list generated from each behaviour's Params, starting a run, its state in
+/api/behaviors/runs/{id} and /api/state, cancelling, and the errors (404 with the valid names, 422 naming
+the field, 409 naming the run that holds the point)."""
+
+from __future__ import annotations
+
+
+def _step(runtime, seconds: float) -> None:
+    runtime.run_for(seconds)
+
+
+def test_the_list_gives_every_behaviour_with_its_parameters_types_units_and_ranges(client):
+    r = client.get("/api/behaviors")
+    assert r.status_code == 200
+    by_name = {b["name"]: b for b in r.json()}
+    assert sorted(by_name) == ["grasp", "look_at", "reach", "release", "sequence", "squat", "stand", "walk_to"]
+    force = next(p for p in by_name["grasp"]["params"] if p["name"] == "force_n")
+    assert force == {"name": "force_n", "type": "number", "default": 10.0, "unit": "N", "min": 1.0, "max": 14.0,
+                     "choices": None, "doc": "fingertip force to hold with (JRL-hand: 14 N at most)"}
+    hand = next(p for p in by_name["reach"]["params"] if p["name"] == "hand")
+    assert hand["choices"] == ["rhand", "lhand"] and hand["type"] == "string"
+
+
+def test_a_run_starts_reports_progress_and_ends_in_the_run_and_state_documents(client, runtime):
+    r = client.post("/api/behaviors/release", json={"time_s": 0.5})
+    assert r.status_code == 200, r.text
+    run_id = r.json()["id"]
+    _step(runtime, 0.25)
+    run = client.get(f"/api/behaviors/runs/{run_id}").json()
+    assert run["state"] == "running" and 0.0 < run["progress"] < 1.0 and run["points"] == ["rhand.gripper"]
+    _step(runtime, 1.0)
+    run = client.get(f"/api/behaviors/runs/{run_id}").json()
+    assert run["state"] == "succeeded" and run["progress"] == 1.0 and run["message"] == "gripper open"
+    state = client.get("/api/state").json()
+    assert [s["id"] for s in state["runs"]] == [run_id] and state["runs"][0]["state"] == "succeeded"
+    assert client.get("/api/behaviors/runs").json()[0]["id"] == run_id
+
+
+def test_a_second_run_on_the_same_gripper_is_refused_naming_the_first_and_cancel_frees_it(client, runtime):
+    first = client.post("/api/behaviors/release", json={"time_s": 2.0}).json()["id"]
+    r = client.post("/api/behaviors/grasp", json={})
+    assert r.status_code == 409 and r.json()["reason"] == "state"
+    assert f"run {first} (release)" in r.json()["detail"]
+    r = client.post(f"/api/behaviors/runs/{first}/cancel")
+    assert r.status_code == 200 and r.json()["state"] == "cancelled"
+    assert client.post("/api/behaviors/grasp", json={"require_object": False}).status_code == 200
+
+
+def test_an_omitted_body_runs_with_the_defaults(client):
+    r = client.post("/api/behaviors/release")
+    assert r.status_code == 200, r.text
+
+
+def test_unknown_names_are_404_with_the_valid_ones(client):
+    r = client.post("/api/behaviors/dance", json={})
+    assert r.status_code == 404 and "valid: grasp, look_at, reach, release, sequence, squat, stand, walk_to" in \
+        r.json()["detail"]
+    r = client.get("/api/behaviors/runs/77")
+    assert r.status_code == 404 and "no run 77" in r.json()["detail"]
+
+
+def test_bad_parameters_are_422_naming_the_field(client):
+    r = client.post("/api/behaviors/grasp", json={"force_n": 20.0})
+    assert r.status_code == 422 and r.json()["field"] == "force_n" and "14" in r.json()["detail"]
+    r = client.post("/api/behaviors/reach", json={"hand": "head"})
+    assert r.status_code == 422 and r.json()["field"] == "hand"
+    r = client.post("/api/behaviors/squat", json={"depth": 0.1})
+    assert r.status_code == 422 and r.json()["field"] == "depth"
+    r = client.post("/api/behaviors/sequence", json={"steps": [{"behavior": "squat", "params": {"depth_m": 9}}]})
+    assert r.status_code == 422 and r.json()["field"].endswith("params.depth_m"), r.json()
+    r = client.post("/api/behaviors/sequence", json={"steps": []})
+    assert r.status_code == 422 and r.json()["field"] == "steps"
+
+
+def test_a_sequence_runs_its_steps(client, runtime):
+    steps = [{"behavior": "release", "params": {"time_s": 0.3}},
+             {"behavior": "grasp", "params": {"time_s": 0.3, "require_object": False}}]
+    run_id = client.post("/api/behaviors/sequence", json={"steps": steps}).json()["id"]
+    _step(runtime, 3.0)
+    run = client.get(f"/api/behaviors/runs/{run_id}").json()
+    assert run["state"] == "succeeded", run
+    assert run["result"]["0.release"]["message"] == "gripper open"
+    assert run["result"]["1.grasp"]["holding"] is False
+
+
+def test_behaviour_routes_are_refused_from_another_origin(client):
+    r = client.post("/api/behaviors/release", json={}, headers={"origin": "http://evil.example"})
+    assert r.status_code == 403

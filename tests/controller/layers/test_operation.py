@@ -1,0 +1,164 @@
+"""OperationLayer at the layer level: identity when idle, Eq. 5 per point, behaviours for one tick only,
+the dead-man, bad input, the motion stop (no simulation)."""
+
+import numpy as np
+import pytest
+
+from controller.core.errors import InvalidCommand
+from controller.core.system import initial_reference, layer_params_classes
+from controller.core.types import Ports
+from controller.kinematics.model import RobotKinematics
+from controller.layers.operation import OperationLayer, OperationParams
+from controller.operation.points import Twist, WalkCommand
+from robot.generate import half_sitting_deg
+from tests.controller.fakes import make_ctx
+
+DT = 0.005
+REF = initial_reference(RobotKinematics(), np.deg2rad(half_sitting_deg()))
+
+
+class Counting:
+    """Wraps the layer's IK to count solves."""
+
+    def __init__(self, ik):
+        self.ik, self.calls = ik, 0
+        self.solve_orig = ik.solve
+        ik.solve = self.solve
+
+    def solve(self, *a, **k):
+        self.calls += 1
+        return self.solve_orig(*a, **k)
+
+
+def run(op, ticks, t0=0.0, before=None, ports=None):
+    """`ticks` ticks from control time t0; before(k, t) runs at each tick boundary; returns the last output."""
+    out = None
+    for k in range(ticks):
+        t = t0 + k * DT
+        if before is not None:
+            before(k, t)
+        ctx = make_ctx(t=t, tick=k)
+        if ports is not None:
+            ctx.last_ports = ports
+        out = op.tick(ctx, REF)
+    return out
+
+
+@pytest.fixture(scope="module")
+def shared_ik():
+    return OperationLayer(DT).ik
+
+
+def layer(ik):
+    ik.reset()
+    return OperationLayer(DT, ik=ik)
+
+
+def test_idle_the_layer_is_identity_and_never_calls_the_ik(shared_ik):
+    op = layer(shared_ik)
+    count = Counting(op.ik)
+    for k in range(20):
+        assert op.tick(make_ctx(t=k * DT, tick=k), REF) is REF
+    assert count.calls == 0
+    assert op.status().to_dict()["active"] is False
+
+
+def test_eq5_motion_and_behaviour_add_per_point(shared_ik):
+    op = layer(shared_ik)
+    behaviour = {"rhand": Twist.of((0, 0, 0.05)), "lhand": Twist.of((0, 0.02, 0))}
+    run(op, 1, before=lambda k, t: (op.set_motion("rhand", Twist.of((0.1, 0, 0)), t), op.set_behavior(behaviour)))
+    pts = op.status().to_dict()["points"]
+    assert np.allclose(pts["rhand"]["motion"], (0.1, 0, 0, 0, 0, 0))
+    assert np.allclose(pts["rhand"]["behavior"], (0, 0, 0.05, 0, 0, 0))
+    assert np.allclose(pts["lhand"]["behavior"], (0, 0.02, 0, 0, 0, 0)) and pts["lhand"]["target"] is not None
+    assert pts["head"]["target"] is None  # never moved: not operated
+
+
+def test_a_cancelled_behaviour_leaves_zero_on_the_next_tick(shared_ik):
+    op = layer(shared_ik)
+    run(op, 1, before=lambda k, t: op.set_behavior({"rhand": Twist.of((0.1, 0, 0))}))
+    target = op.status().to_dict()["points"]["rhand"]["target"]
+    run(op, 5, t0=DT)  # not refreshed: zero
+    pts = op.status().to_dict()["points"]
+    assert pts["rhand"]["behavior"] == [0.0] * 6
+    assert np.allclose(pts["rhand"]["target"], target)  # the target holds where the behaviour left it
+
+
+def test_the_dead_man_zeroes_a_stale_setpoint_after_a_ramp(shared_ik):
+    op = layer(shared_ik)
+    run(op, 1, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    x = []
+    for k in range(1, 80):
+        run(op, 1, t0=k * DT)
+        x.append(op.status().to_dict()["points"]["rhand"]["motion"][0])
+    assert x[30] == pytest.approx(0.1)  # 155 ms old: in full
+    assert 0.0 < x[48] < 0.1  # 245 ms: ramping
+    assert x[-1] == 0.0  # > 300 ms: zero
+    assert max(abs(a - b) for a, b in zip(x, x[1:], strict=False)) <= 0.1 * DT / 0.1 + 1e-9  # no snap
+
+
+def test_the_hand_target_moves_at_the_commanded_speed_in_F_and_a_too_fast_one_is_scaled(shared_ik):
+    op = layer(shared_ik)
+    run(op, 1, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    x0 = op.status().to_dict()["points"]["rhand"]["target"][0]
+    run(op, 100, t0=DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    x1 = op.status().to_dict()["points"]["rhand"]["target"][0]
+    assert x1 - x0 == pytest.approx(0.1 * 100 * DT, abs=1e-9)
+    run(op, 1, t0=101 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
+    assert op.status().to_dict()["points"]["rhand"]["limited"] == "velocity"
+    assert op.status().to_dict()["points"]["rhand"]["target"][0] - x1 == pytest.approx(0.3 * DT, abs=1e-9)
+
+
+def test_the_walk_point_is_published_and_stops_with_one_zero_command(shared_ik):
+    op = layer(shared_ik)
+    ctx = make_ctx(t=0.0)
+    op.set_motion("walk", Twist.of((0.1, 0.0, 0.0), (0.0, 0.0, 0.2)), 0.0, WalkCommand(0, 0, 0, max_stride_m=0.15))
+    assert op.tick(ctx, REF) is REF  # walking alone needs no IK
+    cmd = ctx.ports.walk_command
+    assert (cmd.vx_m_s, cmd.vtheta_rad_s, cmd.max_stride_m) == (0.1, 0.2, 0.15)
+    op.set_motion("walk", Twist.of(), DT)
+    ctx = make_ctx(t=DT)
+    op.tick(ctx, REF)
+    assert ctx.ports.walk_command.is_zero
+    ctx = make_ctx(t=2 * DT)
+    op.tick(ctx, REF)
+    assert ctx.ports.walk_command is None  # not driven any more
+
+
+def test_bad_setpoints_are_refused_naming_the_field():
+    op = OperationLayer.__new__(OperationLayer)  # the checks need no IK
+    with pytest.raises(InvalidCommand, match=r"head\.linear\.x"):
+        OperationLayer.set_motion(op, "head", Twist.of((0.1, 0, 0)), 0.0)
+    with pytest.raises(InvalidCommand, match="valid"):
+        OperationLayer.set_behavior(op, {"knee": Twist.of()})
+    with pytest.raises(InvalidCommand, match="time_s"):
+        OperationLayer.set_motion(op, "rhand", Twist.of(), float("nan"))
+    with pytest.raises(InvalidCommand, match="walk"):
+        OperationLayer.set_motion(op, "rhand", Twist.of(), 0.0, WalkCommand(0.1, 0, 0))
+
+
+def test_while_the_motion_is_stopped_nothing_integrates(shared_ik):
+    op = layer(shared_ik)
+    run(op, 10, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    target = op.status().to_dict()["points"]["rhand"]["target"]
+    stopped = Ports(motion_stopped=True, motion_reverted_to_s=0.0)
+    run(op, 10, t0=10 * DT, ports=stopped, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    st = op.status().to_dict()
+    assert st["motion_stopped"] and st["points"]["rhand"]["limited"] == "motion_stop"
+    assert np.allclose(st["points"]["rhand"]["target"], target)
+
+
+def test_reset_targets_blends_back_to_the_reference_then_is_identity(shared_ik):
+    op = layer(shared_ik)
+    run(op, 40, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    op.reset_targets()
+    out = run(op, 1, t0=40 * DT)
+    assert out is not REF and op.status().to_dict()["active"] is False
+    out = run(op, int(OperationParams().reset_time_s / DT) + 2, t0=41 * DT)
+    assert out is REF
+
+
+def test_the_params_class_is_registered_for_the_params_api():
+    assert layer_params_classes()["op"] is OperationParams
+    with pytest.raises(InvalidCommand, match="hand_speed_m_s"):
+        OperationParams(hand_speed_m_s=-1.0)

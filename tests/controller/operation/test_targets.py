@@ -1,0 +1,33 @@
+"""Targets in the feet frame: F from the soles, one tick of integration (unit)."""
+
+import math
+
+import numpy as np
+import pytest
+
+from controller.operation.points import Twist
+from controller.operation.targets import GazeAngles, HandPose, WaistPose, feet_frame, yaw_rotation
+
+
+def test_the_feet_frame_is_midway_between_the_soles_with_their_mean_yaw():
+    p, yaw = feet_frame(np.array((0.0, -0.1, 0.0)), yaw_rotation(0.2), np.array((0.2, 0.1, 0.0)), yaw_rotation(0.4))
+    assert np.allclose(p, (0.1, 0.0, 0.0)) and yaw == pytest.approx(0.3)
+
+
+def test_a_hand_integrates_linear_and_angular_velocity_in_F():
+    h = HandPose.of((0.3, -0.2, 0.8), np.eye(3))
+    for _ in range(200):
+        h = h.integrated(Twist.of((0.1, 0.0, 0.0), (0.0, 0.0, 0.5)), 0.005)
+    assert np.allclose(h.p_feet_m, (0.4, -0.2, 0.8))
+    assert np.allclose(h.R_feet_hand, yaw_rotation(0.5))
+    assert h.integrated(Twist.of(), 0.005) is h
+
+
+def test_gaze_and_waist_integrate_their_rates():
+    g = GazeAngles(0.0, 0.0).integrated(Twist.of(angular_rad_s=(0.0, 0.1, 0.5)), 1.0)
+    assert (g.pitch_rad, g.yaw_rad) == pytest.approx((0.1, 0.5))
+    back = GazeAngles.of_direction(g.direction_feet())
+    assert (back.pitch_rad, back.yaw_rad) == pytest.approx((0.1, 0.5))
+    w = WaistPose(0.65, (0.0, 0.0, 0.0)).integrated(Twist.of((0, 0, -0.05), (0.0, 0.1, 0.0)), 2.0)
+    assert w.height_m == pytest.approx(0.55) and w.rpy_rad == pytest.approx((0.0, 0.2, 0.0))
+    assert math.isclose(GazeAngles(0.3, 0.0).direction_feet()[2], -math.sin(0.3))

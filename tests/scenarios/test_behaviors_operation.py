@@ -1,0 +1,162 @@
+"""Scenario: the behaviours that move operational points (`squat`, `stand`, `look_at`, `reach`) and walk
+(`walk_to`), run by the operator service on the real chain (the runner on the loop's tick boundaries, the op
+layer's IK, the AutoBalancer). Each checks a physical outcome on the simulated robot: forward kinematics of
+the encoder angles with the KalmanFilter attitude, relative to the soles' midpoint, or (for the walk) the
+simulator's ground truth; never the controller's own reference."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from app.service import OperatorService
+from app.service.local import LocalRobot
+from controller.kinematics.model import RobotKinematics
+from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
+
+DT = 0.005
+
+
+class Rig:
+    """A standing robot (2.5 s settled: the AutoBalancer starts in 2 s) behind the operator service, stepped
+    by the test."""
+
+    def __init__(self) -> None:
+        self.robot = LocalRobot(speed=None)
+        self.service = OperatorService(self.robot)
+        self.kin = RobotKinematics()
+        self.robot.run_for(2.5)
+
+    def run(self, name: str, params: dict, timeout_s: float = 30.0):
+        run_id = self.service.run_behavior(name, params)
+        for _ in range(int(timeout_s / DT)):
+            obs = self.robot.step()
+            assert not obs.fallen and obs.snapshot.fault is None
+            status = self.service.get_run(run_id)
+            if status.state != "running":
+                return status
+        raise AssertionError(f"{name} still running after {timeout_s} s")
+
+    def settle(self, seconds: float = 0.5) -> None:
+        self.robot.run_for(seconds)
+
+    def measured(self, frame: str) -> tuple[np.ndarray, np.ndarray]:
+        """(position [m], rotation) of `frame` relative to the soles' midpoint (yaw 0), from the encoders."""
+        s = self.robot.loop.snapshot
+        kin = self.kin
+        kin.update_rpy(np.zeros(3), s.base_rpy_est_rad, s.q_meas_rad)
+        mid = 0.5 * (kin.frame_pose("rleg_end")[0] + kin.frame_pose("lleg_end")[0])
+        p, R = kin.frame_pose(frame)
+        return p - mid, R
+
+    def close(self) -> None:
+        self.robot.stop()
+
+
+@pytest.fixture
+def rig():
+    r = Rig()
+    yield r
+    r.close()
+
+
+def test_squat_lowers_the_waist_by_0_15_m_and_stand_brings_it_back(rig):
+    z0 = rig.measured("BODY")[0][2]
+    status = rig.run("squat", {"depth_m": 0.15})
+    assert status.state == "succeeded", status.message
+    rig.settle()
+    z1 = rig.measured("BODY")[0][2]
+    print(f"squat: down {z0 - z1:.4f} m")
+    # measured 0.1509 m; bound 6 mm
+    assert z0 - z1 == pytest.approx(0.15, abs=0.006)
+    status = rig.run("stand", {"time_s": 1.5})
+    assert status.state == "succeeded", status.message
+    rig.settle()
+    z2 = rig.measured("BODY")[0][2]
+    print(f"stand: back to {z2 - z0:+.4f} m of the start")
+    assert abs(z2 - z0) < 0.005  # measured 0.0000 m; bound 5 mm
+
+
+def test_look_at_points_the_head_at_a_world_point(rig):
+    target = np.array([1.0, 0.5, 0.8])
+    status = rig.run("look_at", {"x_m": target[0], "y_m": target[1], "z_m": target[2]})
+    assert status.state == "succeeded", status.message
+    rig.settle()
+    p, R = rig.measured("HEAD_LINK1")
+    # where the target is seen from the head: the world target in the soles' frame (the feet are at the origin)
+    feet_mid = np.zeros(3)
+    gaze = R[:, 0]
+    to_target = target - (feet_mid + p)
+    error_deg = math.degrees(math.acos(float(gaze @ to_target / np.linalg.norm(to_target))))
+    print(f"look_at: {error_deg:.2f} deg off")
+    assert error_deg < 1.5  # measured 0.25 deg; bound 1.5 deg
+
+
+def test_reach_puts_the_right_hand_at_a_feet_frame_position_keeping_its_orientation(rig):
+    _, R0 = rig.measured("rarm_end")
+    goal = np.array([0.3, -0.3, 0.7])
+    status = rig.run("reach", {"x_m": goal[0], "y_m": goal[1], "z_m": goal[2]})
+    assert status.state == "succeeded", status.message
+    rig.settle()
+    p, R = rig.measured("rarm_end")
+    turned = math.degrees(math.acos(max(-1.0, min(1.0, 0.5 * (np.trace(R0.T @ R) - 1.0)))))
+    print(f"reach: {np.linalg.norm(p - goal) * 1000:.1f} mm off ({(p - goal).round(4)}), turned {turned:.2f} deg")
+    assert np.linalg.norm(p - goal) < 0.01  # measured 2.2 mm; bound 10 mm
+    assert turned < 2.0  # measured 0.18 deg; the issue's 2 deg
+
+
+def test_walk_to_ends_at_the_world_goal(rig):
+    truth0 = rig.robot.truth
+    base0 = np.array(truth0.base_pos_world[:2])
+    status = rig.run("walk_to", {"x_m": 0.3, "y_m": 0.1, "theta_deg": 10.0})
+    assert status.state == "succeeded", status.message
+    rig.settle(1.0)
+    truth = rig.robot.truth
+    yaw = matrix_to_rpy(quat_wxyz_to_matrix(np.asarray(truth.base_quat_wxyz)))[2]
+    moved = np.array(truth.base_pos_world[:2]) - base0
+    print(f"walk_to: BODY moved {moved.round(4)}, yaw {math.degrees(yaw):.2f} deg")
+    assert np.linalg.norm(moved - [0.3, 0.1]) < 0.03  # measured 5 mm; bound 3 cm
+    assert abs(math.degrees(yaw) - 10.0) < 2.0  # measured 0.05 deg; bound 2 deg
+
+
+def _reach_with_operator(up_m_s: float) -> np.ndarray:
+    """The right hand after a reach, with the operator streaming +up_m_s along z for 2 s from its start."""
+    from app.service.setpoints import Setpoint
+
+    rig = Rig()
+    try:
+        run_id = rig.service.run_behavior("reach", {"x_m": 0.3, "y_m": -0.3, "z_m": 0.7})
+        for k in range(int(6.0 / DT)):
+            if k <= int(2.0 / DT) and up_m_s:  # then the stick released: a zero setpoint
+                vz = up_m_s if k < int(2.0 / DT) else 0.0
+                rig.service.put_setpoint(Setpoint("rhand", (0.0, 0.0, vz), (0.0, 0.0, 0.0)))
+            obs = rig.robot.step()
+            assert not obs.fallen
+        assert rig.service.get_run(run_id).state != "running"
+        return rig.measured("rarm_end")[0]
+    finally:
+        rig.close()
+
+
+def test_an_operator_command_during_a_reach_adds_to_it_seamlessly():
+    """[OP] V-A: the same run twice (same seed), once with the operator's +0.05 m/s up for 2 s."""
+    alone = _reach_with_operator(0.0)
+    both = _reach_with_operator(0.05)
+    offset = both - alone
+    print(f"seamless: operator offset {offset.round(5)}")
+    assert offset[2] == pytest.approx(0.10, abs=0.01)  # measured 0.09997 m; the issue's 1 cm
+    assert np.linalg.norm(offset[:2]) < 0.01  # measured 0.05 mm; bound 1 cm
+
+
+def test_a_behaviour_run_at_max_speed_is_the_same_every_time():
+    def squat_posture() -> np.ndarray:
+        rig = Rig()
+        try:
+            rig.run("squat", {"depth_m": 0.05})
+            return np.array(rig.robot.loop.snapshot.q_meas_rad)
+        finally:
+            rig.close()
+
+    np.testing.assert_array_equal(squat_posture(), squat_posture())
