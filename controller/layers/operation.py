@@ -157,6 +157,7 @@ class OperationLayer(Layer):
         self._ref_frame_key: tuple | None = None
         self._waist_checked = None  # the waist target last found reachable by the AutoBalancer's legs
         self._anchored_walking = False  # the hand targets are held relative to BODY (walking), else to F
+        self._anchor = _ZERO3  # BODY in F while walking (what the hand targets are relative to), else 0
         self._walking = False
         self._time_s = 0.0
         self._version = 0
@@ -275,7 +276,7 @@ class OperationLayer(Layer):
         self._feet_world = F
         if self._walking != self._anchored_walking:
             self._re_anchor(p_body if self._walking else -p_body)
-        anchor = p_body if self._walking else _ZERO3
+        anchor = self._anchor = p_body if self._walking else _ZERO3
         if self._active_since_s is None:
             self._active_since_s = ctx.time_s
         seeded = False
@@ -497,8 +498,8 @@ class OperationLayer(Layer):
                 target = None if w is None else (w.vx_m_s, w.vy_m_s, w.vtheta_rad_s)
                 achieved, limited = None, None
             else:
-                target = _layout(self._targets.get(point))
-                achieved = _layout(self._achieved.get(point))
+                target = _layout(self._targets.get(point), self._anchor)
+                achieved = _layout(self._achieved.get(point), self._anchor)
                 limited = self._limited.get(point) if point in self._targets else None
             pts[point] = PointStatus(target=target, achieved=achieved, limited=limited,
                                      motion=_six(motion), behavior=_six(behavior))
@@ -506,11 +507,12 @@ class OperationLayer(Layer):
                                points=pts)
 
 
-def _layout(pose) -> tuple[float, ...] | None:
+def _layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
+    """A pose as the status gives it, in F (a hand held relative to BODY while walking: plus BODY in F)."""
     if pose is None:
         return None
     if isinstance(pose, HandPose):
-        return (*pose.p_feet_m.tolist(), *matrix_to_rpy(pose.R_feet_hand).tolist())
+        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy(pose.R_feet_hand).tolist())
     if isinstance(pose, GazeAngles):
         return (pose.pitch_rad, pose.yaw_rad)
     return (pose.height_m, *pose.rpy_rad)
