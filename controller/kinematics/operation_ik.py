@@ -701,6 +701,7 @@ class OperationIK:
             self._com = solver.add_com_task(np.zeros(3))
             self._com.mask.set_axises("xy")
         self._base_key: tuple | None = None  # upper-body mode: the base pose last written
+        self._base_rows: tuple = (None, None)  # (base key, its rotation rows)
         self._com_polygon = None  # the constraint, while the COM is near the edge
         self._com_tracking = False  # the caller gives the COM target (com_track_weight)
         self._com_polygon_hard = True
@@ -1031,7 +1032,9 @@ class OperationIK:
     def _com_in_base(self) -> tuple[float, float, float]:
         """The COM in the BODY frame [m] (upper-body mode: the frame of the COM guard)."""
         base = self._base_key
-        return _tmulv(rpy_to_rows(*base[3:]), _sub(self._com_now(), base[:3]))
+        if self._base_rows[0] != base:
+            self._base_rows = (base, rpy_to_rows(*base[3:]))
+        return _tmulv(self._base_rows[1], _sub(self._com_now(), base[:3]))
 
     def _set_feet(self, feet: FeetPoses) -> None:
         last = self._feet_poses._keys if self._feet_poses is not None else (None, None)

@@ -20,7 +20,7 @@ from controller.kinematics.model import RobotKinematics
 from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
 from controller.operation.deadman import deadman_factor
-from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist
+from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist, speed_scale
 from controller.operation.points import (
     POINTS,
     ZERO_TWIST,
@@ -256,12 +256,11 @@ class OperationLayer(Layer):
                 ctx.ports.walk_command = self._last_walk = WalkCommand(0.0, 0.0, 0.0)
             return
         p = self.params
-        lin = limit_twist(Twist.of(twist.linear_m_s), p.walk_speed_m_s, 1.0).scale
-        ang = limit_twist(Twist.of(angular_rad_s=twist.angular_rad_s), 1.0, p.walk_turn_rad_s).scale
-        k = min(lin, ang)
-        steps = self._motion_walk or self._behavior_walk
         vx, vy, _ = twist.linear_m_s.tolist()
-        cmd = WalkCommand(vx * k, vy * k, float(twist.angular_rad_s[2]) * k,
+        vtheta = float(twist.angular_rad_s[2])
+        k = min(speed_scale(math.hypot(vx, vy), p.walk_speed_m_s), speed_scale(abs(vtheta), p.walk_turn_rad_s))
+        steps = self._motion_walk or self._behavior_walk
+        cmd = WalkCommand(vx * k, vy * k, vtheta * k,
                           max_stride_m=steps.max_stride_m if steps else None,
                           foot_distance_m=steps.foot_distance_m if steps else None)
         self._walk_active = True
