@@ -20,7 +20,7 @@ from controller.kinematics.model import RobotKinematics
 from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
 from controller.operation.deadman import deadman_factor
-from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist
+from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist, speed_scale
 from controller.operation.points import (
     POINTS,
     ZERO_TWIST,
@@ -157,6 +157,7 @@ class OperationLayer(Layer):
         self._ref_frame_key: tuple | None = None
         self._waist_checked = None  # the waist target last found reachable by the AutoBalancer's legs
         self._anchored_walking = False  # the hand targets are held relative to BODY (walking), else to F
+        self._anchor = _ZERO3  # BODY in F while walking (what the hand targets are relative to), else 0
         self._walking = False
         self._time_s = 0.0
         self._version = 0
@@ -257,12 +258,11 @@ class OperationLayer(Layer):
                 ctx.ports.walk_command = self._last_walk = WalkCommand(0.0, 0.0, 0.0)
             return
         p = self.params
-        lin = limit_twist(Twist.of(twist.linear_m_s), p.walk_speed_m_s, 1.0).scale
-        ang = limit_twist(Twist.of(angular_rad_s=twist.angular_rad_s), 1.0, p.walk_turn_rad_s).scale
-        k = min(lin, ang)
-        steps = self._motion_walk or self._behavior_walk
         vx, vy, _ = twist.linear_m_s.tolist()
-        cmd = WalkCommand(vx * k, vy * k, float(twist.angular_rad_s[2]) * k,
+        vtheta = float(twist.angular_rad_s[2])
+        k = min(speed_scale(math.hypot(vx, vy), p.walk_speed_m_s), speed_scale(abs(vtheta), p.walk_turn_rad_s))
+        steps = self._motion_walk or self._behavior_walk
+        cmd = WalkCommand(vx * k, vy * k, vtheta * k,
                           max_stride_m=steps.max_stride_m if steps else None,
                           foot_distance_m=steps.foot_distance_m if steps else None)
         self._walk_active = True
@@ -277,7 +277,7 @@ class OperationLayer(Layer):
         self._feet_world = F
         if self._walking != self._anchored_walking:
             self._re_anchor(p_body if self._walking else -p_body)
-        anchor = p_body if self._walking else _ZERO3
+        anchor = self._anchor = p_body if self._walking else _ZERO3
         if self._active_since_s is None:
             self._active_since_s = ctx.time_s
         seeded = False
@@ -499,8 +499,8 @@ class OperationLayer(Layer):
                 target = None if w is None else (w.vx_m_s, w.vy_m_s, w.vtheta_rad_s)
                 achieved, limited = None, None
             else:
-                target = _layout(self._targets.get(point))
-                achieved = _layout(self._achieved.get(point))
+                target = _layout(self._targets.get(point), self._anchor)
+                achieved = _layout(self._achieved.get(point), self._anchor)
                 limited = self._limited.get(point) if point in self._targets else None
             pts[point] = PointStatus(target=target, achieved=achieved, limited=limited,
                                      motion=_six(motion), behavior=_six(behavior))
@@ -508,11 +508,12 @@ class OperationLayer(Layer):
                                points=pts)
 
 
-def _layout(pose) -> tuple[float, ...] | None:
+def _layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
+    """A pose as the status gives it, in F (a hand held relative to BODY while walking: plus BODY in F)."""
     if pose is None:
         return None
     if isinstance(pose, HandPose):
-        return (*pose.p_feet_m.tolist(), *matrix_to_rpy(pose.R_feet_hand).tolist())
+        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy(pose.R_feet_hand).tolist())
     if isinstance(pose, GazeAngles):
         return (pose.pitch_rad, pose.yaw_rad)
     return (pose.height_m, *pose.rpy_rad)

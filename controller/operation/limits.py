@@ -33,8 +33,8 @@ def speed_scale(speed: float, limit: float) -> float:
 def limit_twist(twist: Twist, max_linear_m_s: float, max_angular_rad_s: float) -> Limited:
     """One scale factor for the whole twist: the smaller of the linear and the angular ones, so the point
     slows down along the direction it was asked to go (linear [m/s] and angular [rad/s] norms)."""
-    lin = math.sqrt(float(twist.linear_m_s @ twist.linear_m_s))
-    ang = math.sqrt(float(twist.angular_rad_s @ twist.angular_rad_s))
+    lin = math.hypot(*twist.linear_m_s.tolist())  # floats: several times cheaper than numpy on 3-vectors
+    ang = math.hypot(*twist.angular_rad_s.tolist())
     scale = min(speed_scale(lin, max_linear_m_s), speed_scale(ang, max_angular_rad_s))
     return Limited(twist if scale == 1.0 else twist.scaled(scale), scale)
 

@@ -16,11 +16,11 @@ def test_disabled_layers_that_still_work_are_labelled_as_run_and_only_the_others
     # pass-through layers and the chain was "seq"
     assert r["chain"] == "kf -> rmfo -> seq -> hes"
     assert r["disabled_but_ran"] == ["kf", "rmfo", "hes"]
-    assert list(r["passthrough"]) == ["es", "ic", "abc", "st", "co", "el"]
+    assert list(r["passthrough"]) == ["op", "es", "ic", "abc", "st", "co", "el"]
     assert list(r["layers"]) == ["kf", "rmfo", "seq", "hes"]
     r = run_bench("stand", 0.05, layers="foundation")  # kf and hes asked for: nothing disabled ran
     assert r["chain"] == "kf -> rmfo -> seq -> co -> hes -> el" and r["disabled_but_ran"] == []
-    assert list(r["passthrough"]) == ["es", "ic", "abc", "st"]
+    assert list(r["passthrough"]) == ["op", "es", "ic", "abc", "st"]
 
 
 def test_what_the_probe_calls_run_does_run_when_disabled():

@@ -77,7 +77,7 @@ def test_walking_at_0_1_m_s_for_10_s_while_the_hands_and_head_are_teleoperated_s
     assert op["rhand"]["target"] is not None and op["head"]["target"] is not None  # they were operated
     # measured 1.02 m, as without the hands; bound 1.0 +- 0.05 m
     assert abs((x1 - x0) - 1.0) < 0.05
-    # measured worst tilt 0.78 deg (plain walking 0.67); bound: plain + 0.5 deg
+    # measured worst tilt 0.75 deg (plain walking 0.67); bound: plain + 0.5 deg
     assert w.worst_deg < PLAIN_GO_VELOCITY_TILT_DEG + TILT_MARGIN_DEG
 
 

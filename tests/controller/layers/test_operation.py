@@ -6,7 +6,7 @@ import pytest
 
 from controller.core.errors import InvalidCommand
 from controller.core.system import initial_reference, layer_params_classes
-from controller.core.types import Ports
+from controller.core.types import GaitState, Ports
 from controller.kinematics.model import RobotKinematics
 from controller.layers.operation import OperationLayer, OperationParams
 from controller.operation.points import Twist, WalkCommand
@@ -162,3 +162,44 @@ def test_the_params_class_is_registered_for_the_params_api():
     assert layer_params_classes()["op"] is OperationParams
     with pytest.raises(InvalidCommand, match="hand_speed_m_s"):
         OperationParams(hand_speed_m_s=-1.0)
+
+
+def gait_port(walking: bool, base_y_m: float) -> Ports:
+    """The AutoBalancer's gait of the last tick: soles where REF has them, BODY at `base_y_m` sideways."""
+    kin = RobotKinematics()
+    kin.update_rpy(REF.base_pos_world, REF.base_rpy_rad, REF.q_rad)
+    (pr, Rr), (pl, Rl) = kin.frame_pose("rleg_end"), kin.frame_pose("lleg_end")
+    base = REF.base_pos_world + (0.0, base_y_m, 0.0)
+    z = np.zeros(3)
+    return Ports(gait=GaitState(walking=walking, support="both", contact=(True, True), p_rsole_world=pr,
+                                R_rsole_world=Rr, p_lsole_world=pl, R_lsole_world=Rl, zmp_world=z, cog_world=z,
+                                cog_vel_world=z, cog_pc_world=z, base_pos_world=base,
+                                base_rpy_rad=REF.base_rpy_rad))
+
+
+def test_hand_targets_go_with_body_while_walking_and_do_not_jump_when_the_walk_starts_or_stops(shared_ik):
+    op = layer(shared_ik)
+    t = [0.0]
+
+    def ticks(walking, y0, y1, n=40):
+        """n ticks, BODY moving smoothly (0.5 mm a tick) from y0 to y1 sideways in the gait port."""
+        for y in np.linspace(y0, y1, n):
+            run(op, 1, t0=t[0], ports=gait_port(walking, float(y)))
+            t[0] += DT
+
+    def target():
+        return np.array(op.status().to_dict()["points"]["rhand"]["target"][:3])
+
+    run(op, 1, before=lambda k, t_: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t_), ports=gait_port(False, 0.0))
+    op.set_motion("rhand", Twist.of(), DT)  # the stick let go: the point holds its target
+    t[0] = DT
+    standing = target()
+    ticks(False, 0.0, 0.02)  # standing: held in F while BODY moves
+    assert np.allclose(target(), standing, atol=1e-9)
+    ticks(True, 0.02, 0.02, 1)  # the walk starts: re-anchored on BODY, the same place in F
+    assert np.allclose(target(), standing, atol=1e-9)
+    ticks(True, 0.02, 0.04)  # walking: the hand goes with BODY (+2 cm sideways)
+    assert np.allclose(target(), standing + (0.0, 0.02, 0.0), atol=1e-9)
+    ticks(False, 0.04, 0.04, 1)  # the walk stops: held in F from where it is
+    ticks(False, 0.04, 0.0)
+    assert np.allclose(target(), standing + (0.0, 0.02, 0.0), atol=1e-9)
