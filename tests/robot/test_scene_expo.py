@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -197,3 +198,19 @@ def test_the_open_gripper_takes_the_65_mm_can_and_closes_on_it_before_its_limit(
     assert pad_inner_x - face_x > gen.CAN_DIAMETER_M + 0.03  # 3 cm to spare on approach
     _, finger_rad = gen.grasp_centre(params, "RARM", gen.CAN_DIAMETER_M / 2)
     assert math.radians(-60.0) < finger_rad < math.radians(16.0) - math.radians(30.0)  # far from the stop
+
+
+def test_the_grasp_contact_model_is_the_one_the_modelling_guide_advises_against_slip(plant):
+    """Elliptic cones with impratio 10 (friction as stiff as the normal direction), condim 6 on the objects a
+    hand takes (torsional and rolling friction against turning in a two-jaw grasp), jaws and pads primitives,
+    and no noslip pass papering over creep; robot/hrp2/README.md, "Contact model for grasping"."""
+    m = plant.model
+    assert m.opt.cone == mujoco.mjtCone.mjCONE_ELLIPTIC
+    assert m.opt.impratio >= 10.0
+    assert m.opt.noslip_iterations == 0
+    for name in ("can", "unknown_object"):
+        assert m.geom(name).condim[0] == 6
+    hand_geoms = [m.geom(g).name for g in range(m.ngeom)
+                  if "finger" in m.geom(g).name or "jaw" in m.geom(g).name]
+    assert hand_geoms, "no jaw or finger geoms found"
+    assert all(m.geom(g).type[0] != mujoco.mjtGeom.mjGEOM_MESH for g in hand_geoms)
