@@ -143,7 +143,7 @@ class CameraRig:
             d.mocap_quat[:] = mocap_quat
         d.time = time_s
         mujoco.mj_forward(m, d)
-        images = {}
+        images, truth = {}, {}
         renderer = self._renderer
         for name in cameras:
             cam = m.camera(name).id
@@ -163,8 +163,9 @@ class CameraRig:
             T[:3, :3] = d.cam_xmat[cam].reshape(3, 3) @ R_MUJOCO_OPTICAL
             T[:3, 3] = d.cam_xpos[cam]
             T.flags.writeable = False
-            images[name] = CameraImage(name, rgb, depth, self._intrinsics[name], T)
-        return Frames(time_s, images, time.perf_counter() - start)
+            images[name] = CameraImage(name, rgb, depth, self._intrinsics[name])
+            truth[name] = T
+        return Frames(time_s, images, time.perf_counter() - start, truth)
 
     def _add_stereo_noise(self, depth: np.ndarray, fx_px: float) -> None:
         """Depth as a stereo pair measures it: disparity fx b / z [px] plus Gaussian noise, back to depth."""

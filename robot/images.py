@@ -44,24 +44,27 @@ class CameraImage:
     """One camera's picture at one instant.
 
     `depth_m` is the metric depth along the optical axis (z, not the ray length) per pixel, float32 [m],
-    +inf where nothing was hit; None for a camera without depth. `T_world_camera_true` is the simulator's
-    camera pose (optical frame, (4, 4)): for tests only, never for the robot, which must use its own estimate.
+    +inf where nothing was hit; None for a camera without depth. No pose: the robot places the image with its
+    own estimate of the camera pose (the simulator's is in Frames, for tests).
     """
 
     camera: str
     rgb: np.ndarray  # (H, W, 3) uint8
     depth_m: np.ndarray | None  # (H, W) float32 [m]
     intrinsics: CameraIntrinsics
-    T_world_camera_true: np.ndarray  # (4, 4), tests only
 
 
 @dataclass(frozen=True, slots=True)
 class Frames:
-    """The images of one request: camera name -> CameraImage, all of the same simulated instant."""
+    """The images of one request: camera name -> CameraImage, all of the same simulated instant.
+
+    `T_world_camera_true` is the simulator's pose of each camera (optical frame, (4, 4)), beside the images
+    and not in them: ground truth for tests measuring an error, never an input of perception."""
 
     time_s: float  # simulated time of the state they show [s]
     images: dict[str, CameraImage]
     render_wall_s: float  # wall time spent rendering them [s]
+    T_world_camera_true: dict[str, np.ndarray]  # camera name -> (4, 4), tests only
 
     def __getitem__(self, camera: str) -> CameraImage:
         try:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import math
 import threading
-import time
 
 import mujoco
 import numpy as np
@@ -19,8 +18,6 @@ TABLE_TOP_Z_M = 0.70
 TABLE_PLANE_TOLERANCE_M = 0.001
 #: Measured: a 1 cm marker's pixel centroid is within 0.11 px of its projection; allowed 0.5 px.
 PROJECTION_TOLERANCE_PX = 0.5
-#: Measured on this 2-core machine: narrow pair + depth 40-63 ms. Allowed: the 0.3 s recognition budget.
-PAIR_RENDER_BUDGET_S = 0.3
 
 
 def viewpoint_qpos(plant: MujocoPlant, base_x_m: float = 1.2, head_pitch_deg: float = 35.0) -> np.ndarray:
@@ -62,7 +59,7 @@ def test_two_requests_of_one_state_return_the_same_images(rig, plant):
     a, b = first.result(), second.result()
     for name in HEAD_CAMERAS:
         np.testing.assert_array_equal(a[name].rgb, b[name].rgb)
-        np.testing.assert_array_equal(a[name].T_world_camera_true, b[name].T_world_camera_true)
+        np.testing.assert_array_equal(a.T_world_camera_true[name], b.T_world_camera_true[name])
     np.testing.assert_array_equal(a["narrow_left"].depth_m, b["narrow_left"].depth_m)
     assert a.time_s == 1.0
 
@@ -118,7 +115,7 @@ def test_a_marker_appears_where_the_intrinsics_and_true_pose_project_it(plant):
         rgb = image.rgb.astype(int)
         cyan = (rgb[..., 1] > 2 * rgb[..., 0] + 20) & (rgb[..., 2] > 2 * rgb[..., 0] + 20)  # lit or shaded
         v, u = np.nonzero(cyan)
-        T = image.T_world_camera_true
+        T = frames.T_world_camera_true[name]
         p = T[:3, :3].T @ (marker_world_m - T[:3, 3])
         k = image.intrinsics
         expected = np.array([k.fx * p[0] / p[2] + k.cx, k.fy * p[1] / p[2] + k.cy])
@@ -127,8 +124,9 @@ def test_a_marker_appears_where_the_intrinsics_and_true_pose_project_it(plant):
 
 
 def test_metric_depth_back_projects_the_table_top_onto_its_plane(rig, plant):
-    image = rig.render(viewpoint_qpos(plant), 0.0, cameras=("narrow_left",))["narrow_left"]
-    k, T = image.intrinsics, image.T_world_camera_true
+    frames = rig.render(viewpoint_qpos(plant), 0.0, cameras=("narrow_left",))
+    image = frames["narrow_left"]
+    k, T = image.intrinsics, frames.T_world_camera_true["narrow_left"]
     rgb = image.rgb.astype(int)
     beige = (rgb.min(axis=2) > 150) & (rgb[..., 0] - rgb[..., 2] > 20)  # the lit table top
     v, u = np.nonzero(beige)
@@ -173,15 +171,14 @@ def test_stereo_noise_grows_with_depth_squared(plant):
     assert stereo_baseline_m(plant.model) == pytest.approx(0.144)
 
 
-def test_a_stereo_pair_with_depth_renders_within_the_recognition_budget(rig, plant):
-    q = viewpoint_qpos(plant)
-    rig.render(q, 0.0, cameras=("narrow_left", "narrow_right"))  # warm up
-    walls = []
-    for _ in range(5):
-        start = time.perf_counter()
-        rig.render(q, 0.0, cameras=("narrow_left", "narrow_right"))
-        walls.append(time.perf_counter() - start)
-    assert float(np.median(walls)) < PAIR_RENDER_BUDGET_S
+def test_the_narrow_pair_renders_640_by_480_with_depth_registered_to_the_left_image(rig, plant):
+    """What a recognition consumes (its wall time is `hrp2-console bench --scenario camera`, not a test)."""
+    frames = rig.render(viewpoint_qpos(plant), 0.0, cameras=("narrow_left", "narrow_right"))
+    assert set(frames.images) == {"narrow_left", "narrow_right"}
+    left = frames["narrow_left"]
+    assert left.rgb.shape == (480, 640, 3) and left.depth_m.shape == (480, 640)
+    assert frames["narrow_right"].depth_m is None
+    assert frames.render_wall_s > 0.0
 
 
 def test_unknown_cameras_and_bad_states_are_refused_with_the_valid_names(rig, plant):
