@@ -11,8 +11,10 @@ ROOT = Path(__file__).resolve().parents[1]
 FORBIDDEN = {
     "controller": {"app", "behaviors", "fastapi", "viser", "pydantic", "uvicorn", "starlette"},
     "robot": {"app", "behaviors", "controller", "fastapi", "viser", "pydantic"},
-    "behaviors": {"app", "fastapi", "viser", "pydantic", "uvicorn"},
+    "behaviors": {"app", "fastapi", "viser", "pydantic", "uvicorn", "mujoco"},
 }
+#: Modules behaviours must not import: the simulator (its state is ground truth, not the robot's knowledge).
+SIMULATOR_MODULES = {"robot.plant", "robot.camera", "robot.scene_objects"}
 
 
 #: modules (dotted, prefix match) a package must not import, beyond FORBIDDEN's top-level packages
@@ -52,6 +54,27 @@ def test_package_does_not_import_what_the_design_forbids(package):
     offenders = {}
     for path in sorted((ROOT / package).rglob("*.py")):
         bad = imported_top_levels(path) & FORBIDDEN[package]
+        if bad:
+            offenders[str(path.relative_to(ROOT))] = sorted(bad)
+    assert offenders == {}
+
+
+def imported_modules(path: Path) -> set[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            names.add(node.module)
+            names |= {f"{node.module}.{a.name}" for a in node.names}
+    return names
+
+
+def test_behaviors_do_not_import_the_simulator():
+    offenders = {}
+    for path in sorted((ROOT / "behaviors").rglob("*.py")):
+        bad = imported_modules(path) & SIMULATOR_MODULES
         if bad:
             offenders[str(path.relative_to(ROOT))] = sorted(bad)
     assert offenders == {}
