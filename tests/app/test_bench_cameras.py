@@ -3,7 +3,7 @@
 import pytest
 
 from app.bench import run_bench
-from app.bench_cameras import run_camera_bench
+from app.bench_cameras import run_camera_bench, run_recognition_bench
 
 
 def test_the_camera_bench_reports_wall_times_of_the_narrow_pair_against_the_goal():
@@ -16,3 +16,9 @@ def test_the_camera_bench_reports_wall_times_of_the_narrow_pair_against_the_goal
 def test_the_camera_bench_takes_no_layer_selection():
     with pytest.raises(ValueError, match="cameras"):
         run_bench("camera", layers="seq")
+
+
+def test_the_recognition_bench_finds_the_can_every_time_it_times_a_recognition():
+    r = run_recognition_bench(recognitions=2)
+    assert r["scenario"] == "recognition" and r["found"] == 2
+    assert 0.0 < r["render_s"]["median"] <= r["wall_s"]["median"]
