@@ -10,6 +10,7 @@ from typing import Any
 
 import numpy as np
 
+from app.bench_cameras import CAMERA_SCENARIOS, run_camera_bench, run_recognition_bench
 from app.service import OperatorService
 from app.service.local import LocalRobot
 from controller.core.chain import CHAIN_ORDER
@@ -204,12 +205,17 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     input through, with their timers. The report then also gives the whole step's wall time less physics
     (`step_ms`: chain, snapshot, state estimation, logging) and the loop's own share of it
     (`loop_overhead_ms`: step minus the sum of all layer timers)."""
+    if scenario in CAMERA_SCENARIOS:
+        if layers is not None:
+            raise ValueError(f"scenario {scenario!r} times the cameras; --layers/--chain do not apply")
+        return run_camera_bench() if scenario == "camera" else run_recognition_bench()
     if scenario in CONSOLE_SCENARIOS:
         if layers is not None:
             raise ValueError(f"scenario {scenario!r} runs the whole console; --layers/--chain do not apply")
         return run_load_bench(duration_s, scene)
     if scenario not in SCENARIOS:
-        raise ValueError(f"unknown scenario {scenario!r}; valid scenarios: {', '.join(SCENARIOS)}")
+        valid = ", ".join((*SCENARIOS, *CONSOLE_SCENARIOS, *CAMERA_SCENARIOS))
+        raise ValueError(f"unknown scenario {scenario!r}; valid scenarios: {valid}")
     spec = SCENARIOS[scenario]
     selected = None if layers is None else layer_selection(layers)
     if selected is not None and not set(spec.needs) <= set(selected):

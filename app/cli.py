@@ -102,13 +102,14 @@ def run_parser() -> argparse.ArgumentParser:
 
 def bench_parser() -> argparse.ArgumentParser:
     from app.bench import CHAINS, CONSOLE_SCENARIOS, SCENARIOS
+    from app.bench_cameras import CAMERA_SCENARIOS
 
     p = argparse.ArgumentParser(prog="hrp2-console bench",
                                 description="Run the chain synchronously as fast as possible (no servers) "
                                             "and print its timing as JSON.")
-    p.add_argument("--scenario", choices=(*SCENARIOS, *CONSOLE_SCENARIOS), default="stand",
+    p.add_argument("--scenario", choices=(*SCENARIOS, *CONSOLE_SCENARIOS, *CAMERA_SCENARIOS), default="stand",
                    help="; ".join([f"{k}: {v.description}" for k, v in SCENARIOS.items()]
-                                  + [f"{k}: {v}" for k, v in CONSOLE_SCENARIOS.items()]))
+                                  + [f"{k}: {v}" for k, v in {**CONSOLE_SCENARIOS, **CAMERA_SCENARIOS}.items()]))
     p.add_argument("--duration", type=_positive_seconds, default=5.0, help="simulated seconds (default 5)")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
     which = p.add_mutually_exclusive_group()

@@ -14,6 +14,8 @@ from app.service.verbs import (
     MAX_GO_POS_M,
     MAX_GO_POS_RAD,
     MAX_MOTION_TIME_S,
+    MAX_OBJECT_XY_M,
+    MAX_OBJECT_Z_M,
     MAX_PUSH_DURATION_S,
     MAX_PUSH_FORCE_N,
     MAX_TARGET_POS_M,
@@ -70,6 +72,14 @@ class TargetPoseRequest(_Body):
 class ResetRequest(_Body):
     scene: SceneName | None = Field(default=None, description="scene name (GET /api/sim/scenes); default: the "
                                                                "current one")
+
+
+class PlaceObjectRequest(_Body):
+    position: list[Annotated[float, Field(ge=-MAX_OBJECT_XY_M, le=MAX_OBJECT_XY_M)]] = Field(
+        description=f"[x, y]: standing on what is below (table, box, floor); [x, y, z]: the body origin, z in "
+                    f"[0, {MAX_OBJECT_Z_M:g}] [m], world frame; |x|, |y| <= {MAX_OBJECT_XY_M:g} m",
+        min_length=2, max_length=3, examples=[[2.2, 0.3]])
+    yaw_deg: float = Field(default=0.0, ge=-360.0, le=360.0, description="turn about the world z axis [deg]")
 
 
 class PushRequest(_Body):
@@ -150,6 +160,11 @@ class WalkFootsteps(BaseModel):
 class Ok(BaseModel):
     ok: bool = True
     message: str = ""
+
+
+class ObjectPlaced(Ok):
+    name: str = Field(description="the object placed")
+    position: list[float] = Field(description="its body origin after placing [m], world frame")
 
 
 class EstopResponse(Ok):

@@ -211,12 +211,13 @@ def gripper_fixed_jaw_face_x(params: dict, side: str) -> float:
     return px - FINGER_PAD_DEPTH_M * math.sin(limit) - FINGER_PAD_RADIUS_M
 
 
-def grasp_centre(params: dict, side: str) -> tuple[tuple[float, float, float], float]:
-    """Centre of an 85 mm cylinder held against the fixed jaw with the pad normal perpendicular to the finger
-    (in LINK5 [m]), and the finger angle there [rad]."""
+def grasp_centre(params: dict, side: str, radius_m: float = GRASP_CYLINDER_RADIUS_M
+                 ) -> tuple[tuple[float, float, float], float]:
+    """Centre of a cylinder (default the 85 mm can) held against the fixed jaw with the pad normal perpendicular
+    to the finger (in LINK5 [m]), and the finger angle there [rad]."""
     px, py, pz = gripper_pivot(params, side)
-    cx = gripper_fixed_jaw_face_x(params, side) + GRASP_CYLINDER_RADIUS_M
-    a = GRASP_CYLINDER_RADIUS_M + FINGER_PAD_RADIUS_M  # local centre (-a, 0, -d) in LINK6
+    cx = gripper_fixed_jaw_face_x(params, side) + radius_m
+    a = radius_m + FINGER_PAD_RADIUS_M  # local centre (-a, 0, -d) in LINK6
     d = FINGER_PAD_DEPTH_M
     lo, hi = math.radians(-89.0), 0.0
     for _ in range(100):  # bisection on x(theta) = -a cos - d sin (decreasing in theta on [-89, 0] deg)
@@ -629,6 +630,163 @@ def mjcf_scene_door(params: dict) -> str:
     return mjcf_scene_file(params, "hrp2 door scene", world, (0.0,), sections)
 
 
+# ------------------------------------------------------------------------------ EXPO 2005 scene [OP sec. VI]
+# The robot stands at the origin facing +x. [OP VI] gives the known models: a 300 ml can of 65 mm diameter,
+# a table "0.75 m width x 1.5 m depth x 0.7 m height" and a trash box with a 120 x 280 mm hole; the robot
+# approaches the table's long (1.5 m) side, so here the table is 0.75 m deep (x) and 1.5 m wide (y).
+# Table and trash box are mocap bodies: static for the physics, movable at run time by a simulator operation
+# (robot.scene_objects.place_object). Can and unknown object are free bodies. Numbers: robot/hrp2/README.md.
+
+EXPO_TABLE_SIZE_M = (0.75, 1.5, 0.70)  # depth (x), width (y), height [m] [OP VI]
+EXPO_TABLE_NEAR_EDGE_X_M = 2.0  # the robot starts 2.0 m from the near (long) edge
+EXPO_TABLE_CENTRE_Y_M = 0.0
+EXPO_TABLE_TOP_THICKNESS_M = 0.03
+EXPO_TABLE_LEG_SIZE_M = 0.04  # square legs
+EXPO_TABLE_LEG_INSET_M = 0.03  # leg faces from the top's edges
+EXPO_TABLE_FRICTION = (0.8, 0.005, 0.0001)
+
+#: 300 ml can, 65 mm diameter [OP VI]. Height: a can's outer volume is ~1.18 x its fill (a 355 ml can is
+#: 66 mm x 123 mm = 419 ml outside), so 1.18 x 300 ml / (pi 32.5^2 mm^2) = 107 mm. Mass: 300 ml of a soft
+#: drink (1.04 kg/l) plus ~20 g of can.
+CAN_DIAMETER_M = 0.065
+CAN_HEIGHT_M = 0.107
+CAN_MASS_KG = 0.33
+#: Can contacts: condim 6 (tangential, torsional, rolling friction) so that a two-jaw grasp also resists the
+#: can turning about the grasp axis; the can's own coefficients are the floor's, so against the finger pads
+#: (max rule) the pads' 1.2 / 0.02 / 0.001 apply and against the table the table's.
+CAN_CONDIM = 6
+CAN_FRICTION = (1.0, 0.005, 0.0001)
+#: As stiff as the robot's own geoms (class hrp2, solref 0.005 s) instead of MuJoCo's default 0.02 s: the soft
+#: default (mixed 0.0125 s against a pad) let a held can creep ~2 mm in 5 s of arm motion, 0.005 s ~1 mm.
+CAN_SOLREF = (0.005, 1.0)
+EXPO_CAN_START_FROM_EDGE_M = 0.15  # default placement: 0.15 m from the near edge, on the table's centre line
+EXPO_CAN_FROM_EDGE_RANGE_M = (0.10, 0.30)  # the range tests place it in
+
+#: Trash box [OP VI]: 120 x 280 mm hole centred in the lid; the outer box and its height are assumed.
+#: Box frame: origin at the floor below the hole centre, x along the hole's long side.
+TRASH_BOX_HOLE_M = (0.28, 0.12)  # long (x), short (y)
+TRASH_BOX_OUTER_M = (0.45, 0.30, 0.60)  # x, y, height (lid top) [m]
+TRASH_BOX_WALL_M = 0.01  # walls, bottom and lid thickness
+#: Centre of the hole's footprint: 2.0 m to the robot's right of a robot standing at (1.4, 0) in front of the
+#: table (it turns right, sees the box ~2 m away and walks ~1.4 m as in [OP VI]); 2.1 m from the table's
+#: near-edge centre. Hole long side along world x.
+TRASH_BOX_CENTRE_M = (1.4, -2.0)
+TRASH_BOX_YAW_DEG = 0.0
+
+#: The "unknown object" on the floor [OP VI, Fig. 7c: a bag]: a small soft-looking box the robot has no model of.
+UNKNOWN_OBJECT_SIZE_M = (0.20, 0.12, 0.08)
+UNKNOWN_OBJECT_MASS_KG = 0.30
+UNKNOWN_OBJECT_CENTRE_M = (1.6, 1.0)
+
+EXPO_RGBA = {
+    "table": "0.8 0.74 0.62 1",  # beige top (low saturation)
+    "table_leg": "0.35 0.35 0.38 1",
+    "can": "0.85 0.05 0.05 1",  # saturated red: the only red in the scene, for colour segmentation
+    "trash_box": "0.3 0.4 0.55 1",
+    "trash_box_lid": "0.1 0.7 0.2 1",  # saturated green lid around the hole, for recognition
+    "trash_box_inside": "0.08 0.08 0.08 1",
+    "unknown": "0.55 0.25 0.65 1",
+}
+
+
+def expo_materials() -> list[str]:
+    lines = ["  <asset>"]
+    for name, rgba in EXPO_RGBA.items():
+        specular = ' specular="0.1"' if name == "can" else ""
+        lines.append(f'    <material name="expo_{name}" rgba="{rgba}"{specular}/>')
+    lines.append("  </asset>")
+    return lines
+
+
+def box_geom(name: str, lo, hi, material: str, friction=None, ind: str = "      ") -> str:
+    """A box geom spanning the corners lo..hi [m] in its body's frame."""
+    centre = [(a + b) / 2 for a, b in zip(lo, hi, strict=True)]
+    half = [(b - a) / 2 for a, b in zip(lo, hi, strict=True)]
+    extra = f' friction="{vec(friction)}"' if friction is not None else ""
+    return (f'{ind}<geom name="{name}" type="box" pos="{vec(centre)}" size="{vec(half)}" '
+            f'material="expo_{material}"{extra}/>')
+
+
+def expo_table_lines() -> list[str]:
+    depth, width, height = EXPO_TABLE_SIZE_M
+    centre = (EXPO_TABLE_NEAR_EDGE_X_M + depth / 2, EXPO_TABLE_CENTRE_Y_M, 0.0)
+    top_lo = height - EXPO_TABLE_TOP_THICKNESS_M
+    lines = [f'    <body name="table" mocap="true" pos="{vec(centre)}">',
+             box_geom("table_top", (-depth / 2, -width / 2, top_lo), (depth / 2, width / 2, height), "table",
+                      EXPO_TABLE_FRICTION)]
+    leg = EXPO_TABLE_LEG_SIZE_M
+    for k, (sx, sy) in enumerate(((1, 1), (1, -1), (-1, 1), (-1, -1))):
+        x_out = sx * (depth / 2 - EXPO_TABLE_LEG_INSET_M)
+        y_out = sy * (width / 2 - EXPO_TABLE_LEG_INSET_M)
+        lo = (min(x_out, x_out - sx * leg), min(y_out, y_out - sy * leg), 0.0)
+        hi = (max(x_out, x_out - sx * leg), max(y_out, y_out - sy * leg), top_lo)
+        lines.append(box_geom(f"table_leg{k}", lo, hi, "table_leg"))
+    lines.append("    </body>")
+    return lines
+
+
+def expo_trash_box_lines() -> list[str]:
+    lx, ly, height = TRASH_BOX_OUTER_M
+    hx, hy = TRASH_BOX_HOLE_M
+    t = TRASH_BOX_WALL_M
+    yaw = math.radians(TRASH_BOX_YAW_DEG)
+    quat = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+    x, y = lx / 2, ly / 2
+    lid = height - t
+    return [
+        f'    <body name="trash_box" mocap="true" pos="{vec((*TRASH_BOX_CENTRE_M, 0.0))}" quat="{vec(quat)}">',
+        box_geom("trash_box_bottom", (-x, -y, 0.0), (x, y, t), "trash_box_inside"),
+        box_geom("trash_box_wall_px", (x - t, -y, t), (x, y, lid), "trash_box"),
+        box_geom("trash_box_wall_nx", (-x, -y, t), (-x + t, y, lid), "trash_box"),
+        box_geom("trash_box_wall_py", (-x + t, y - t, t), (x - t, y, lid), "trash_box"),
+        box_geom("trash_box_wall_ny", (-x + t, -y, t), (x - t, -y + t, lid), "trash_box"),
+        box_geom("trash_box_lid_py", (-x, hy / 2, lid), (x, y, height), "trash_box_lid"),
+        box_geom("trash_box_lid_ny", (-x, -y, lid), (x, -hy / 2, height), "trash_box_lid"),
+        box_geom("trash_box_lid_px", (hx / 2, -hy / 2, lid), (x, hy / 2, height), "trash_box_lid"),
+        box_geom("trash_box_lid_nx", (-x, -hy / 2, lid), (-hx / 2, hy / 2, height), "trash_box_lid"),
+        "    </body>",
+    ]
+
+
+def free_body_lines(name: str, pos, mass: float, inertia, geom: str) -> list[str]:
+    return [f'    <body name="{name}" pos="{vec(pos)}">',
+            f'      <freejoint name="{name}_free"/>',
+            f'      <inertial pos="0 0 0" mass="{fmt(mass)}" diaginertia="{vec(inertia)}"/>',
+            f"      {geom}",
+            "    </body>"]
+
+
+def expo_can_start_m() -> tuple[float, float, float]:
+    return (EXPO_TABLE_NEAR_EDGE_X_M + EXPO_CAN_START_FROM_EDGE_M, EXPO_TABLE_CENTRE_Y_M,
+            EXPO_TABLE_SIZE_M[2] + CAN_HEIGHT_M / 2)
+
+
+def expo_unknown_object_start_m() -> tuple[float, float, float]:
+    return (*UNKNOWN_OBJECT_CENTRE_M, UNKNOWN_OBJECT_SIZE_M[2] / 2)
+
+
+def mjcf_scene_expo(params: dict) -> str:
+    r, h, m = CAN_DIAMETER_M / 2, CAN_HEIGHT_M, CAN_MASS_KG
+    can_inertia = (m * (3 * r * r + h * h) / 12, m * (3 * r * r + h * h) / 12, m * r * r / 2)
+    can_geom = (f'<geom name="can" type="cylinder" size="{fmt(r)} {fmt(h / 2)}" material="expo_can" '
+                f'condim="{CAN_CONDIM}" friction="{vec(CAN_FRICTION)}" solref="{vec(CAN_SOLREF)}"/>')
+    a, b, c = UNKNOWN_OBJECT_SIZE_M
+    mu = UNKNOWN_OBJECT_MASS_KG
+    box_inertia = (mu * (b * b + c * c) / 12, mu * (a * a + c * c) / 12, mu * (a * a + b * b) / 12)
+    box_geom_line = (f'<geom name="unknown_object" type="box" size="{vec((a / 2, b / 2, c / 2))}" '
+                     f'material="expo_unknown" condim="{CAN_CONDIM}" friction="{vec(CAN_FRICTION)}" '
+                     f'solref="{vec(CAN_SOLREF)}"/>')
+    can_pos, object_pos = expo_can_start_m(), expo_unknown_object_start_m()
+    world = [
+        *expo_table_lines(),
+        *expo_trash_box_lines(),
+        *free_body_lines("can", can_pos, m, can_inertia, can_geom),
+        *free_body_lines("unknown_object", object_pos, mu, box_inertia, box_geom_line),
+    ]
+    extra_qpos = (*can_pos, 1.0, 0.0, 0.0, 0.0, *object_pos, 1.0, 0.0, 0.0, 0.0)
+    return mjcf_scene_file(params, "hrp2 expo scene", world, extra_qpos, expo_materials())
+
+
 # ----------------------------------------------------------------------------------------------- URDF
 
 AXIS_RPY = {"z": (0.0, 0.0, 0.0), "x": (0.0, math.pi / 2, 0.0), "y": (math.pi / 2, 0.0, 0.0)}
@@ -696,7 +854,8 @@ def urdf(params: dict) -> str:
 
 # ----------------------------------------------------------------------------------------------- main
 
-GENERATED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml", "scene_door.xml", "hrp2.urdf")
+GENERATED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml", "scene_door.xml", "scene_expo.xml",
+                   "hrp2.urdf")
 
 
 def render(params: dict | None = None) -> dict[str, str]:
@@ -704,7 +863,8 @@ def render(params: dict | None = None) -> dict[str, str]:
     params = load_parameters() if params is None else params
     return {"hrp2.xml": mjcf_robot(params), "scene.xml": mjcf_scene(params),
             "scene_wall.xml": mjcf_scene_wall(params), "scene_valve.xml": mjcf_scene_valve(params),
-            "scene_door.xml": mjcf_scene_door(params), "hrp2.urdf": urdf(params)}
+            "scene_door.xml": mjcf_scene_door(params), "scene_expo.xml": mjcf_scene_expo(params),
+            "hrp2.urdf": urdf(params)}
 
 
 def generate(output_dir: str | Path = MODEL_DIR) -> list[Path]:

@@ -7,6 +7,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from robot import scene_objects
 from robot.names import BASE_LINK, FORCE_SENSOR_NAMES, JOINT_NAMES, MJCF_SCENE, MODEL_DIR, NUM_JOINTS
 from robot.sensors import GroundTruth, Sensors, frozen_array
 
@@ -17,6 +18,9 @@ SCENES: dict[str, Path] = {
     "wall": MODEL_DIR / "scene_wall.xml",  # wall in front (face x = 0.40 m) and at the left (y = 0.825 m)
     "valve": MODEL_DIR / "scene_valve.xml",  # valve on a wall, hinge along -x, sensor valve_angle
     "door": MODEL_DIR / "scene_door.xml",  # pull door, hinge at y = -0.45 m, sensor door_angle
+    # EXPO 2005 tasks [OP VI]: table (near edge x = 2.0 m), 300 ml can, trash box with a 120 x 280 mm hole,
+    # an unknown object on the floor; objects movable with MujocoPlant.place_object
+    "expo": MODEL_DIR / "scene_expo.xml",
 }
 
 #: MuJoCo's force/torque sensors give the wrench the parent exerts on the sensor's body (the distal side);
@@ -183,6 +187,22 @@ class MujocoPlant:
             if self.time_s >= end_s:
                 self._data.xfrc_applied[body_id] = 0.0
                 del self._push_end_s[body_id]
+
+    # ------------------------------------------------------------------ simulator operations (not hardware)
+
+    def placeable_objects(self) -> dict[str, str]:
+        """The scene's loose objects: name -> "free" (moves under physics) or "fixed" (moves only when placed)."""
+        return scene_objects.placeable_objects(self._model)
+
+    def place_object(self, name: str, position, yaw_rad: float = 0.0) -> np.ndarray:
+        """Put an object at (x, y, z) of its body origin [m, world], or at (x, y) standing on what is below it,
+        yawed by `yaw_rad` about world z, at rest; returns the body position. Lasts until the next reset.
+        Unknown names raise ValueError listing the scene's objects (see robot.scene_objects.place_object)."""
+        return scene_objects.place_object(self._model, self._data, name, position, yaw_rad)
+
+    def object_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """True pose of an object (position [m, world], quaternion wxyz): for tests and setup, never the robot."""
+        return scene_objects.object_pose(self._model, self._data, name)
 
     def warnings(self) -> dict[str, int]:
         """Nonzero MuJoCo warning counters since the last reset: name -> count."""

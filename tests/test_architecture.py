@@ -1,6 +1,6 @@
-"""Import rules of the design card: the controller never imports the app nor the simulator's plant; robot
-imports no other package; behaviours never reach the app, MuJoCo or the plant; no private name crosses
-modules of the controller."""
+"""Import rules of the design card: the controller never imports the app nor the simulator (plant, cameras,
+object operations, ground truth); robot imports no other package; behaviours never reach the app, MuJoCo or
+the simulator, nor read a ground-truth attribute; no private name crosses modules of the controller."""
 
 import ast
 from pathlib import Path
@@ -11,15 +11,23 @@ ROOT = Path(__file__).resolve().parents[1]
 FORBIDDEN = {
     "controller": {"app", "behaviors", "fastapi", "viser", "pydantic", "uvicorn", "starlette"},
     "robot": {"app", "behaviors", "controller", "fastapi", "viser", "pydantic"},
-    "behaviors": {"app", "fastapi", "viser", "pydantic", "uvicorn"},
+    "behaviors": {"app", "fastapi", "viser", "pydantic", "uvicorn", "mujoco"},
 }
-
-
-#: modules (dotted, prefix match) a package must not import, beyond FORBIDDEN's top-level packages
+#: The simulator, whose state is ground truth and not the robot's knowledge: its plant, cameras and object
+#: operations, and the ground-truth half of robot.sensors.
+SIMULATOR_MODULES = {"robot.plant", "robot.camera", "robot.scene_objects", "robot.sensors.GroundTruth",
+                     "robot.sensors.is_fallen"}
+#: modules (dotted, prefix match) a package must not import, beyond FORBIDDEN's top-level packages;
+#: `from robot import plant` counts as robot.plant
 FORBIDDEN_MODULES = {
-    "controller": {"robot.plant", "robot.camera", "robot.scene_objects"},
-    "behaviors": {"robot.plant", "robot.camera", "robot.scene_objects", "mujoco"},
+    "controller": SIMULATOR_MODULES,
+    "behaviors": SIMULATOR_MODULES | {"mujoco"},
 }
+#: Attributes that carry the simulator's view (Observation.truth, MujocoPlant.ground_truth / object_pose /
+#: place_object, Frames.T_world_camera_true and any *_true name, MjData's state arrays): behaviours and
+#: perception never read them, even from an object handed to them.
+GROUND_TRUTH_ATTRIBUTES = {"truth", "ground_truth", "object_pose", "place_object", "placeable_objects", "qpos",
+                           "qvel", "xpos", "xquat", "mocap_pos", "mocap_quat", "geom_xpos", "cam_xpos", "sensordata"}
 #: the only controller module allowed to import mujoco: the CollisionDetector uses it as a geometry library
 MUJOCO_IN_CONTROLLER = {"controller/layers/collision_detector.py"}
 
@@ -33,6 +41,7 @@ def imported_modules(path: Path) -> set[str]:
             names |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
             names.add(node.module)
+            names |= {f"{node.module}.{a.name}" for a in node.names}  # `from robot import plant`
     return names
 
 
@@ -76,6 +85,17 @@ def test_package_does_not_import_the_modules_the_design_keeps_from_it(package):
                if m == f or m.startswith(f + ".")}
         if bad:
             offenders[str(path.relative_to(ROOT))] = sorted(bad)
+    assert offenders == {}
+
+
+def test_behaviors_read_no_ground_truth_attribute():
+    offenders = {}
+    for path in sorted((ROOT / "behaviors").rglob("*.py")):
+        tree = ast.parse(path.read_text(), filename=str(path))
+        bad = sorted({node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)
+                      and (node.attr in GROUND_TRUTH_ATTRIBUTES or node.attr.endswith("_true"))})
+        if bad:
+            offenders[str(path.relative_to(ROOT))] = bad
     assert offenders == {}
 
 

@@ -1,15 +1,16 @@
 """Simulation controls: reset (optionally to another scene; a new robot process if the old one died),
-push a body, list scenes."""
+push a body, place a scene object, list scenes and objects."""
 
 from __future__ import annotations
 
+import math
 from typing import Annotated
 
-from fastapi import APIRouter, Body
+from fastapi import APIRouter, Body, Path
 
 from app.deps import ServiceDep
 from app.errors import errors
-from app.schemas import Ok, PushRequest, ResetRequest
+from app.schemas import ObjectPlaced, Ok, PlaceObjectRequest, PushRequest, ResetRequest
 
 router = APIRouter(prefix="/api/sim", tags=["simulation"])
 
@@ -29,3 +30,19 @@ def reset(service: ServiceDep, req: Annotated[ResetRequest | None, Body()] = Non
              summary="Apply a world-frame force at a body's COM for a while")
 def push(req: PushRequest, service: ServiceDep) -> Ok:
     return Ok(message=service.push(req.body, req.force, req.duration))
+
+
+@router.get("/objects", summary="The current scene's objects a simulator operation may place")
+def objects(service: ServiceDep) -> dict[str, list[str] | str]:
+    return {"objects": list(service.objects), "scene": service.info.scene}
+
+
+@router.put("/objects/{name}", response_model=ObjectPlaced,
+            responses=errors(404, 422, e404="no such object in this scene (the valid ones are listed)"),
+            summary="Place a scene object (position, yaw) at rest: a simulator operation the robot only sees")
+def place_object(name: Annotated[str, Path(max_length=64)], req: PlaceObjectRequest,
+                 service: ServiceDep) -> ObjectPlaced:
+    placed = service.place_object(name, req.position, math.radians(req.yaw_deg))
+    where = ", ".join(f"{v:.3f}" for v in placed)
+    return ObjectPlaced(message=f"{name} placed at ({where}) m, yaw {req.yaw_deg:g} deg", name=name,
+                        position=list(placed))

@@ -28,6 +28,7 @@ from app.service.verbs import (
     GoPos,
     GoVelocity,
     ListRuns,
+    PlaceObject,
     Push,
     ReleaseEstop,
     ReleaseMotion,
@@ -263,6 +264,16 @@ class OperatorService:
     # ---- the simulation --------------------------------------------------------------------------------
     def push(self, body: str, force_n: Sequence[float], duration_s: float) -> str:
         return self.run(Push(body, tuple(map(float, force_n)), float(duration_s)))
+
+    @property
+    def objects(self) -> tuple[str, ...]:
+        """The current scene's placeable objects."""
+        return self._info.objects
+
+    def place_object(self, name: str, position_m: Sequence[float], yaw_rad: float = 0.0
+                     ) -> tuple[float, float, float]:
+        """Put a scene object at (x, y) on what is below it or at (x, y, z) [m], yawed [rad]; the body position."""
+        return self.run(PlaceObject(name, tuple(position_m), yaw_rad))
 
     def reset(self, scene: str | None = None) -> str:
         """Restart the simulation (a new robot process if the old one died)."""

@@ -307,7 +307,7 @@ class RobotHost:
             q_upper_rad=tuple(float(v) for v in np.asarray(kin.q_upper)),
             chain=tuple(chain.order()), params={o: self.params(o) for o in self.param_owners()},
             impedance_limbs=tuple(ic.limbs) if ic is not None else (), dt_control_s=self.dt_control_s,
-            speed=self.loop.speed)
+            speed=self.loop.speed, objects=tuple(self.plant.placeable_objects()))
 
     def timing(self, max_age_s: float = 0.2) -> LoopTiming:
         """The loop's lateness figures, recomputed at most every `max_age_s` (a percentile over 12000 ticks

@@ -36,6 +36,8 @@ MAX_VELOCITY_RAD_S = math.radians(45.0)  # |vtheta| of goVelocity
 MAX_FOOTSTEPS = 50
 MAX_FOOTSTEP_POS_M = 10.0  # [m] |pos| components of a setFootSteps entry
 MAX_TARGET_POS_M = 5.0  # [m] |pos| components of a setTargetPose target
+MAX_OBJECT_XY_M = 10.0  # [m] |x|, |y| where a scene object may be placed
+MAX_OBJECT_Z_M = 3.0  # [m] highest body origin of a placed object (z >= 0)
 TARGET_LIMBS = ("rarm", "larm", "rleg", "lleg")
 
 
@@ -55,6 +57,7 @@ class RobotInfo:
     impedance_limbs: tuple[str, ...]
     dt_control_s: float
     speed: float | None
+    objects: tuple[str, ...] = ()  # the scene's placeable objects (a simulator operation moves them)
 
     def joint_limits_rad(self, index: int) -> tuple[float, float]:
         return self.q_lower_rad[index], self.q_upper_rad[index]
@@ -622,6 +625,36 @@ class Push(Verb):
     def run(self, host: RobotHost) -> str:
         host.plant.push(self.body, np.array(self.force_n), self.duration_s)
         return f"pushing {self.body} for {self.duration_s:g} s"
+
+
+@dataclass(frozen=True)
+class PlaceObject(Verb):
+    """Put a scene object at (x, y) standing on what is below it, or with its body origin at (x, y, z) [m, world],
+    yawed by `yaw_rad`, at rest (a simulator operation: the robot learns of it only through its cameras)."""
+
+    name = "place_object"
+    object_name: str
+    position_m: tuple[float, ...]
+    yaw_rad: float = 0.0
+
+    def __post_init__(self) -> None:
+        if len(self.position_m) not in (2, 3):
+            raise InvalidArgument("position", f"must be [x, y] or [x, y, z] [m], got {len(self.position_m)} numbers")
+        _finite("position", self.position_m)
+        for axis, value in zip("xy", self.position_m[:2], strict=False):
+            _bounded(f"position.{axis}", value, -MAX_OBJECT_XY_M, MAX_OBJECT_XY_M, "m")
+        if len(self.position_m) == 3:
+            _bounded("position.z", self.position_m[2], 0.0, MAX_OBJECT_Z_M, "m")
+        _bounded("yaw", self.yaw_rad, -2 * math.pi, 2 * math.pi, "deg", math.degrees)
+
+    def check(self, info: RobotInfo) -> None:
+        if self.object_name not in info.objects:
+            valid = ", ".join(info.objects) or f"none in scene {info.scene!r}"
+            raise NotFound(f"object: unknown object {self.object_name!r}; valid objects: {valid}")
+
+    def run(self, host: RobotHost) -> tuple[float, float, float]:
+        placed = host.plant.place_object(self.object_name, self.position_m, self.yaw_rad)
+        return tuple(float(v) for v in placed)
 
 
 @dataclass(frozen=True)

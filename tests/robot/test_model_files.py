@@ -13,8 +13,8 @@ from app.experiments import wall as wall_experiment
 from robot.names import MODEL_DIR
 from robot.plant import SCENES, MujocoPlant, available_scenes
 
-REQUIRED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml", "scene_door.xml", "hrp2.urdf",
-                  "README.md", "LICENSE", "CHANGELOG.md")
+REQUIRED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml", "scene_door.xml", "scene_expo.xml",
+                  "hrp2.urdf", "README.md", "LICENSE", "CHANGELOG.md")
 
 
 @pytest.mark.parametrize("name", REQUIRED_FILES)

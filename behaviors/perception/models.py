@@ -1,0 +1,30 @@
+"""The object models the robot knows [OP VI]: the 300 ml can and the trash box (its own copy, not the scene's)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True, slots=True)
+class CanModel:
+    """A drink can standing upright: a vertical cylinder."""
+
+    diameter_m: float = 0.065  # [OP VI]
+    height_m: float = 0.107  # 300 ml at 65 mm diameter (robot/hrp2/README.md)
+
+    @property
+    def radius_m(self) -> float:
+        return self.diameter_m / 2
+
+
+@dataclass(frozen=True, slots=True)
+class TrashBoxModel:
+    """A box whose horizontal lid (the coloured part) has a rectangular hole in its middle."""
+
+    hole_m: tuple[float, float] = (0.28, 0.12)  # long, short side [OP VI]
+    lid_m: tuple[float, float] = (0.45, 0.30)  # the lid's outer long and short side, hole centred
+    lid_height_m: float = 0.60  # lid top above the floor
+
+
+CAN = CanModel()
+TRASH_BOX = TrashBoxModel()

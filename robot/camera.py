@@ -1,0 +1,244 @@
+"""The simulated head cameras: one offscreen MuJoCo renderer on one thread, fed copies of the plant state."""
+
+from __future__ import annotations
+
+import copy
+import math
+import threading
+import time
+from collections.abc import Sequence
+from concurrent.futures import Future, ThreadPoolExecutor
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from robot.images import CameraImage, CameraIntrinsics, Frames
+from robot.plant import scene_path
+
+#: The head cameras [OP sec. V] (robot/generate.py CAMERAS): narrow stereo pair and the wide teleoperation camera.
+HEAD_CAMERAS: tuple[str, ...] = ("narrow_left", "narrow_right", "wide")
+#: Depth comes with the left narrow camera only: a simulated stereo sensor (narrow pair, 0.144 m baseline)
+#: whose depth map is registered to the left image. The wide camera has no stereo partner.
+DEPTH_CAMERAS: tuple[str, ...] = ("narrow_left",)
+
+#: MuJoCo camera frame (x right, y up, looking along -z) -> optical frame (x right, y down, z forward).
+R_MUJOCO_OPTICAL = np.diag([1.0, -1.0, -1.0])
+#: Depth at or beyond this fraction of the far clipping plane means nothing was hit.
+FAR_FRACTION = 0.999
+
+
+def camera_intrinsics(model: mujoco.MjModel, camera: str, width: int, height: int) -> CameraIntrinsics:
+    """Pinhole intrinsics of a model camera rendered at width x height [px].
+
+    A camera with `sensorsize` (the head cameras) has its fields of view from focal length and sensor size,
+    stretched to the image: fx = f / sensor_x * width, fy = f / sensor_y * height. Otherwise MuJoCo's `fovy`
+    gives fy = height / (2 tan(fovy / 2)) and square pixels (fx = fy). The principal point is the image centre.
+    """
+    cam = model.camera(camera).id
+    sensor = model.cam_sensorsize[cam]
+    if sensor[0] > 0 and sensor[1] > 0:
+        f_x, f_y = model.cam_intrinsic[cam][:2]
+        fx, fy = f_x / sensor[0] * width, f_y / sensor[1] * height
+    else:
+        fy = height / (2 * math.tan(math.radians(model.cam_fovy[cam]) / 2))
+        fx = fy
+    return CameraIntrinsics(width, height, float(fx), float(fy), (width - 1) / 2, (height - 1) / 2)
+
+
+def stereo_baseline_m(model: mujoco.MjModel) -> float:
+    """Distance between the narrow pair's optical centres [m] (0.144 m on HRP-2 No.10); 0 without the pair."""
+    names = {model.camera(i).name for i in range(model.ncam)}
+    if not {"narrow_left", "narrow_right"} <= names:
+        return 0.0
+    return float(np.linalg.norm(model.camera("narrow_left").pos - model.camera("narrow_right").pos))
+
+
+class CameraRig:
+    """Renders the head cameras from snapshots of the plant state, on one dedicated render thread.
+
+    EGL (and OSMesa) contexts belong to the thread that made them current, so the renderer is created, used
+    and freed on the rig's single worker thread; callers only queue requests. Each request carries a copy of
+    the state (qpos, and the mocap poses of fixed objects); the rig writes it into its own MjData, runs
+    mj_forward and renders RGB for every camera and metric depth for DEPTH_CAMERAS. Shadows, reflections,
+    the skybox and multisampling are off for speed. Set MUJOCO_GL=egl (or osmesa) before importing mujoco.
+
+    Depth is the renderer's z-buffer, exact to float32: an ideal stereo sensor. `disparity_noise_px` > 0 adds
+    the error of a real one: Gaussian noise on the disparity fx b / z of the narrow pair (baseline b), so the
+    depth error grows as z^2 (about 2 mm at 1.2 m for 0.25 px). `seed` makes that noise repeatable.
+    """
+
+    def __init__(self, scene: str | Path | mujoco.MjModel = "default", cameras: Sequence[str] = HEAD_CAMERAS,
+                 width: int = 640, height: int = 480, depth_cameras: Sequence[str] | None = None,
+                 disparity_noise_px: float = 0.0, seed: int | None = None) -> None:
+        if isinstance(scene, mujoco.MjModel):
+            model = copy.copy(scene)  # the rig's own model: its visual settings change below
+        else:
+            model = mujoco.MjModel.from_xml_path(str(scene_path(scene)))
+        known = [model.camera(i).name for i in range(model.ncam)]
+        cameras = tuple(cameras)
+        if depth_cameras is None:  # DEPTH_CAMERAS among those rendered
+            depth_cameras = tuple(c for c in DEPTH_CAMERAS if c in cameras)
+        for name in (*cameras, *depth_cameras):
+            if name not in known:
+                raise ValueError(f"unknown camera {name!r}; valid cameras: {', '.join(known)}")
+        if not cameras:
+            raise ValueError(f"cameras must name at least one camera; valid cameras: {', '.join(known)}")
+        if not set(depth_cameras) <= set(cameras):
+            raise ValueError(f"depth_cameras {tuple(depth_cameras)} must be among cameras {cameras}")
+        if not (isinstance(width, int) and isinstance(height, int) and width > 0 and height > 0):
+            raise ValueError(f"width and height must be positive integers [px], got {width!r} x {height!r}")
+        if not (math.isfinite(disparity_noise_px) and disparity_noise_px >= 0):
+            raise ValueError(f"disparity_noise_px must be >= 0 [px], got {disparity_noise_px!r}")
+        model.vis.quality.offsamples = 0
+        model.vis.global_.offwidth = max(model.vis.global_.offwidth, width)
+        model.vis.global_.offheight = max(model.vis.global_.offheight, height)
+        self._model = model
+        self._data = mujoco.MjData(model)
+        self._cameras = cameras
+        self._depth_cameras = tuple(depth_cameras)
+        self._width, self._height = width, height
+        self._intrinsics = {name: camera_intrinsics(model, name, width, height) for name in cameras}
+        self._far_m = float(model.vis.map.zfar * model.stat.extent)
+        self._baseline_m = stereo_baseline_m(model)
+        self._disparity_noise_px = float(disparity_noise_px)
+        self._rng = np.random.default_rng(seed)
+        self._gl_thread_ids: set[int] = set()
+        self._closed = False
+        self._lock = threading.Lock()
+        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="camera-render")
+        try:
+            self._executor.submit(self._open).result()
+        except Exception:
+            self._executor.shutdown(wait=True)
+            raise
+
+    def __repr__(self) -> str:
+        return (f"CameraRig(cameras={self._cameras}, depth={self._depth_cameras}, "
+                f"{self._width}x{self._height} px, closed={self._closed})")
+
+    # ------------------------------------------------------------------ render thread
+
+    def _open(self) -> None:
+        self._gl_thread_ids.add(threading.get_ident())
+        try:
+            self._renderer = mujoco.Renderer(self._model, self._height, self._width)
+        except Exception as err:
+            raise RuntimeError(f"cannot create an offscreen renderer ({err}); set MUJOCO_GL=egl or osmesa "
+                               "before mujoco is imported") from err
+        flags = self._renderer.scene.flags
+        for flag in (mujoco.mjtRndFlag.mjRND_SHADOW, mujoco.mjtRndFlag.mjRND_REFLECTION,
+                     mujoco.mjtRndFlag.mjRND_SKYBOX):
+            flags[flag] = 0
+
+    def _render(self, qpos: np.ndarray, time_s: float, mocap_pos, mocap_quat, cameras) -> Frames:
+        self._gl_thread_ids.add(threading.get_ident())
+        start = time.perf_counter()
+        m, d = self._model, self._data
+        d.qpos[:] = qpos
+        d.qvel[:] = 0.0
+        if mocap_pos is not None:
+            d.mocap_pos[:] = mocap_pos
+        if mocap_quat is not None:
+            d.mocap_quat[:] = mocap_quat
+        d.time = time_s
+        mujoco.mj_forward(m, d)
+        images, truth = {}, {}
+        renderer = self._renderer
+        for name in cameras:
+            cam = m.camera(name).id
+            renderer.update_scene(d, camera=cam)
+            rgb = renderer.render()
+            depth = None
+            if name in self._depth_cameras:
+                renderer.enable_depth_rendering()
+                depth = renderer.render()
+                renderer.disable_depth_rendering()
+                depth[depth >= FAR_FRACTION * self._far_m] = np.inf
+                if self._disparity_noise_px > 0:
+                    self._add_stereo_noise(depth, self._intrinsics[name].fx)
+                depth.flags.writeable = False
+            rgb.flags.writeable = False
+            T = np.eye(4)
+            T[:3, :3] = d.cam_xmat[cam].reshape(3, 3) @ R_MUJOCO_OPTICAL
+            T[:3, 3] = d.cam_xpos[cam]
+            T.flags.writeable = False
+            images[name] = CameraImage(name, rgb, depth, self._intrinsics[name])
+            truth[name] = T
+        return Frames(time_s, images, time.perf_counter() - start, truth)
+
+    def _add_stereo_noise(self, depth: np.ndarray, fx_px: float) -> None:
+        """Depth as a stereo pair measures it: disparity fx b / z [px] plus Gaussian noise, back to depth."""
+        hit = np.isfinite(depth)
+        fb = fx_px * self._baseline_m
+        disparity = fb / depth[hit] + self._rng.normal(0.0, self._disparity_noise_px, int(hit.sum()))
+        depth[hit] = np.where(disparity > 0, fb / np.maximum(disparity, 1e-9), np.inf)
+
+    def _close(self) -> None:
+        self._gl_thread_ids.add(threading.get_ident())
+        self._renderer.close()
+
+    # ------------------------------------------------------------------ callers' side
+
+    @property
+    def cameras(self) -> tuple[str, ...]:
+        return self._cameras
+
+    @property
+    def intrinsics(self) -> dict[str, CameraIntrinsics]:
+        return dict(self._intrinsics)
+
+    @property
+    def gl_thread_ids(self) -> frozenset[int]:
+        """Identifiers of the threads that have touched the GL context (one: the render thread)."""
+        return frozenset(self._gl_thread_ids)
+
+    def request(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
+                cameras: Sequence[str] | None = None) -> Future[Frames]:
+        """Queue a rendering of this state; the arrays are copied now, so the caller may go on stepping.
+
+        qpos (nq,); mocap_pos (nmocap, 3) and mocap_quat (nmocap, 4) for fixed objects (None: the model's
+        poses); cameras: a subset of the rig's (None: all). The future's result is a Frames.
+        """
+        q = np.array(qpos, dtype=float, copy=True)
+        if q.shape != (self._model.nq,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"qpos must be {self._model.nq} finite numbers, got shape {q.shape}")
+        pos = None if mocap_pos is None else np.array(mocap_pos, dtype=float, copy=True).reshape(-1, 3)
+        quat = None if mocap_quat is None else np.array(mocap_quat, dtype=float, copy=True).reshape(-1, 4)
+        for name, a in (("mocap_pos", pos), ("mocap_quat", quat)):
+            if a is not None and a.shape[0] != self._model.nmocap:
+                raise ValueError(f"{name} must have {self._model.nmocap} rows (one per mocap body), got {a.shape}")
+        chosen = self._cameras if cameras is None else tuple(cameras)
+        unknown = [c for c in chosen if c not in self._cameras]
+        if unknown or not chosen:
+            raise ValueError(f"cameras {unknown or chosen} not rendered by this rig; valid: {', '.join(self._cameras)}")
+        with self._lock:
+            if self._closed:
+                raise RuntimeError("CameraRig is closed")
+            return self._executor.submit(self._render, q, float(time_s), pos, quat, chosen)
+
+    def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None) -> Future[Frames]:
+        """request() with a copy of this MjData's qpos, time and mocap poses (e.g. MujocoPlant.data)."""
+        return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras)
+
+    def render(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
+               cameras: Sequence[str] | None = None) -> Frames:
+        """request(...) and wait for it."""
+        return self.request(qpos, time_s, mocap_pos, mocap_quat, cameras).result()
+
+    def close(self) -> None:
+        """Free the renderer on its thread and stop the thread (pending requests finish first). Idempotent."""
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+        try:
+            self._executor.submit(self._close).result()
+        finally:
+            self._executor.shutdown(wait=True)
+
+    def __enter__(self) -> CameraRig:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
