@@ -84,7 +84,7 @@ def test_bench_foundation_chain_reports_its_layers_and_the_loop_overhead():
     report = json.loads(r.stdout)
     assert report["chain"] == "kf -> rmfo -> seq -> co -> hes -> el"
     assert list(report["layers"]) == report["chain"].split(" -> ")
-    assert list(report["passthrough"]) == ["es", "ic", "abc", "st"]  # disabled: their input passes through
+    assert list(report["passthrough"]) == ["op", "es", "ic", "abc", "st"]  # disabled: their input passes through
     assert report["disabled_but_ran"] == []
     for key in ("tick_ms", "physics_ms", "step_ms", "layers_sum_ms", "loop_overhead_ms"):
         assert set(report[key]) == {"p50_ms", "p99_ms"}
@@ -99,7 +99,7 @@ def test_bench_layers_option_takes_a_list_and_rejects_unknown_names():
     report = json.loads(r.stdout)
     # the HardEmergencyStopper works disabled too: it ran, and is labelled so
     assert report["chain"] == "kf -> rmfo -> seq -> hes" and report["disabled_but_ran"] == ["hes"]
-    assert list(report["passthrough"]) == ["es", "ic", "abc", "st", "co", "el"]
+    assert list(report["passthrough"]) == ["op", "es", "ic", "abc", "st", "co", "el"]
     r = run("bench", "--layers", "kf,warp")
     assert r.returncode == 2
     assert "--layers" in r.stderr and "warp" in r.stderr and "rmfo" in r.stderr
