@@ -60,6 +60,13 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
     def index() -> FileResponse:
         return FileResponse(STATIC_DIR / "index.html")
 
+    @api.get("/viewer/", include_in_schema=False)
+    def viewer_client() -> FileResponse:
+        # viser's client from the page's own origin (the 3D view's iframe; its websocket goes to the viewer port)
+        from app.viewer_client import client_html_path
+
+        return FileResponse(client_html_path(), media_type="text/html; charset=utf-8")
+
     api.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     guarded = ConsoleGuard(HotPaths(api), allowed_hosts_for(settings.host, settings.extra_hosts))
     guarded.fastapi = api
