@@ -426,6 +426,7 @@ class Viewer:
              {"label": "+threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
              {"label": "-threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
              {"label": "CP flag", "stroke": "rgba(200,16,46,0)", "width": 0, "fill": "rgba(200,16,46,0.18)",
+              "fillTo": -PLOT_RANGE_MM,
               "points": {"show": False}}),
             title="capture-point error [mm] (shaded: CP flag raised)",
             scales={"x": {"time": False}, "y": {"auto": False, "range": (-PLOT_RANGE_MM, PLOT_RANGE_MM)}},
