@@ -51,7 +51,7 @@ function say(text, bad = false) {
 
 async function api(method, url, body) {
   try {
-    const r = await fetch(url, {method, headers: headers(body !== undefined),
+    const r = await fetch(url, {method, headers: headers(method !== "GET"),
                                 body: body === undefined ? undefined : JSON.stringify(body)});
     const data = await r.json().catch(() => ({}));
     if (!r.ok) {
@@ -74,14 +74,22 @@ const post = (url, body) => api("POST", url, body);
 
 // ---- E-STOP: pointer-down (not click: no waiting for the release), Space / Esc anywhere, gamepad B ----------
 let lastEstopAt = -1e9;
-function estop(source) {
+// the e-stops this page sent: input event time (epoch [ms]) and the loop's reply (the e-stop benchmark reads it)
+window.hrp2Estops = [];
+function estop(source, eventTimeStamp) {
   lastEstopAt = performance.now();
+  const record = {source, event_epoch_ms: performance.timeOrigin + (eventTimeStamp ?? performance.now()), reply: null};
+  window.hrp2Estops.push(record);
+  if (window.hrp2Estops.length > 1000) window.hrp2Estops.shift();
   fetch("/api/estop", {method: "POST", headers: headers(false), keepalive: true})
-    .then((r) => r.json().then((d) => { if (!r.ok) log(`E-STOP (${source}): ${r.status} ${d.detail}`, "bad"); }))
+    .then((r) => r.json().then((d) => {
+      record.reply = d;
+      if (!r.ok) log(`E-STOP (${source}): ${r.status} ${d.detail}`, "bad");
+    }))
     .catch((e) => log(`E-STOP (${source}) not sent: ${e}`, "bad"));
   log(`E-STOP pressed (${source})`, "bad");
 }
-$("estop").addEventListener("pointerdown", (e) => { e.preventDefault(); estop("button"); });
+$("estop").addEventListener("pointerdown", (e) => { e.preventDefault(); estop("button", e.timeStamp); });
 $("estop").addEventListener("click", () => { if (performance.now() - lastEstopAt > 500) estop("button"); });
 
 function isTyping(target) {
@@ -513,6 +521,7 @@ function connectOperator() {
 }
 
 function streamTick() {
+  readGamepad();  // also here, not only every animation frame: a busy compositor must not delay a let-go dead-man
   const a = axes();
   let sending = false;
   for (const p of POINTS) {
@@ -584,6 +593,10 @@ bindStick($("stick-right"), 1);
 const GP = {estop: 1, nextPoint: 3, deadman: [4, 5], lt: 6, rt: 7, dpadLeft: 14, dpadRight: 15};
 let gpPrev = [];
 function pollGamepad() {
+  readGamepad();
+  requestAnimationFrame(pollGamepad);
+}
+function readGamepad() {
   const pads = navigator.getGamepads ? [...navigator.getGamepads()].filter(Boolean) : [];
   const gp = pads.find((g) => g.connected !== false);
   if (gp) {
@@ -599,7 +612,6 @@ function pollGamepad() {
   } else {
     gamepadDeadman = false;
   }
-  requestAnimationFrame(pollGamepad);
 }
 requestAnimationFrame(pollGamepad);
 
