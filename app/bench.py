@@ -179,6 +179,8 @@ def _summed(samples: dict[str, np.ndarray], names: Sequence[str], n: int) -> np.
 CONSOLE_SCENARIOS = {
     "load": "the console at real time under 20 pollers of /api/state at 10 Hz, 100 commands/s and an e-stop "
             "pressed (and released) every second: tick start-lateness, /api/state and e-stop request times",
+    "estop-browser": "E-STOP pointer-down in a real Chromium -> hard stop engaged in the loop, 50 clicks while the "
+                     "page streams a stick (stubbed gamepad) and shows the 3D view: p50/p99/max [ms]",
 }
 
 
@@ -212,6 +214,10 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     if scenario in CONSOLE_SCENARIOS:
         if layers is not None:
             raise ValueError(f"scenario {scenario!r} runs the whole console; --layers/--chain do not apply")
+        if scenario == "estop-browser":
+            from app.bench_browser import run_estop_browser_bench
+
+            return run_estop_browser_bench(scene=scene)
         return run_load_bench(duration_s, scene)
     if scenario not in SCENARIOS:
         valid = ", ".join((*SCENARIOS, *CONSOLE_SCENARIOS, *CAMERA_SCENARIOS))

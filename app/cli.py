@@ -217,6 +217,8 @@ def run(argv: Sequence[str]) -> int:
         except RuntimeError as exc:
             print(f"hrp2-console: error: {exc}", file=sys.stderr)
             return 2
+        if viewer is not None:
+            viewer.allow_page(http_port)  # the page's /viewer/ iframe opens the viewer's websocket
         speed = "max" if args.speed is None else f"{args.speed:g}x real time"
         pub = service.published()
         print(f"hrp2-console: scene {args.scene!r}, {speed}; chain {pub.chain}")

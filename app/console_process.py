@@ -21,9 +21,10 @@ ROOT = Path(__file__).resolve().parents[1]
 class Console:
     """`hrp2-console --headless --port 0 ARGS` until `stop()`; `port` is where its HTTP API listens."""
 
-    def __init__(self, *args: str, timeout_s: float = 90.0) -> None:
+    def __init__(self, *args: str, timeout_s: float = 90.0, headless: bool = True, viewer_port: int = 0) -> None:
         env = {**os.environ, "PYTHONUNBUFFERED": "1", "MUJOCO_GL": os.environ.get("MUJOCO_GL", "egl")}
-        self.proc = subprocess.Popen([sys.executable, "-m", "app.cli", "--headless", "--port", "0", *args],
+        view = ["--headless"] if headless else ["--viewer-port", str(viewer_port)]
+        self.proc = subprocess.Popen([sys.executable, "-m", "app.cli", *view, "--port", "0", *args],
                                      cwd=ROOT, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
         self.lines: list[str] = []
         deadline = time.monotonic() + timeout_s

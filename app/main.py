@@ -6,7 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from fastapi import FastAPI
-from fastapi.responses import FileResponse
+from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
 from app.errors import ErrorBody, install_error_handlers
@@ -59,6 +59,13 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
     @api.get("/", include_in_schema=False)
     def index() -> FileResponse:
         return FileResponse(STATIC_DIR / "index.html")
+
+    @api.get("/viewer/", include_in_schema=False)
+    def viewer_client() -> HTMLResponse:
+        # viser's client with the page's key forwarder (the 3D view's iframe; its websocket goes to the viewer port)
+        from app.viewer_client import client_html
+
+        return HTMLResponse(client_html())
 
     api.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
     guarded = ConsoleGuard(HotPaths(api), allowed_hosts_for(settings.host, settings.extra_hosts))

@@ -19,13 +19,16 @@ import viser
 
 from app.service import OperatorService, ServiceError
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
+from controller.operation.targets import feet_frame, yaw_rotation
 from robot.plant import scene_path
 
 log = logging.getLogger(__name__)
 
 _VISUAL_GROUPS = (0, 1, 2)  # MJCF geom groups drawn by default; group 3 holds the collision shapes
 PLOT_WINDOW_S = 10.0  # [s] of simulated time shown by the capture-point error plot
-PLOT_RATE_HZ = 10.0  # plot samples and redraws per second (wall time)
+PLOT_RATE_HZ = 25.0  # plot samples and redraws per second (wall time): the issue asks >= 20
+PLOT_RANGE_MM = 100.0  # the plot's fixed y range +-[mm]: the default 40 mm threshold stays readable
+OP_TARGET_POINTS = ("rhand", "lhand")  # operational points whose target position is drawn (x, y, z in F)
 MAX_FOOTSTEPS = 16  # planned footsteps drawn (fixed buffer: the handles are only updated, never rebuilt)
 _FLOOR_LIFT_M = 0.002  # floor markers drawn this far above the sole plane so they are not hidden
 _SOLES = {"rleg": HRP2_RIGHT_SOLE, "lleg": HRP2_LEFT_SOLE}
@@ -90,11 +93,11 @@ def footstep_rectangles(steps, z: float) -> np.ndarray:
 
 
 class CpErrorHistory:
-    """Ring buffer of (sim time [s], CP error x, y [mm], threshold [mm]) over the last `window_s`."""
+    """Ring buffer of (sim time [s], CP error x, y [mm], threshold [mm], flag) over the last `window_s`."""
 
     def __init__(self, window_s: float = PLOT_WINDOW_S, maxlen: int = 2000) -> None:
         self.window_s = float(window_s)
-        self._rows: deque[tuple[float, float, float, float]] = deque(maxlen=maxlen)
+        self._rows: deque[tuple[float, float, float, float, float]] = deque(maxlen=maxlen)
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -110,18 +113,28 @@ class CpErrorHistory:
         if self._rows and t == self._rows[-1][0]:
             return False
         ex, ey = st.cp_error
-        self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m)))
+        self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m),
+                           1.0 if st.emergency else 0.0))
         while self._rows and self._rows[0][0] < t - self.window_s:
             self._rows.popleft()
         return True
 
+    def latest(self) -> tuple[float, float, float, float, bool] | None:
+        """The newest row: (time [s], err x, err y, threshold [mm], flag), or None."""
+        if not self._rows:
+            return None
+        t, ex, ey, thr, flag = self._rows[-1]
+        return t, ex, ey, thr, bool(flag)
+
     def data(self) -> tuple[np.ndarray, ...]:
-        """(time, err x, err y, +threshold, -threshold) arrays for the uPlot."""
+        """(time, err x, err y, +threshold, -threshold, flag band) arrays for the uPlot; the flag band is at the
+        top of the fixed range while the CP flag is raised and at its bottom otherwise (filled down: shaded)."""
         if not self._rows:
             z = np.zeros(1)
-            return z, z, z, z, z
+            return z, z, z, z, z, np.full(1, -PLOT_RANGE_MM)
         a = np.asarray(self._rows, dtype=float)
-        return a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3]
+        band = np.where(a[:, 4] > 0.5, PLOT_RANGE_MM, -PLOT_RANGE_MM)
+        return a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3], band
 
 
 def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
@@ -132,8 +145,8 @@ def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
 
 
 def allowed_ws_origins(host: str, port: int) -> list[str | None]:
-    """Origins the viser websocket accepts: its own page (the iframe of the operator page), on the bound
-    host or a loopback name; None (no Origin header) for non-browser clients such as viser's own."""
+    """Origins the viser websocket accepts: its own page, on the bound host or a loopback name; None (no
+    Origin header) for non-browser clients such as viser's own."""
     from app.security import LOOPBACK_NAMES, is_loopback
 
     names = {host, *(LOOPBACK_NAMES if is_loopback(host) else ())}
@@ -149,18 +162,21 @@ class _OriginCheckingServe:
     front of viser's own, so the handshake of a page from another origin is refused (403) before viser sees
     it. The allowed origins use the port the connection arrived on (viser may pick a free port)."""
 
-    def __init__(self, serve, host: str):
+    def __init__(self, serve, host: str, page_origins: set[str]):
         self._serve = serve
         self._host = host
+        self._page_origins = page_origins
 
     def __call__(self, handler, host, port, **kwargs):
         inner = kwargs.get("process_request")
         allowed_host = self._host
+        page_origins = self._page_origins
 
         def process_request(connection, request):
             if request.headers.get("Upgrade", "").lower() == "websocket":
                 origin = request.headers.get("Origin")
-                if origin not in allowed_ws_origins(allowed_host, connection.local_address[1]):
+                if origin not in page_origins and origin not in allowed_ws_origins(allowed_host,
+                                                                                   connection.local_address[1]):
                     return connection.respond(403, "this viewer only accepts its own page\n")
             return inner(connection, request) if inner is not None else None
 
@@ -168,7 +184,7 @@ class _OriginCheckingServe:
         return self._serve(handler, host, port, **kwargs)
 
 
-def _viser_with_origin_check(host: str, port: int, **kwargs) -> viser.ViserServer:
+def _viser_with_origin_check(host: str, port: int, page_origins: set[str], **kwargs) -> viser.ViserServer:
     """A ViserServer whose websocket checks the Origin header (viser 1.1 has no option for it: its server
     module's reference to websockets' `serve` is wrapped while the server starts)."""
     import types
@@ -178,7 +194,7 @@ def _viser_with_origin_check(host: str, port: int, **kwargs) -> viser.ViserServe
     real = _infra.websockets
     wrapped = types.SimpleNamespace(**{k: getattr(real, k) for k in ("datastructures", "exceptions")})
     wrapped.asyncio = types.SimpleNamespace(server=types.SimpleNamespace(
-        serve=_OriginCheckingServe(real.asyncio.server.serve, host),
+        serve=_OriginCheckingServe(real.asyncio.server.serve, host, page_origins),
         ServerConnection=real.asyncio.server.ServerConnection))
     _infra.websockets = wrapped
     try:
@@ -191,10 +207,12 @@ def _viser_with_origin_check(host: str, port: int, **kwargs) -> viser.ViserServe
 class Viewer:
     """viser server showing the robot; body poses are pushed in one atomic batch at `rate_hz`."""
 
-    def __init__(self, service: OperatorService, host: str = "127.0.0.1", port: int = 8080, rate_hz: float = 30.0):
+    def __init__(self, service: OperatorService, host: str = "127.0.0.1", port: int = 8080, rate_hz: float = 25.0):
         self.service = service
         self.rate_hz = float(rate_hz)
-        self.server = _viser_with_origin_check(host, port)
+        self._host = host
+        self._page_origins: set[str] = set()
+        self.server = _viser_with_origin_check(host, port, self._page_origins)
         self.port = self.server.get_port()
         self.server.scene.configure_default_lights(enabled=True, cast_shadow=False)
         self.server.scene.set_up_direction("+z")
@@ -203,12 +221,19 @@ class Viewer:
         self._model_key: tuple[str, ...] = ()
         self._model: mujoco.MjModel | None = None
         self._cp_history = CpErrorHistory()
+        self._plot_updates = 0
         self._build_markers()
         self._build_scene()
         self._build_gui()
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name="viser-update", daemon=True)
         self._thread.start()
+
+    def allow_page(self, port: int) -> None:
+        """Accept the websocket of the operator page served on `port` of the same host (its /viewer/ iframe)."""
+        for origin in allowed_ws_origins(self._host, port):
+            if origin is not None:
+                self._page_origins.add(origin)
 
     # ---- scene --------------------------------------------------------------------------------
     def _build_scene(self) -> None:
@@ -302,6 +327,10 @@ class Viewer:
                                              thickness=0.003, visible=False)
         m["footsteps"] = scene.add_line_segments("/markers/footsteps", _padded(seg, 4 * MAX_FOOTSTEPS),
                                                  (0, 170, 200), thickness=0.003, visible=False)
+        for point, color in zip(OP_TARGET_POINTS, ((200, 40, 200), (120, 40, 220)), strict=True):
+            m[f"target_{point}"] = scene.add_icosphere(f"/markers/target_{point}", radius=0.025, color=color,
+                                                       subdivisions=1, opacity=0.6, cast_shadow=False,
+                                                       receive_shadow=False, visible=False)
         self._markers = m
 
     @staticmethod
@@ -355,6 +384,24 @@ class Viewer:
             m["footsteps"].points = _padded(footstep_rectangles(planned[:MAX_FOOTSTEPS], floor_z),
                                             4 * MAX_FOOTSTEPS)
         self._show(m["footsteps"], bool(planned))
+        self._update_targets(snap, gait)
+
+    def _update_targets(self, snap, gait) -> None:
+        """The operation layer's hand targets (x, y, z in the feet frame F) drawn in the world."""
+        op = snap.layers.get("op")
+        points = getattr(op, "points", None) or {}
+        frame = None
+        if gait is not None:
+            frame = feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world)
+        for point in OP_TARGET_POINTS:
+            handle = self._markers[f"target_{point}"]
+            status = points.get(point)
+            target = getattr(status, "target", None)
+            if frame is None or target is None:
+                self._show(handle, False)
+                continue
+            origin, yaw = frame
+            self._place(handle, origin + yaw_rotation(yaw) @ np.asarray(target[:3], dtype=float))
 
     # ---- GUI ----------------------------------------------------------------------------------
     def _build_gui(self) -> None:
@@ -377,11 +424,16 @@ class Viewer:
              {"label": "CP err x [mm]", "stroke": "#e6194b", "width": 1.5},
              {"label": "CP err y [mm]", "stroke": "#3c78d8", "width": 1.5},
              {"label": "+threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
-             {"label": "-threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)}),
-            title="capture-point error [mm]",
-            scales={"x": {"time": False}},
+             {"label": "-threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
+             {"label": "CP flag", "stroke": "rgba(200,16,46,0)", "width": 0, "fill": "rgba(200,16,46,0.18)",
+              "fillTo": -PLOT_RANGE_MM,
+              "points": {"show": False}}),
+            title="capture-point error [mm] (shaded: CP flag raised)",
+            scales={"x": {"time": False}, "y": {"auto": False, "range": (-PLOT_RANGE_MM, PLOT_RANGE_MM)}},
+            legend={"show": True, "live": True},
             aspect=1.6,
         )
+        self._cp_values = gui.add_markdown(self._cp_legend())
 
         @self._estop.on_click
         def _(_event) -> None:
@@ -415,15 +467,31 @@ class Viewer:
         if self._fault.value != fault:
             self._fault.value = fault
 
+    def _cp_legend(self) -> str:
+        """The plot's current values, as a line under it (uPlot's own legend shows them under the cursor)."""
+        row = self._cp_history.latest()
+        if row is None:
+            return "CP error: no Stabilizer"
+        t, ex, ey, thr, flag = row
+        return (f"t {t:.2f} s: x **{ex:+.1f}** mm, y **{ey:+.1f}** mm, |e| {math.hypot(ex, ey):.1f} / threshold "
+                f"{thr:.1f} mm, flag **{'RAISED' if flag else 'off'}**")
+
     def _update_plot(self, snap) -> None:
         if self._cp_history.add(snap):
             self._cp_plot.data = self._cp_history.data()
+            self._plot_updates += 1
+            if self._plot_updates % 5 == 0:
+                self._cp_values.content = self._cp_legend()
 
     # ---- background update ----------------------------------------------------------------------
     def _run(self) -> None:
         period = 1.0 / self.rate_hz
         last_tick, n = -1, 0
-        while not self._stop.wait(period):
+        due = time.monotonic()
+        while True:  # on a fixed schedule (the work of a round does not stretch the period)
+            due = max(due + period, time.monotonic())
+            if self._stop.wait(due - time.monotonic()):
+                break
             try:
                 if self.service.info.scene != self._scene:
                     self._build_scene()  # the simulation was reset to another scene

@@ -43,8 +43,9 @@ def test_the_estop_and_release_buttons_are_verbs_of_the_service(viewer, robot):
 
 
 def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snapshots(viewer, robot):
-    assert viewer._cp_plot is not None and len(viewer._cp_plot.data) == 5
-    assert set(viewer._markers) == {"cog", "zmp", "cp_ref", "cp_act", "support", "soles", "footsteps"}
+    assert viewer._cp_plot is not None and len(viewer._cp_plot.data) == 6
+    assert set(viewer._markers) == {"cog", "zmp", "cp_ref", "cp_act", "support", "soles", "footsteps",
+                                     "target_rhand", "target_lhand"}
     for _ in range(5):
         snap = robot.run_for(0.05)
         viewer.apply_snapshot(snap)
@@ -61,7 +62,7 @@ def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snap
     mid = 0.5 * (np.asarray(gait.p_rsole_world[:2]) + np.asarray(gait.p_lsole_world[:2]))
     pts = m["support"].points[:, 0, :2]
     assert pts[:, 0].min() < mid[0] < pts[:, 0].max() and pts[:, 1].min() < mid[1] < pts[:, 1].max()
-    t, ex, ey, hi, lo = viewer._cp_plot.data
+    t, ex, ey, hi, lo, _band = viewer._cp_plot.data
     assert len(t) >= 5 and np.all(np.diff(t) > 0) and t[-1] == pytest.approx(snap.time_s)  # + thread samples
     assert ex[-1] == pytest.approx(1e3 * st.cp_error[0]) and ey[-1] == pytest.approx(1e3 * st.cp_error[1])
     np.testing.assert_allclose(hi, 1e3 * st.cp_threshold_m)
@@ -105,18 +106,52 @@ def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewe
 def test_the_cp_history_keeps_a_time_window_and_clears_on_reset():
     from types import SimpleNamespace
 
-    from app.viewer import CpErrorHistory
+    from app.viewer import PLOT_RANGE_MM, CpErrorHistory
 
     h = CpErrorHistory(window_s=1.0)
-    st = SimpleNamespace(cp_error=(0.01, -0.02), cp_threshold_m=0.04)
+    st = SimpleNamespace(cp_error=(0.01, -0.02), cp_threshold_m=0.04, emergency=False)
+    flagged = SimpleNamespace(cp_error=(0.05, 0.0), cp_threshold_m=0.04, emergency=True)
     for i in range(30):
-        assert h.add(SimpleNamespace(time_s=0.1 * i, layers={"st": st}))
-    t, ex, ey, hi, lo = h.data()
+        assert h.add(SimpleNamespace(time_s=0.1 * i, layers={"st": flagged if i == 29 else st}))
+    t, ex, ey, hi, lo, band = h.data()
     assert t[-1] - t[0] <= 1.0 + 1e-9 and ex[0] == pytest.approx(10.0) and ey[0] == pytest.approx(-20.0)
     assert hi[0] == pytest.approx(40.0) and lo[0] == pytest.approx(-40.0)
+    # the flag band fills the fixed range while the flag is raised, and nothing (its bottom) otherwise
+    assert band[-1] == PLOT_RANGE_MM and set(band[:-1]) == {-PLOT_RANGE_MM}
+    assert h.latest() == pytest.approx((2.9, 50.0, 0.0, 40.0, True))
     assert not h.add(SimpleNamespace(time_s=5.0, layers={}))
     h.add(SimpleNamespace(time_s=0.0, layers={"st": st}))
     assert len(h) == 1
+
+
+def test_the_operator_pages_origin_is_accepted_once_allowed(viewer):
+    from websockets.exceptions import InvalidStatus
+    from websockets.sync.client import connect
+
+    url, page = f"ws://127.0.0.1:{viewer.port}/", "http://127.0.0.1:8123"
+    with pytest.raises(InvalidStatus):
+        connect(url, origin=page, subprotocols=["viser-v1"], open_timeout=5)
+    viewer.allow_page(8123)
+    with connect(url, origin=page, subprotocols=["viser-v1"], open_timeout=5):
+        pass
+
+
+def test_the_hand_targets_of_the_operation_layer_are_drawn_in_the_world(viewer, robot):
+    from app.service.setpoints import Setpoint
+
+    snap = robot.run_for(0.05)
+    viewer.apply_snapshot(snap)
+    assert not viewer._markers["target_rhand"].visible
+    for _ in range(10):
+        viewer.service.put_setpoint(Setpoint("rhand", (0.0, 0.0, 0.1), (0.0, 0.0, 0.0)))
+        snap = robot.run_for(0.02)
+    viewer.apply_snapshot(snap)
+    handle = viewer._markers["target_rhand"]
+    target = snap.layers["op"].points["rhand"].target
+    assert handle.visible and target is not None
+    gait = snap.reference.gait
+    origin_z = 0.5 * (gait.p_rsole_world[2] + gait.p_lsole_world[2])
+    assert handle.position[2] == pytest.approx(origin_z + target[2], abs=1e-6)
 
 
 @pytest.mark.parametrize("origin, accepted", [("http://127.0.0.1:{port}", True), ("http://localhost:{port}", True),

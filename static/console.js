@@ -1,0 +1,774 @@
+// The operator console page: safety bar, telemetry, teleoperation (sticks, gamepad, keys), behaviours, command
+// box, controller management. Everything it offers comes from the API's own documents (GET /api/behaviors, the
+// OpenAPI schema of PUT /api/params, /api/config): nothing here is written per behaviour or per parameter.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const fmt = (v, d = 3) => (v === null || v === undefined || Number.isNaN(Number(v))) ? "-" : Number(v).toFixed(d);
+const el = (tag, attrs = {}, ...children) => {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) {
+    if (k === "class") e.className = v;
+    else if (k === "text") e.textContent = v;
+    else if (k.startsWith("on")) e.addEventListener(k.slice(2), v);
+    else if (v !== undefined && v !== null && v !== false) e.setAttribute(k, v === true ? "" : v);
+  }
+  for (const c of children) e.append(c);
+  return e;
+};
+
+// ---- the token and the client id (contract with the API): from the page's own URL, kept in memory -----------
+const TOKEN = new URLSearchParams(location.search).get("token");
+if (TOKEN) history.replaceState(null, "", location.pathname);  // not left in the address bar
+const CLIENT_ID = "page-" + Math.random().toString(36).slice(2, 10);
+
+function headers(json = true) {
+  const h = {"X-Client-Id": CLIENT_ID};
+  if (json) h["Content-Type"] = "application/json";
+  if (TOKEN) h["Authorization"] = `Bearer ${TOKEN}`;
+  return h;
+}
+function wsUrl(path) {
+  const url = new URL(path, location.href);
+  url.protocol = location.protocol === "https:" ? "wss:" : "ws:";
+  if (TOKEN) url.searchParams.set("token", TOKEN);
+  return url.href;
+}
+
+// ---- history: commands, results, faults, what other clients did ---------------------------------------------
+function log(text, kind = "") {
+  const h = $("history");
+  const t = lastState ? `${fmt(lastState.time, 2)} s ` : "";
+  h.append(el("li", {class: kind, text: t + text}));
+  while (h.children.length > 300) h.firstChild.remove();
+  h.scrollTop = h.scrollHeight;
+}
+function say(text, bad = false) {
+  const m = $("message");
+  m.textContent = text;
+  m.className = bad ? "alarm" : "";
+}
+
+async function api(method, url, body) {
+  try {
+    const r = await fetch(url, {method, headers: headers(method !== "GET"),
+                                body: body === undefined ? undefined : JSON.stringify(body)});
+    const data = await r.json().catch(() => ({}));
+    if (!r.ok) {
+      const why = r.status === 423 ? `another operator holds control (${data.holder || data.detail || "?"})`
+        : (data.detail || r.statusText);
+      const text = `${method} ${url}: ${r.status} ${typeof why === "string" ? why : JSON.stringify(why)}`;
+      say(text, true);
+      log(text, "bad");
+      return null;
+    }
+    if (data.message) say(data.message);
+    return data;
+  } catch (e) {
+    say(`${method} ${url}: ${e}`, true);
+    log(`${method} ${url}: ${e}`, "bad");
+    return null;
+  }
+}
+const post = (url, body) => api("POST", url, body);
+
+// ---- E-STOP: pointer-down (not click: no waiting for the release), Space / Esc anywhere, gamepad B ----------
+let lastEstopAt = -1e9;
+// the e-stops this page sent: input event time (epoch [ms]) and the loop's reply (the e-stop benchmark reads it)
+window.hrp2Estops = [];
+function estop(source, eventTimeStamp) {
+  lastEstopAt = performance.now();
+  const record = {source, event_epoch_ms: performance.timeOrigin + (eventTimeStamp ?? performance.now()), reply: null};
+  window.hrp2Estops.push(record);
+  if (window.hrp2Estops.length > 1000) window.hrp2Estops.shift();
+  fetch("/api/estop", {method: "POST", headers: headers(false), keepalive: true})
+    .then((r) => r.json().then((d) => {
+      record.reply = d;
+      if (!r.ok) log(`E-STOP (${source}): ${r.status} ${d.detail}`, "bad");
+    }))
+    .catch((e) => log(`E-STOP (${source}) not sent: ${e}`, "bad"));
+  log(`E-STOP pressed (${source})`, "bad");
+}
+$("estop").addEventListener("pointerdown", (e) => { e.preventDefault(); estop("button", e.timeStamp); });
+$("estop").addEventListener("click", () => { if (performance.now() - lastEstopAt > 500) estop("button"); });
+
+function isTyping(target) {
+  if (!target || !target.tagName) return false;
+  const tag = target.tagName.toUpperCase();
+  if (tag === "TEXTAREA" || target.isContentEditable) return true;
+  if (tag !== "INPUT") return false;
+  return !["button", "checkbox", "radio", "range", "submit", "reset", "file", "color"].includes(
+    (target.type || "text").toLowerCase());
+}
+
+const KEY_AXES = {  // held keys -> (axis, sign); axes: L fwd, L left, L twist, R fwd, R left, R twist
+  KeyW: [0, 1], KeyS: [0, -1], KeyA: [1, 1], KeyD: [1, -1], KeyQ: [2, 1], KeyE: [2, -1],
+  ArrowUp: [3, 1], ArrowDown: [3, -1], ArrowLeft: [4, 1], ArrowRight: [4, -1], KeyZ: [5, 1], KeyC: [5, -1],
+};
+const KEY_DEFLECTION = 0.5;
+const heldKeys = new Set();
+
+function onKeyDown(e) {
+  if (e.key === "Escape" || e.code === "Space" || e.key === " ") {
+    if (isTyping(e.target)) return;
+    e.preventDefault();
+    e.stopPropagation();
+    if (!e.repeat) estop(e.key === "Escape" ? "Esc" : "Space");
+    return;
+  }
+  if (isTyping(e.target) || e.ctrlKey || e.metaKey || e.altKey) return;
+  if (/^Digit[1-9]$/.test(e.code)) {
+    const k = Number(e.code.slice(5)) - 1;
+    if (k < POINTS.length) { selectPoint(POINTS[k]); e.preventDefault(); }
+    return;
+  }
+  if (KEY_AXES[e.code]) { heldKeys.add(e.code); e.preventDefault(); }
+}
+function onKeyUp(e) { heldKeys.delete(e.code); }
+window.addEventListener("keydown", onKeyDown, true);
+window.addEventListener("keyup", onKeyUp, true);
+window.addEventListener("blur", () => heldKeys.clear());
+
+// ---- the other stops, each with its own release ---------------------------------------------------------------
+$("release").addEventListener("click", () => post("/api/estop/release").then((d) => d && log(d.message, "ok")));
+$("motion-stop").addEventListener("click", () => post("/api/motion/stop").then((d) => d && log(d.message, "ok")));
+$("motion-release").addEventListener("click", () => post("/api/motion/release").then((d) => d && log(d.message, "ok")));
+$("walk-estop").addEventListener("click", () => post("/api/walk/emergency-stop").then((d) => d && log(d.message, "ok")));
+$("walk-release").addEventListener("click", () => post("/api/walk/stop").then((d) => d && log(d.message, "ok")));
+$("st-stop").addEventListener("click", () => post("/api/stabilizer/stop").then((d) => d && log(d.message, "ok")));
+$("st-start").addEventListener("click", () => post("/api/stabilizer/start").then((d) => d && log(d.message, "ok")));
+
+// ---- telemetry: WS /ws/telemetry when the console has it, else GET /api/state at 20 Hz; staleness watch -------
+const RATE_HZ = 20;
+const STALE_MS = 1000;
+let lastState = null;
+let lastFreshAt = performance.now();
+let telemetryMode = "connecting";
+
+function startTelemetry() {
+  let opened = false;
+  let ws;
+  try {
+    ws = new WebSocket(wsUrl(`/ws/telemetry?rate_hz=${RATE_HZ}`));
+  } catch (e) {
+    pollState();
+    return;
+  }
+  ws.onopen = () => { opened = true; telemetryMode = "telemetry"; };
+  ws.onmessage = (m) => { try { onState(JSON.parse(m.data)); } catch (e) { /* a bad frame is skipped */ } };
+  ws.onclose = () => {
+    if (!opened) { telemetryMode = "polling"; pollState(); return; }  // not offered: poll instead
+    setTimeout(startTelemetry, 500);  // was offered: reconnect
+  };
+}
+
+async function pollState() {
+  const t0 = performance.now();
+  try {
+    const ctl = new AbortController();
+    const timer = setTimeout(() => ctl.abort(), STALE_MS);
+    const r = await fetch("/api/state", {headers: headers(false), signal: ctl.signal, cache: "no-store"});
+    clearTimeout(timer);
+    if (r.ok) onState(await r.json());
+  } catch (e) { /* the staleness watch says so */ }
+  setTimeout(pollState, Math.max(0, 1000 / RATE_HZ - (performance.now() - t0)));
+}
+
+function watchStaleness() {
+  const age = performance.now() - lastFreshAt;
+  const offline = age > STALE_MS;
+  document.body.classList.toggle("offline", offline);
+  $("offline").hidden = !offline;
+  $("conn").className = offline ? "bad" : "";
+  if (offline) {
+    const why = lastState === null ? "no state received yet." : `the last state is ${(age / 1000).toFixed(1)} s old.`;
+    $("offline-why").textContent = why;
+    $("conn").textContent = "connection lost";
+  } else {
+    $("conn").textContent = `live (${telemetryMode})`;
+  }
+}
+setInterval(watchStaleness, 100);
+
+// ---- the state: safety bar, banner, latched alerts, readouts, events into the history ------------------------
+let acknowledged = null;
+const myRuns = new Set();
+const knownRuns = new Map();  // id -> state
+
+function setStop(row, on, text) {
+  $(row).classList.toggle("on", on);
+}
+
+function onState(s) {
+  if (!s || typeof s !== "object" || s.time === undefined) return;
+  const prev = lastState;
+  if (!prev || s.tick !== prev.tick || s.time !== prev.time) lastFreshAt = performance.now();
+  lastState = s;
+  const em = s.emergency || {};
+  $("s-time").textContent = `${fmt(s.time)} s (tick ${s.tick})`;
+
+  $("s-hard").textContent = em.hard_stop ? "ENGAGED" : "off";
+  $("s-hard").className = "st" + (em.hard_stop ? " alarm" : "");
+  setStop("stop-hard", !!em.hard_stop);
+  $("s-motion").textContent = em.motion_stop ? `STOPPED (${em.motion_stop_reason || "?"})` : "off";
+  setStop("stop-motion", !!em.motion_stop);
+  $("s-walkstop").textContent = em.walking_stop ? "STOPPING in place" : "off";
+  setStop("stop-walking", !!em.walking_stop);
+  $("s-ststop").textContent = em.stabilizer_stop ? "STOPPED" : "running";
+  setStop("stop-stabilizer", !!em.stabilizer_stop);
+
+  $("banner").hidden = !em.hard_stop;
+  $("banner-why").textContent = em.hard_stop
+    ? [em.hard_stop_reason && `reason: ${em.hard_stop_reason}`, em.fault && `fault: ${em.fault}`,
+       "Release is the green control in the hard row."].filter(Boolean).join("; ") : "";
+
+  // latched stops (not the operator's own): raised as an alert until acknowledged
+  let latched = null;
+  if (s.fallen) latched = {key: "fall", text: `the robot has fallen (${em.fall || "?"}); reset the simulation.`};
+  else if (em.fault) latched = {key: `fault:${em.fault}`, text: `fault: ${em.fault} (the hard stop is engaged).`};
+  else if (em.motion_stop && em.motion_stop_reason && em.motion_stop_reason !== "operator") {
+    latched = {key: `motion:${em.motion_stop_time}`, text: `motion stop latched by ${em.motion_stop_reason} at ` +
+      `${fmt(em.motion_stop_time, 2)} s (CP error ${fmt(1000 * (s.capture_point || {}).error_norm, 1)} mm). ` +
+      "Balance keeps working; release it in the motion row."};
+  }
+  const showLatched = latched !== null && latched.key !== acknowledged;
+  $("latched").hidden = !showLatched;
+  if (showLatched) $("latched-text").textContent = latched.text;
+  $("latched").dataset.key = latched ? latched.key : "";
+
+  $("s-fallen").textContent = s.fallen ? "FALLEN" : "no";
+  $("s-fallen").className = s.fallen ? "alarm" : "";
+  $("s-fault").textContent = em.fault || "none";
+  $("s-fault").className = em.fault ? "alarm" : "";
+  $("s-height").textContent = s.base ? `${fmt(s.base.pos[2])} m` : "-";
+  $("s-rpy-est").textContent = s.estimate ? s.estimate.rpy_deg.map((v) => fmt(v, 1)).join(", ") + " deg" : "-";
+  $("s-support").textContent = `${s.walking ? "walking" : "standing"}, support ${s.support}`;
+  const cp = s.capture_point || {};
+  if (cp.error) {
+    $("s-cp").textContent = `${fmt(cp.error_norm * 1000, 1)} mm (x ${fmt(cp.error[0] * 1000, 1)}, ` +
+      `y ${fmt(cp.error[1] * 1000, 1)}; threshold ${fmt(cp.cp_threshold_m * 1000, 1)} mm)`;
+  }
+  $("s-flag").textContent = em.flag ? "RAISED" : "off";
+  $("s-flag").className = em.flag ? "alarm" : "";
+  $("s-chain").textContent = s.chain || "-";
+
+  const op = s.operation && s.operation.points && s.operation.points[selected];
+  const limited = op ? op.limited : null;
+  $("limited").textContent = limited || "no";
+  $("limited").className = limited ? "alarm" : "";
+
+  if (prev) {
+    const pe = prev.emergency || {};
+    if (em.hard_stop && !pe.hard_stop) log(`hard stop engaged${em.hard_stop_reason ? ` (${em.hard_stop_reason})` : ""}`, "bad");
+    if (!em.hard_stop && pe.hard_stop) log("hard stop released", "ok");
+    if (em.motion_stop && !pe.motion_stop) log(`motion stop (${em.motion_stop_reason || "?"})`, "bad");
+    if (!em.motion_stop && pe.motion_stop) log("motion stop released", "ok");
+    if (em.fault && em.fault !== pe.fault) log(`FAULT: ${em.fault}`, "bad");
+    if (s.fallen && !prev.fallen) log("FALLEN", "bad");
+    if (em.flag && !pe.flag) log("capture-point flag raised", "bad");
+    if (s.scene !== prev.scene) log(`scene is now ${s.scene}`, "other");
+  }
+  updateRuns(s.runs || []);
+}
+$("latched-ack").addEventListener("click", () => { acknowledged = $("latched").dataset.key; $("latched").hidden = true; });
+
+// ---- behaviours: a button and a generated form per registered behaviour; runs with progress and cancel ------
+let behaviors = [];
+
+function rangeText(p) {
+  const parts = [];
+  if (p.unit && p.unit !== "-") parts.push(`[${p.unit}]`);
+  if (p.min !== null && p.min !== undefined && p.max !== null && p.max !== undefined) parts.push(`${p.min} .. ${p.max}`);
+  else if (p.min !== null && p.min !== undefined) parts.push(`>= ${p.min}`);
+  else if (p.max !== null && p.max !== undefined) parts.push(`<= ${p.max}`);
+  if (p.choices) parts.push(p.choices.join(" | "));
+  return parts.join(" ");
+}
+
+function fieldInput(p, id) {
+  if (p.choices) {
+    const s = el("select", {id, name: p.name});
+    for (const c of p.choices) s.append(el("option", {value: String(c), text: String(c)}));
+    s.value = String(p.default);
+    return s;
+  }
+  if (p.type === "boolean") return el("input", {id, name: p.name, type: "checkbox", checked: !!p.default});
+  if (p.type === "number" || p.type === "integer") {
+    return el("input", {id, name: p.name, type: "number", step: p.type === "integer" ? "1" : "any",
+                        min: p.min ?? undefined, max: p.max ?? undefined, value: p.default ?? "", required: true});
+  }
+  if (p.type === "array") {
+    return el("textarea", {id, name: p.name, rows: "3", placeholder: '[{"behavior": "squat", "params": {"depth_m": 0.1}}]'});
+  }
+  return el("input", {id, name: p.name, type: "text", value: p.default ?? ""});
+}
+
+function openForm(b) {
+  const f = $("behavior-form");
+  f.replaceChildren(el("strong", {class: "span", text: `${b.name}: ${b.summary}`}));
+  for (const p of b.params) {
+    const id = `bp-${b.name}-${p.name}`;
+    f.append(el("label", {for: id, text: p.name, title: p.doc || ""}), fieldInput(p, id),
+             el("span", {class: "range", text: rangeText(p), title: p.doc || ""}));
+  }
+  f.append(el("div", {class: "span row"}, el("button", {type: "submit", text: `Start ${b.name}`}),
+              el("button", {type: "button", text: "Close", onclick: () => { f.hidden = true; }})));
+  f.dataset.behavior = b.name;
+  f.hidden = false;
+}
+
+$("behavior-form").addEventListener("submit", (e) => {
+  e.preventDefault();
+  const b = behaviors.find((x) => x.name === $("behavior-form").dataset.behavior);
+  const body = {};
+  for (const p of b.params) {
+    const input = $(`bp-${b.name}-${p.name}`);
+    if (p.type === "boolean") body[p.name] = input.checked;
+    else if (p.type === "number") body[p.name] = Number(input.value);
+    else if (p.type === "integer") body[p.name] = Math.round(Number(input.value));
+    else if (p.type === "array") {
+      try { body[p.name] = JSON.parse(input.value || "[]"); } catch (err) { say(`${p.name}: not JSON (${err.message})`, true); return; }
+    } else body[p.name] = input.value;
+  }
+  startBehavior(b.name, body, `${b.name} ${JSON.stringify(body)}`);
+});
+
+async function startBehavior(name, body, shown) {
+  log(`> ${shown}`, "cmd");
+  const d = await post(`/api/behaviors/${name}`, body);
+  if (d) { myRuns.add(d.id); log(d.message, "ok"); }
+  return d;
+}
+
+function updateRuns(runs) {
+  const box = $("runs");
+  for (const r of runs) {
+    const before = knownRuns.get(r.id);
+    if (before === undefined && !myRuns.has(r.id)) log(`another client started ${r.behavior} (run ${r.id})`, "other");
+    if (before !== r.state && r.state !== "running") {
+      const result = r.result && Object.keys(r.result).length ? ` ${JSON.stringify(r.result)}` : "";
+      log(`run ${r.id} ${r.behavior} ${r.state}: ${r.message}${result}`, r.state === "succeeded" ? "ok" : "bad");
+    }
+    knownRuns.set(r.id, r.state);
+  }
+  const shown = runs.slice(-4);
+  box.replaceChildren(...shown.map((r) => el("div", {class: "run", "data-run": r.id},
+    el("span", {text: `run ${r.id} ${r.behavior}: ${r.state} (${Math.round(100 * r.progress)} %) ${r.message || ""}`}),
+    r.state === "running" ? el("button", {type: "button", text: "Cancel",
+                                           onclick: () => post(`/api/behaviors/runs/${r.id}/cancel`)}) : el("span"),
+    el("progress", {max: "1", value: String(r.progress), "aria-label": `run ${r.id} progress`}))));
+}
+
+// ---- the command box: `name v1 v2 ...` (the behaviour's parameters in declaration order) or `name k=v` ------
+const BUILTINS = {
+  help: () => log("commands: " + behaviors.map((b) => `${b.name} ${b.params.filter((p) => p.type !== "array")
+    .map((p) => p.name).join(" ")}`).join("; ") + "; estop; release; stop (motion); cancel [run]", "ok"),
+  estop: () => estop("command"),
+  release: () => post("/api/estop/release").then((d) => d && log(d.message, "ok")),
+  stop: () => post("/api/motion/stop").then((d) => d && log(d.message, "ok")),
+  cancel: (args) => {
+    const id = args.length ? Number(args[0]) : [...myRuns].pop();
+    if (!Number.isInteger(id)) throw new Error(`cancel: give a run id (got ${args[0]})`);
+    return post(`/api/behaviors/runs/${id}/cancel`);
+  },
+};
+
+function convert(p, text) {
+  if (p.type === "number" || p.type === "integer") {
+    const v = Number(text);
+    if (text === "" || !Number.isFinite(v)) throw new Error(`${p.name}: '${text}' is not a number (${rangeText(p)})`);
+    if (p.type === "integer" && !Number.isInteger(v)) throw new Error(`${p.name}: '${text}' is not an integer`);
+    if ((p.min !== null && p.min !== undefined && v < p.min) || (p.max !== null && p.max !== undefined && v > p.max)) {
+      throw new Error(`${p.name}: ${v} is outside ${rangeText(p)}`);
+    }
+    return v;
+  }
+  if (p.type === "boolean") {
+    const t = text.toLowerCase();
+    if (["true", "1", "yes", "on"].includes(t)) return true;
+    if (["false", "0", "no", "off"].includes(t)) return false;
+    throw new Error(`${p.name}: '${text}' is not true or false`);
+  }
+  if (p.choices && !p.choices.map(String).includes(text)) {
+    throw new Error(`${p.name}: '${text}' is not one of ${p.choices.join(", ")}`);
+  }
+  return text;
+}
+
+function parseCommand(text) {
+  const words = text.trim().split(/\s+/).filter(Boolean);
+  if (!words.length) throw new Error("type a command (help lists them)");
+  const [name, ...args] = words;
+  const b = behaviors.find((x) => x.name === name);
+  if (!b) {
+    throw new Error(`unknown command '${name}'; valid: ${[...behaviors.map((x) => x.name), ...Object.keys(BUILTINS)].join(", ")}`);
+  }
+  const params = b.params.filter((p) => p.type !== "array");
+  const body = {};
+  let k = 0;
+  for (const a of args) {
+    const eq = a.indexOf("=");
+    if (eq > 0) {
+      const key = a.slice(0, eq);
+      const p = b.params.find((x) => x.name === key);
+      if (!p) throw new Error(`${name} has no parameter '${key}'; valid: ${b.params.map((x) => x.name).join(", ")}`);
+      body[key] = p.type === "array" ? JSON.parse(a.slice(eq + 1)) : convert(p, a.slice(eq + 1));
+      continue;
+    }
+    if (k >= params.length) throw new Error(`${name} takes at most ${params.length} values (${params.map((p) => p.name).join(" ")})`);
+    body[params[k].name] = convert(params[k], a);
+    k += 1;
+  }
+  return {name, body};
+}
+
+$("command-form").addEventListener("submit", async (e) => {
+  e.preventDefault();
+  const text = $("command").value.trim();
+  const [word, ...args] = text.split(/\s+/);
+  try {
+    if (BUILTINS[word]) { log(`> ${text}`, "cmd"); await BUILTINS[word](args); }
+    else {
+      const {name, body} = parseCommand(text);
+      await startBehavior(name, body, text);
+    }
+    $("command").value = "";
+  } catch (err) {
+    log(`> ${text}`, "cmd");
+    log(err.message, "bad");
+    say(err.message, true);
+  }
+});
+
+// ---- teleoperation: the selected point's twist from two 3-DOF sticks, the gamepad and the keys -------------
+const POINTS = ["rhand", "lhand", "head", "waist", "walk"];
+const USED = {  // (linear xyz, angular xyz) the point uses (controller.operation.points.USED_COMPONENTS)
+  rhand: [[1, 1, 1], [1, 1, 1]], lhand: [[1, 1, 1], [1, 1, 1]], head: [[0, 0, 0], [0, 1, 1]],
+  waist: [[0, 0, 1], [1, 1, 1]], walk: [[1, 1, 0], [0, 0, 1]],
+};
+const FULL = {  // full deflection: linear [m/s], angular [deg/s]
+  rhand: [0.1, 30], lhand: [0.1, 30], head: [0, 30], waist: [0.05, 15], walk: [0.2, 20],
+};
+const STICK_DEAD_ZONE = 0.08;
+const GAMEPAD_DEAD_ZONE = 0.1;
+const STREAM_HZ = 50;
+const ZERO_TAIL = 3;  // zero setpoints sent after a point's input ends (the stream then goes quiet)
+let selected = "rhand";
+const onScreen = [[0, 0, 0], [0, 0, 0]];  // per stick: fwd, left, twist in [-1, 1]
+let gamepadAxes = [0, 0, 0, 0, 0, 0];
+let gamepadDeadman = false;
+
+function selectPoint(p) {
+  selected = p;
+  for (const b of $("points").children) b.setAttribute("aria-checked", String(b.dataset.point === p));
+  $("sel-point").textContent = p;
+}
+for (const [k, p] of POINTS.entries()) {
+  $("points").append(el("button", {type: "button", role: "radio", "data-point": p, "aria-checked": "false",
+                                   title: `key ${k + 1}`, text: p, onclick: () => selectPoint(p)}));
+}
+selectPoint(selected);
+
+const clamp1 = (v) => Math.max(-1, Math.min(1, v));
+function deadZone(v, dz) { const a = Math.abs(v); return a <= dz ? 0 : Math.sign(v) * (a - dz) / (1 - dz); }
+
+function axes() {
+  const a = [0, 0, 0, 0, 0, 0];
+  for (let s = 0; s < 2; s++) for (let i = 0; i < 3; i++) a[3 * s + i] += onScreen[s][i];
+  if (gamepadDeadman) for (let i = 0; i < 6; i++) a[i] += gamepadAxes[i];
+  for (const code of heldKeys) { const [i, sign] = KEY_AXES[code]; a[i] += sign * KEY_DEFLECTION; }
+  return a.map(clamp1);
+}
+
+function twistOf(point, a) {
+  const [lf, ll, lt, rf, rl, rt] = a;
+  const [vlin, vang] = FULL[point];
+  let lin, ang;
+  if (point === "walk") { lin = [lf, 0.5 * ll, 0]; ang = [0, 0, clamp1(lt + rl)]; }
+  else if (point === "head") { lin = [0, 0, 0]; ang = [0, clamp1(rf + lf), clamp1(rl + ll)]; }
+  else if (point === "waist") { lin = [0, 0, clamp1(lf + lt)]; ang = [rt, rf, rl]; }
+  else { lin = [lf, ll, lt]; ang = [rt, rf, rl]; }
+  const [um, am] = USED[point];
+  const r = (v) => Math.round(v * 1e4) / 1e4;
+  return {linear: lin.map((v, i) => r(um[i] ? v * vlin : 0)), angular: ang.map((v, i) => r(am[i] ? v * vang : 0))};
+}
+const isZero = (t) => t.linear.every((v) => v === 0) && t.angular.every((v) => v === 0);
+
+// the WS /ws/operator stream: each message answered once, in order (ack or error): the FIFO gives the round trip
+let opWs = null;
+const sentAt = [];
+const rtts = [];
+const zeroTail = {};
+let lastStreamError = "";
+
+function connectOperator() {
+  const ws = new WebSocket(wsUrl("/ws/operator"));
+  ws.onopen = () => { opWs = ws; sentAt.length = 0; };
+  ws.onmessage = (m) => {
+    const t0 = sentAt.shift();
+    if (t0 !== undefined) {
+      rtts.push(performance.now() - t0);
+      if (rtts.length > 50) rtts.shift();
+    }
+    let d = {};
+    try { d = JSON.parse(m.data); } catch (e) { return; }
+    if (d.ok === false && d.detail !== lastStreamError) {
+      lastStreamError = d.detail;
+      log(`stream: ${d.detail}`, "bad");
+    } else if (d.ok) lastStreamError = "";
+  };
+  ws.onclose = () => { if (opWs === ws) opWs = null; setTimeout(connectOperator, 1000); };
+}
+
+function streamTick() {
+  readGamepad();  // also here, not only every animation frame: a busy compositor must not delay a let-go dead-man
+  const a = axes();
+  let sending = false;
+  for (const p of POINTS) {
+    const t = p === selected ? twistOf(p, a) : {linear: [0, 0, 0], angular: [0, 0, 0]};
+    if (!isZero(t)) zeroTail[p] = ZERO_TAIL;
+    else if (zeroTail[p] > 0) zeroTail[p] -= 1;
+    else continue;
+    sending = true;
+    if (opWs && opWs.readyState === WebSocket.OPEN && opWs.bufferedAmount < 4096) {
+      opWs.send(JSON.stringify({point: p, linear: t.linear, angular: t.angular}));
+      sentAt.push(performance.now());
+      if (sentAt.length > 200) sentAt.shift();
+    }
+  }
+  $("stream-state").textContent = !opWs ? "not connected" : sending ? `streaming ${selected} at ${STREAM_HZ} Hz` : "idle";
+  if (rtts.length) {
+    const sorted = [...rtts].sort((x, y) => x - y);
+    $("latency").textContent = `${sorted[Math.floor(sorted.length / 2)].toFixed(1)} ms (median of ${sorted.length})`;
+  }
+}
+setInterval(streamTick, 1000 / STREAM_HZ);
+// the page hidden: nothing held any more (the zero tail stops what moved)
+document.addEventListener("visibilitychange", () => {
+  if (document.hidden) { heldKeys.clear(); for (const s of onScreen) s.fill(0); gamepadDeadman = false; }
+});
+
+// on-screen sticks: a pad (fwd, left) and a twist bar each; mouse and touch (pointer events), spring back
+function bindStick(root, s) {
+  const pad = root.querySelector(".pad"), twist = root.querySelector(".twist");
+  const padKnob = pad.querySelector(".knob"), twistKnob = twist.querySelector(".knob");
+  function padAt(e) {
+    const r = pad.getBoundingClientRect();
+    const radius = r.width / 2;
+    let dx = (e.clientX - r.left - radius) / radius, dy = (e.clientY - r.top - radius) / radius;
+    const n = Math.hypot(dx, dy);
+    if (n > 1) { dx /= n; dy /= n; }
+    padKnob.style.transform = `translate(${dx * radius}px, ${dy * radius}px)`;
+    const m = Math.min(1, Math.hypot(dx, dy));
+    const k = m > 0 ? deadZone(m, STICK_DEAD_ZONE) / m : 0;
+    onScreen[s][0] = -dy * k;
+    onScreen[s][1] = -dx * k;
+  }
+  function twistAt(e) {
+    const r = twist.getBoundingClientRect();
+    const half = r.width / 2;
+    const dx = Math.max(-1, Math.min(1, (e.clientX - r.left - half) / half));
+    twistKnob.style.transform = `translateX(${dx * half}px)`;
+    onScreen[s][2] = -deadZone(dx, STICK_DEAD_ZONE);
+  }
+  function bind(target, at, release) {
+    target.addEventListener("pointerdown", (e) => {
+      e.preventDefault();
+      target.setPointerCapture(e.pointerId);
+      root.classList.add("active");
+      at(e);
+    });
+    target.addEventListener("pointermove", (e) => { if (target.hasPointerCapture(e.pointerId)) at(e); });
+    for (const ev of ["pointerup", "pointercancel", "lostpointercapture"]) {
+      target.addEventListener(ev, () => { root.classList.remove("active"); release(); });
+    }
+  }
+  bind(pad, padAt, () => { onScreen[s][0] = onScreen[s][1] = 0; padKnob.style.transform = ""; });
+  bind(twist, twistAt, () => { onScreen[s][2] = 0; twistKnob.style.transform = ""; });
+}
+bindStick($("stick-left"), 0);
+bindStick($("stick-right"), 1);
+
+// the Gamepad API, polled every animation frame: sticks = [OP]'s two joysticks, RB/LB held = dead-man
+const GP = {estop: 1, nextPoint: 3, deadman: [4, 5], lt: 6, rt: 7, dpadLeft: 14, dpadRight: 15};
+let gpPrev = [];
+function pollGamepad() {
+  readGamepad();
+  requestAnimationFrame(pollGamepad);
+}
+function readGamepad() {
+  const pads = navigator.getGamepads ? [...navigator.getGamepads()].filter(Boolean) : [];
+  const gp = pads.find((g) => g.connected !== false);
+  if (gp) {
+    const ax = (i) => deadZone(gp.axes[i] || 0, GAMEPAD_DEAD_ZONE);
+    const btn = (i) => { const b = gp.buttons[i]; return b ? (typeof b === "object" ? b.value || (b.pressed ? 1 : 0) : b) : 0; };
+    const pressed = gp.buttons.map((b, i) => btn(i) > 0.5);
+    if (pressed[GP.estop] && !gpPrev[GP.estop]) estop("gamepad");
+    if (pressed[GP.nextPoint] && !gpPrev[GP.nextPoint]) selectPoint(POINTS[(POINTS.indexOf(selected) + 1) % POINTS.length]);
+    gpPrev = pressed;
+    gamepadDeadman = GP.deadman.some((i) => pressed[i]);
+    gamepadAxes = [-ax(1), -ax(0), btn(GP.lt) - btn(GP.rt), -ax(3), -ax(2), btn(GP.dpadLeft) - btn(GP.dpadRight)];
+    $("gamepad").textContent = `gamepad: ${gp.id || "connected"}; dead-man ${gamepadDeadman ? "HELD" : "released"}`;
+  } else {
+    gamepadDeadman = false;
+  }
+}
+requestAnimationFrame(pollGamepad);
+
+// ---- controller management: start/stop pairs and parameter panels from the OpenAPI document ----------------
+async function buildController(openapi, cfg) {
+  const box = $("layer-buttons");
+  for (const [path, ops] of Object.entries(openapi.paths || {})) {
+    const m = path.match(/^\/api\/(.+)\/start$/);
+    if (!m || !ops.post || !(openapi.paths[`/api/${m[1]}/stop`] || {}).post) continue;
+    const param = (ops.post.parameters || []).find((p) => p.in === "path");
+    const values = param ? ((param.schema || {}).enum || []) : [null];
+    for (const v of values) {
+      const seg = param ? m[1].replace(`{${param.name}}`, v) : m[1];
+      const label = seg.replace(/\//g, " ");
+      box.append(el("span", {class: "row"}, el("b", {text: label}),
+        el("button", {type: "button", text: "start", "aria-label": `start ${label}`,
+                      onclick: () => post(`/api/${seg}/start`).then((d) => d && log(d.message, "ok"))}),
+        el("button", {type: "button", text: "stop", "aria-label": `stop ${label}`,
+                      onclick: () => post(`/api/${seg}/stop`).then((d) => d && log(d.message, "ok"))})));
+    }
+  }
+  const sel = $("scene");
+  for (const name of cfg.scenes || []) sel.append(el("option", {value: name, text: name}));
+  const put = (((openapi.paths["/api/params"] || {}).put || {}).requestBody || {}).content;
+  const schema = put && put["application/json"] && put["application/json"].schema;
+  const current = await api("GET", "/api/params");
+  if (!schema || !current) return;
+  const panels = $("params");
+  for (const [owner, ownerSchema] of Object.entries(schema.properties || {})) {
+    if (!current[owner]) continue;
+    const grid = el("form", {class: "grid", "data-owner": owner});
+    for (const [name, fs] of Object.entries(ownerSchema.properties || {})) {
+      const id = `pp-${owner}-${name}`;
+      const value = current[owner][name];
+      let input;
+      if (fs.enum) {
+        input = el("select", {id, name});
+        for (const c of fs.enum) input.append(el("option", {value: String(c), text: String(c)}));
+        input.value = String(value);
+      } else if (fs.type === "boolean") input = el("input", {id, name, type: "checkbox", checked: !!value});
+      else if (fs.type === "number" || fs.type === "integer") {
+        input = el("input", {id, name, type: "number", step: "any", min: fs.minimum, max: fs.maximum,
+                             value: Array.isArray(value) ? "" : value});
+      } else input = el("input", {id, name, type: "text", value: JSON.stringify(value)});
+      const range = [fs.minimum !== undefined && fs.maximum !== undefined ? `${fs.minimum} .. ${fs.maximum}` : "",
+                     (fs.description || "").replace(/^[^[]*/, "")].join(" ");
+      grid.append(el("label", {for: id, text: name, title: fs.description || ""}), input,
+                  el("span", {class: "small", text: range}));
+    }
+    grid.append(el("button", {type: "submit", text: `Apply ${owner}`}));
+    grid.addEventListener("submit", (e) => {
+      e.preventDefault();
+      const changes = {};
+      for (const [name, fs] of Object.entries(ownerSchema.properties || {})) {
+        const input = $(`pp-${owner}-${name}`);
+        let v;
+        if (fs.type === "boolean") v = input.checked;
+        else if (fs.enum) v = fs.enum.find((c) => String(c) === input.value);
+        else if (fs.type === "number" || fs.type === "integer") { if (input.value === "") continue; v = Number(input.value); }
+        else { try { v = JSON.parse(input.value); } catch (err) { v = input.value; } }
+        if (JSON.stringify(v) !== JSON.stringify(current[owner][name])) changes[name] = v;
+      }
+      if (!Object.keys(changes).length) { say(`${owner}: nothing changed`); return; }
+      api("PUT", "/api/params", {[owner]: changes}).then((d) => {
+        if (d) { Object.assign(current[owner], changes); log(`${owner} parameters set: ${JSON.stringify(changes)}`, "ok"); }
+      });
+    });
+    panels.append(el("details", {}, el("summary", {text: `${owner} parameters`}), grid));
+  }
+}
+
+$("reset-form").addEventListener("submit", (e) => {
+  e.preventDefault();
+  log(`> reset ${$("scene").value}`, "cmd");
+  post("/api/sim/reset", {scene: $("scene").value}).then((d) => d && log(d.message, "ok"));
+});
+$("params-dump").addEventListener("click", async () => {
+  const d = await api("GET", "/api/params");
+  if (!d) return;
+  const a = el("a", {href: URL.createObjectURL(new Blob([JSON.stringify(d, null, 2)], {type: "application/json"})),
+                     download: "hrp2_params.json"});
+  document.body.append(a);
+  a.click();
+  a.remove();
+  log("parameters dumped to hrp2_params.json", "ok");
+});
+$("params-load").addEventListener("change", async (e) => {
+  const file = e.target.files[0];
+  if (!file) return;
+  let doc;
+  try { doc = JSON.parse(await file.text()); } catch (err) { say(`${file.name}: not JSON (${err.message})`, true); return; }
+  const d = await api("PUT", "/api/params", doc);
+  if (d) log(`parameters loaded from ${file.name} (${Object.keys(doc).join(", ")})`, "ok");
+  e.target.value = "";
+});
+
+// ---- joint form (the sequence player) ---------------------------------------------------------------------
+let limits = {};
+$("joint").addEventListener("change", () => {
+  const lim = limits[$("joint").value];
+  if (lim) { $("angle").min = lim[0]; $("angle").max = lim[1]; $("angle").title = `range ${lim[0]} .. ${lim[1]} deg`; }
+});
+$("joint-form").addEventListener("submit", (e) => {
+  e.preventDefault();
+  const angles = {[$("joint").value]: Number($("angle").value)};
+  post("/api/sequence/joint-angles", {angles_deg: angles, time: Number($("duration").value)});
+});
+
+// ---- start-up ---------------------------------------------------------------------------------------------
+// The 3D view is viser's client served by this console at /viewer/ with one script added (static/viewer_keys.js)
+// that hands Esc / Space and the teleoperation keys to this page. It is loaded from the other loopback name when
+// there is one (127.0.0.1 <-> localhost): another site, so the browser runs it in its own process and a slow
+// (software) WebGL frame never holds up this page's e-stop.
+function viewerHost() {
+  return {"127.0.0.1": "localhost", "localhost": "127.0.0.1"}[location.hostname] || location.hostname;
+}
+let viewerFrame = null;
+function mountViewer(cfg) {
+  const view = $("view");
+  if (!cfg.viewer_port) {
+    view.append(el("p", {class: "noviewer", text: "No 3D viewer (started with --headless)."}));
+    return;
+  }
+  const host = viewerHost();
+  const shownHost = host.includes(":") ? `[${host}]` : host;
+  const ws = `${location.protocol === "https:" ? "wss" : "ws"}://${shownHost}:${cfg.viewer_port}`;
+  const origin = `${location.protocol}//${shownHost}${location.port ? ":" + location.port : ""}`;
+  viewerFrame = el("iframe", {title: "3D view of the robot (viser)",
+                              src: `${origin}/viewer/?websocket=${encodeURIComponent(ws)}`});
+  view.append(viewerFrame);
+}
+window.addEventListener("message", (e) => {
+  if (!viewerFrame || e.source !== viewerFrame.contentWindow) return;
+  const d = e.data || {};
+  if (d.type !== "hrp2-key" || typeof d.code !== "string") return;
+  const ev = {key: String(d.key), code: d.code, repeat: !!d.repeat, target: null, ctrlKey: false, metaKey: false,
+              altKey: false, preventDefault() {}, stopPropagation() {}};
+  if (d.down) onKeyDown(ev); else onKeyUp(ev);
+});
+window.addEventListener("blur", () => {
+  // the focus went into the 3D view (or away): the keys held here are released
+  heldKeys.clear();
+});
+
+async function start() {
+  const cfg = await api("GET", "/api/config") || {};
+  limits = cfg.joint_limits_deg || {};
+  for (const name of cfg.joints || []) $("joint").append(el("option", {value: name, text: name}));
+  if (cfg.joints && cfg.joints.includes("RARM_JOINT0")) { $("joint").value = "RARM_JOINT0"; $("joint").dispatchEvent(new Event("change")); }
+  mountViewer(cfg);
+  behaviors = await api("GET", "/api/behaviors") || [];
+  $("behaviors").replaceChildren(...behaviors.map((b) => el("button", {type: "button", text: b.name, title: b.summary,
+                                                                        "data-behavior": b.name, onclick: () => openForm(b)})));
+  const openapi = await api("GET", "/openapi.json");
+  if (openapi) await buildController(openapi, cfg);
+}
+
+startTelemetry();
+connectOperator();
+start().catch((e) => say(`start-up: ${e}`, true));
