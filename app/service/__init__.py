@@ -78,6 +78,7 @@ class RobotBackend(Protocol):
     def refresh_info(self, timeout_s: float = 10.0) -> RobotInfo: ...
     def log_rows(self) -> np.ndarray: ...
     def put_setpoint(self, setpoint: Setpoint) -> Setpoint: ...
+    def setpoint_seq(self) -> int: ...
     def reset(self, scene: str | None = None, timeout_s: float = 30.0) -> RobotInfo: ...
     def close(self, timeout_s: float = 10.0) -> dict | None: ...
 
@@ -114,7 +115,8 @@ class OperatorService:
         return self.robot.estop()
 
     def release_estop(self) -> str:
-        return self.run(ReleaseEstop())
+        """Release the hard e-stop: nothing the operator streamed before the release runs after it."""
+        return self.run(ReleaseEstop(self.robot.setpoint_seq()))
 
     def stop_motion(self) -> str:
         return self.run(StopMotion())
@@ -228,7 +230,8 @@ class OperatorService:
         return self.published().setpoint_acks.get(point)
 
     def operator_velocity(self, setpoint: Setpoint, timeout_s: float = ACK_TIMEOUT_S) -> SetpointAck:
-        """Put a setpoint and wait until the robot has applied it (the tick it reached)."""
+        """Put a setpoint and wait until the robot has applied it (the tick it reached); Refused when the
+        robot acknowledged it as ignored (the hard e-stop)."""
         import time
 
         numbered = self.put_setpoint(setpoint)
@@ -236,6 +239,8 @@ class OperatorService:
         while True:
             ack = self.setpoint_ack(setpoint.point)
             if ack is not None and ack.seq >= numbered.seq:
+                if ack.ignored is not None and ack.seq == numbered.seq:
+                    raise Refused(ack.ignored, ignored_message(ack.ignored))
                 return ack
             if time.monotonic() > deadline:
                 raise Unavailable(f"the robot did not acknowledge the {setpoint.point} setpoint within "
@@ -328,6 +333,15 @@ class OperatorService:
 
     def close(self) -> dict | None:
         return self.robot.close()
+
+
+def ignored_message(reason: str) -> str:
+    """What an ignored setpoint's acknowledgement says."""
+    if reason == "hard_stop":
+        return "setpoint ignored: the hard e-stop is engaged; release it first"
+    if reason == "before_release":
+        return "setpoint ignored: it was sent before the hard e-stop's release (nothing runs that was sent before)"
+    return f"setpoint ignored ({reason})"
 
 
 def _with_params(info: RobotInfo, params: Mapping[str, Params]) -> RobotInfo:
