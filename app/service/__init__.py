@@ -209,15 +209,15 @@ class OperatorService:
 
     # ---- the operator's velocities and the behaviours ([OP] Eq. 5) -------------------------------------------
     def _refuse_setpoint(self) -> None:
-        """What refuses a motion verb refuses a setpoint too (the robot's latest published safety state)."""
+        """A fall refuses a setpoint as it refuses a motion verb (the robot's latest published safety state)."""
         if "op" not in self._info.chain:
             raise NotFound(f"the chain has no operation layer ('op'); present: {', '.join(self._info.chain)}")
         safety = self.published().snapshot.safety
         if safety.fall is not None:
             raise Refused("fallen", f"operator velocity refused: the robot has fallen ({safety.fall}); reset the "
                                     "simulation")
-        if safety.hard_stop:
-            raise Refused("hard_stop", "operator velocity refused: the hard e-stop is engaged; release it first")
+        # (the hard e-stop is the robot's to judge, at the tick the setpoint reaches: it acknowledges the setpoint
+        # as ignored; a published state up to 20 ms old would refuse the first setpoints after a release)
 
     def put_setpoint(self, setpoint: Setpoint) -> Setpoint:
         """Hand the operator's newest velocity for one point to the robot's latest-value channel (no queue);
