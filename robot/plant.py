@@ -43,8 +43,8 @@ def scene_path(scene: str | Path) -> Path:
 
 
 #: MuJoCo's warnings of a state gone non-finite or unstable (it then resets the data to the model's defaults)
-_DIVERGED_WARNINGS = tuple(int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
-                                              mujoco.mjtWarning.mjWARN_BADQACC))
+_DIVERGED_WARNINGS = np.array([int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                                                 mujoco.mjtWarning.mjWARN_BADQACC)])
 
 
 class PhysicsDiverged(RuntimeError):
@@ -175,7 +175,7 @@ class MujocoPlant:
             d.time += n * self.dt_physics
             return
         qpos0, t0 = d.qpos.copy(), float(d.time)
-        bad0 = [int(d.warning[w].number) for w in _DIVERGED_WARNINGS]
+        bad0 = d.warning.number[_DIVERGED_WARNINGS]  # (a copy: fancy indexing)
         # The IMU and F/T sensors report the mean over the steps since the last read, as a real
         # sensor's anti-aliasing filter does: a single sample, taken in phase with the servo command
         # updates, would see the 1 kHz servo vibration as a biased acceleration.
@@ -187,10 +187,11 @@ class MujocoPlant:
             mujoco.mj_step(self._model, d)
             total += d.sensordata
             self._end_pushes()
-        # (MuJoCo resets the data at a bad state and counts a warning: checked once per call, ~2 us)
-        bad = [w for w, before in zip(_DIVERGED_WARNINGS, bad0, strict=True) if d.warning[w].number > before]
-        if bad or not np.isfinite(d.qpos).all():
-            self._halt(mujoco.mjtWarning(bad[0]).name if bad else "non-finite qpos", qpos0, t0, n)
+        # (MuJoCo resets the data at a bad state and counts a warning: checked once per call)
+        bad = d.warning.number[_DIVERGED_WARNINGS] > bad0
+        if bad.any() or not np.isfinite(d.qpos).all():
+            what = mujoco.mjtWarning(_DIVERGED_WARNINGS[int(np.argmax(bad))]).name if bad.any() else "non-finite qpos"
+            self._halt(what, qpos0, t0, n)
         self._sensor_mean = total / n
 
     def _halt(self, what: str, qpos, t0: float, n: int) -> None:
