@@ -89,7 +89,13 @@ def run_parser() -> argparse.ArgumentParser:
     p.add_argument("--headless", action="store_true", help="no 3D viewer")
     p.add_argument("--duration", type=_positive_seconds, default=None,
                    help="run this many seconds of simulated time, print a summary and exit")
-    p.add_argument("--host", default="127.0.0.1", help="address of the HTTP API and the viewer")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address of the HTTP API and the viewer (default 127.0.0.1, this machine only; any other "
+                        "needs a token)")
+    p.add_argument("--token", default=None,
+                   help="the access token every /api/ request (Authorization: Bearer <token>) and WebSocket "
+                        "(?token=) must carry; default: the environment variable HRP2_CONSOLE_TOKEN. Required for a "
+                        "--host other than loopback. Open the page as http://HOST:PORT/?token=<token>")
     p.add_argument("--port", type=_port, default=8000, help="HTTP API port")
     p.add_argument("--viewer-port", type=_port, default=8080, help="viser viewer port")
     p.add_argument("--params", type=_params_file, default=None, metavar="FILE",
@@ -181,6 +187,14 @@ class _StopRequested:
 def run(argv: Sequence[str]) -> int:
     args = run_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
+    from app.security import TokenRequired, check_token_config, is_loopback, token_from_env
+
+    token = token_from_env(args.token)
+    try:  # before anything starts: nothing answers other machines without a token
+        check_token_config(args.host, token)
+    except TokenRequired as exc:
+        print(f"hrp2-console: error: {exc}", file=sys.stderr)
+        return 2
 
     from app.main import create_app
     from app.service import OperatorService, ServiceError
@@ -202,15 +216,19 @@ def run(argv: Sequence[str]) -> int:
     service = OperatorService(robot)
     viewer = None
     viewer_port = None
+    viewer_host = args.host
     server = http_thread = None
     try:
         if not args.headless:
             from app.viewer import Viewer
 
-            viewer = Viewer(service, host=args.host, port=args.viewer_port)
+            # viser's own server checks no token and its panel can release the e-stop: it stays on this
+            # machine whatever --host says
+            viewer_host = args.host if is_loopback(args.host) else "127.0.0.1"
+            viewer = Viewer(service, host=viewer_host, port=args.viewer_port)
             viewer_port = viewer.port
         settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
-                            viewer_port=viewer_port)
+                            viewer_port=viewer_port, token=token)
         app = create_app(settings, service=service)
         try:
             server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)
@@ -223,9 +241,11 @@ def run(argv: Sequence[str]) -> int:
         pub = service.published()
         print(f"hrp2-console: scene {args.scene!r}, {speed}; chain {pub.chain}")
         print(f"  robot process  pid {robot.process.pid}, scheduling {robot.priority}")
-        print(f"  operator page  http://{args.host}:{http_port}/   (API docs /docs)")
+        query = "?token=<the token>" if token is not None else ""
+        print(f"  operator page  http://{args.host}:{http_port}/{query}   (API docs /docs)")
         if viewer_port is not None:
-            print(f"  3D viewer      http://{args.host}:{viewer_port}/")
+            note = "" if viewer_host == args.host else "   (this machine only: viser checks no token)"
+            print(f"  3D viewer      http://{viewer_host}:{viewer_port}/{note}")
         sys.stdout.flush()
         dt = robot.info().dt_control_s
         while not stop.event.is_set():

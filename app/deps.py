@@ -6,6 +6,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
+from app.operator_lock import OperatorLock
 from app.service import OperatorService, Unavailable
 from app.settings import Settings
 
@@ -21,5 +22,13 @@ def get_settings(request: Request) -> Settings:
     return getattr(request.app.state, "settings", None) or Settings()
 
 
+def get_lock(request: Request) -> OperatorLock:
+    lock = getattr(request.app.state, "lock", None)
+    if lock is None:
+        lock = request.app.state.lock = OperatorLock()
+    return lock
+
+
 ServiceDep = Annotated[OperatorService, Depends(get_service)]
 SettingsDep = Annotated[Settings, Depends(get_settings)]
+LockDep = Annotated[OperatorLock, Depends(get_lock)]

@@ -11,6 +11,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
+from app.operator_lock import Locked
 from app.service.errors import InvalidArgument, Refused, ServiceError
 from controller.core.errors import InvalidCommand, InvalidState
 
@@ -31,7 +32,8 @@ class ErrorBody(BaseModel):
     detail: str = Field(description="what was wrong and what would have worked")
     field: str | None = Field(default=None, description="the offending field (422)")
     reason: str | None = Field(default=None, description="what is in the way (409): hard_stop, fallen, collision, "
-                                                         "motion_stop, state")
+                                                         "motion_stop, reach, state, diverged; (423): locked")
+    holder: str | None = Field(default=None, description="the client holding the operator lock (423)")
     errors: list[ValidationItem] | None = Field(default=None, description="pydantic's findings (422)")
 
 
@@ -110,16 +112,23 @@ async def _internal_handler(_: Request, exc: Exception) -> JSONResponse:
     return JSONResponse(status_code=500, content=body(f"internal error: {type(exc).__name__}: {exc}"))
 
 
+async def _locked_handler(_: Request, exc: Locked) -> JSONResponse:
+    return JSONResponse(status_code=423, content=body(str(exc), reason="locked", holder=exc.holder))
+
+
 def install_error_handlers(app: FastAPI) -> None:
     app.add_exception_handler(Exception, _internal_handler)
     app.add_exception_handler(RequestValidationError, _validation_handler)
     app.add_exception_handler(ServiceError, _service_handler)
     app.add_exception_handler(InvalidCommand, _invalid_command_handler)
     app.add_exception_handler(InvalidState, _invalid_state_handler)
+    app.add_exception_handler(Locked, _locked_handler)
 
 
 #: responses every route may give besides 200 (in OpenAPI, all with the one error body)
 COMMON_ERRORS = {
+    401: {"model": ErrorBody, "description": "the console's token is missing or wrong (a console bound beyond "
+                                             "loopback: 'Authorization: Bearer <token>')"},
     403: {"model": ErrorBody, "description": "a control request from a page of another origin"},
     405: {"model": ErrorBody, "description": "a method the path does not have (the Allow header lists those it has)"},
     413: {"model": ErrorBody, "description": "a body over 64 kB"},
@@ -127,13 +136,16 @@ COMMON_ERRORS = {
     421: {"model": ErrorBody, "description": "a Host header that is not the console's address"},
     500: {"model": ErrorBody, "description": "an unexpected error (the connection stays usable)"},
     503: {"model": ErrorBody, "description": "the robot process is not running or did not answer"}}
+#: what control requests (POST, PUT, DELETE) may answer besides those
+CONTROL_ERRORS = {423: {"model": ErrorBody, "description": "another client holds the operator lock: `holder` "
+                                                           "names it (the e-stop is never refused)"}}
 
 
 def errors(*codes: int, **descriptions: str) -> dict[int, dict[str, Any]]:
     """OpenAPI `responses` for a route: the error codes it may answer, each with ErrorBody."""
     default = {404: "something named does not exist (the valid names are listed)",
                409: "valid, but not now: `reason` says what is in the way (hard_stop, fallen, collision, "
-                    "motion_stop, reach, state)",
+                    "motion_stop, reach, state, diverged)",
                422: "invalid field: `field` names it, `detail` says what is allowed"}
     out = dict(COMMON_ERRORS)
     for code in codes:

@@ -9,6 +9,7 @@ import json
 import re
 
 from app.service import OperatorService, ServiceError
+from app.state import with_operator_lock
 
 _JSON = [(b"content-type", b"application/json")]
 
@@ -60,7 +61,7 @@ class HotPaths:
             key = (scope["method"], scope["path"])
             if service is not None and key == ("GET", "/api/state"):
                 try:
-                    body = service.state_json()
+                    body = with_operator_lock(service.state_json(), getattr(self.api.state, "lock", None))
                 except ServiceError:
                     pass  # FastAPI's route answers with the error
                 else:

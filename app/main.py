@@ -6,11 +6,13 @@ from __future__ import annotations
 from pathlib import Path
 
 from fastapi import FastAPI
+from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
-from app.errors import ErrorBody, install_error_handlers
+from app.errors import COMMON_ERRORS, CONTROL_ERRORS, ErrorBody, install_error_handlers
 from app.hot_paths import HotPaths
+from app.operator_lock import OperatorLock
 from app.routers import (
     behaviors,
     chain,
@@ -23,9 +25,10 @@ from app.routers import (
     sequence,
     sim,
     state,
+    telemetry,
     walk,
 )
-from app.security import ConsoleGuard, allowed_hosts_for
+from app.security import LOCK_EXEMPT, UNSAFE_METHODS, ConsoleGuard, allowed_hosts_for, check_token_config
 from app.service import OperatorService
 from app.settings import Settings
 
@@ -33,17 +36,24 @@ STATIC_DIR = Path(__file__).resolve().parents[1] / "static"
 
 
 def create_app(settings: Settings | None = None, service: OperatorService | None = None):
-    """The console's ASGI app: FastAPI behind the guard. Its FastAPI instance is `.fastapi`."""
+    """The console's ASGI app: FastAPI behind the guard. Its FastAPI instance is `.fastapi`. Raises
+    app.security.TokenRequired for a host beyond loopback without a token."""
     settings = settings or Settings()
-    api = FastAPI(title="HRP-2 operator console", version="0.1.0",
+    check_token_config(settings.host, settings.token)
+    api = FastAPI(title="HRP-2 operator console", version="0.1.0", docs_url=None, redoc_url=None,
                   description="Operator API of the simulated HRP-2 No.10: state, e-stop, motion stop, "
                               "sequence player, walking, layer parameters, impedance, experiments, "
                               "simulation controls, the operator's velocities at the operational points "
                               "(feet frame) and the behaviours. Units: m, s, deg, N. Control requests (POST, PUT) "
                               "must be sent as JSON (Content-Type: application/json); only POST /api/estop is "
-                              "accepted without. Bodies are limited to 64 kB.")
+                              "accepted without. Bodies are limited to 64 kB. A console bound beyond loopback needs "
+                              "its token on every /api/ request (Authorization: Bearer <token>) and every WebSocket "
+                              "(?token=<token>). While a client holds the operator lock (POST /api/operator/lock), "
+                              "the others' control requests are answered 423 naming the holder; the e-stop never "
+                              "is.")
     api.state.settings = settings
     api.state.service = service
+    lock = api.state.lock = OperatorLock(settings.lock_lease_s, settings.lock_grace_s)
     install_error_handlers(api)
     from starlette.exceptions import HTTPException as StarletteHTTPException
 
@@ -52,6 +62,7 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
                    behaviors):
         api.include_router(module.router)
     api.include_router(operator.ws_router)
+    api.include_router(telemetry.router)
     api.include_router(emergency.motion_router)
     api.include_router(emergency.params_router)
     _publish_error_schema(api)
@@ -67,10 +78,26 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
 
         return HTMLResponse(client_html())
 
+    _serve_docs(api)
     api.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
-    guarded = ConsoleGuard(HotPaths(api), allowed_hosts_for(settings.host, settings.extra_hosts))
+    guarded = ConsoleGuard(HotPaths(api), allowed_hosts_for(settings.host, settings.extra_hosts),
+                           token=settings.token, lock=lock)
     guarded.fastapi = api
     return guarded
+
+
+def _serve_docs(api: FastAPI) -> None:
+    """/docs with Swagger UI's own files from the swagger-ui-bundle-v2 package: nothing from the internet."""
+    from swagger_ui_bundle import swagger_ui_path
+
+    api.mount("/static/swagger-ui", StaticFiles(directory=str(swagger_ui_path)), name="swagger-ui")
+
+    @api.get("/docs", include_in_schema=False)
+    def docs() -> HTMLResponse:
+        return get_swagger_ui_html(openapi_url="/openapi.json", title=f"{api.title} - API",
+                                   swagger_js_url="/static/swagger-ui/swagger-ui-bundle.js",
+                                   swagger_css_url="/static/swagger-ui/swagger-ui.css",
+                                   swagger_favicon_url="/static/swagger-ui/favicon-32x32.png")
 
 
 def _publish_error_schema(api: FastAPI) -> None:
@@ -88,9 +115,18 @@ def _publish_error_schema(api: FastAPI) -> None:
         components["ErrorBody"] = error_schema
         components["HTTPValidationError"] = error_schema
         components.pop("ValidationError", None)
-        for path in schema.get("paths", {}).values():
-            for op in path.values():
-                resp = op.get("responses", {}).get("422")
+        for template, path in schema.get("paths", {}).items():
+            for method, op in path.items():
+                responses = op.setdefault("responses", {})
+                # the front door's answers: the token on every /api/ path, the lock on control requests
+                extra = {401: COMMON_ERRORS[401]}
+                if method.upper() in UNSAFE_METHODS and (method.upper(), template) not in LOCK_EXEMPT:
+                    extra.update(CONTROL_ERRORS)
+                for code, spec in extra.items():
+                    responses.setdefault(str(code), {
+                        "description": spec["description"],
+                        "content": {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}})
+                resp = responses.get("422")
                 if resp is not None:
                     resp["content"] = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorBody"}}}
         return schema

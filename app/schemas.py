@@ -368,3 +368,23 @@ class BehaviorDoc(BaseModel):
     name: str
     summary: str
     params: list[BehaviorParamDoc]
+
+
+# ---- the operator lock ---------------------------------------------------------------------------------------
+class LockRequest(_Body):
+    client: str = Field(pattern=r"^[A-Za-z0-9._:-]{1,64}$", min_length=1, max_length=64, examples=["page-1"],
+                        description="this client's id (1 to 64 of A-Z a-z 0-9 . _ : -), sent again as the "
+                                    "X-Client-Id header of its control requests and as ?client= of its WebSockets")
+
+
+class OperatorLockState(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    holder: str | None = Field(description="the client in control; null: nobody, any client may control")
+    lease_s: float = Field(description="a holder without a WebSocket keeps the lock this long after its last "
+                                       "request [s]")
+    grace_s: float = Field(description="kept this long after the holder's last WebSocket closed [s]")
+    expires_in_s: float | None = Field(description="when it goes unless renewed [s]; null while the holder has a "
+                                                   "WebSocket open, or when free")
+    connected: bool = Field(description="the holder has a WebSocket open (/ws/operator or /ws/telemetry with "
+                                        "?client=)")

@@ -1,13 +1,18 @@
 """The console's front door (pure ASGI middleware): Host and Origin checks against DNS rebinding and
-cross-site requests, JSON-only control requests, a body-size limit, and a JSON 500 for anything
-unexpected that keeps the connection usable."""
+cross-site requests, the access token, the operator lock, JSON-only control requests, a body-size limit,
+and a JSON 500 for anything unexpected that keeps the connection usable."""
 
 from __future__ import annotations
 
+import hmac
 import ipaddress
 import json
 import logging
+import os
 from collections.abc import Iterable
+from urllib.parse import parse_qs
+
+from app.operator_lock import Locked, OperatorLock
 
 log = logging.getLogger(__name__)
 
@@ -16,6 +21,14 @@ UNSAFE_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 #: control requests any page may send without a JSON body: they can only make the robot safer
 ALWAYS_ALLOWED = frozenset({("POST", "/api/estop")})
 LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
+#: control requests the operator lock never refuses: stops (they only make the robot safer) and the lock's own
+LOCK_EXEMPT = frozenset({("POST", "/api/estop"), ("POST", "/api/motion/stop"), ("POST", "/api/operator/lock"),
+                         ("DELETE", "/api/operator/lock")})
+#: paths that need the token when one is set (everything else: the page, its static files, /docs, the schema)
+TOKEN_PREFIXES = ("/api/", "/ws/")
+TOKEN_ENV = "HRP2_CONSOLE_TOKEN"
+MIN_TOKEN_CHARS = 16
+CLIENT_HEADER = b"x-client-id"
 
 
 def is_loopback(host: str) -> bool:
@@ -25,6 +38,31 @@ def is_loopback(host: str) -> bool:
         return ipaddress.ip_address(host.strip("[]")).is_loopback
     except ValueError:
         return False
+
+
+class TokenRequired(ValueError):
+    """The console cannot start as configured: a host other than loopback without a (good) token."""
+
+
+def token_from_env(given: str | None) -> str | None:
+    """`--token` if given, else the environment's HRP2_CONSOLE_TOKEN, else None."""
+    if given is not None:
+        return given
+    return os.environ.get(TOKEN_ENV) or None
+
+
+def check_token_config(host: str, token: str | None) -> None:
+    """TokenRequired when the console would answer other machines without a token, or with a weak one."""
+    if token is not None:
+        if len(token) < MIN_TOKEN_CHARS or any(c.isspace() for c in token) or not token.isprintable():
+            raise TokenRequired(f"the token must be at least {MIN_TOKEN_CHARS} printable characters without "
+                                f"spaces (got {len(token)}); e.g. python3 -c 'import secrets; "
+                                "print(secrets.token_urlsafe())'")
+        return
+    if not is_loopback(host):
+        raise TokenRequired(f"--host {host} lets other machines reach the console: give a token with --token "
+                            f"or the environment variable {TOKEN_ENV} (at least {MIN_TOKEN_CHARS} characters), "
+                            "or bind 127.0.0.1 (the default)")
 
 
 def allowed_hosts_for(bind_host: str, extra: Iterable[str] = ()) -> tuple[str, ...] | None:
@@ -63,12 +101,28 @@ async def _send_json(send, status: int, detail: str, headers: Iterable[tuple[byt
 
 
 class ConsoleGuard:
-    """Wraps the FastAPI app. `allowed_hosts` None accepts any Host (the token then guards, see Settings)."""
+    """Wraps the FastAPI app. `allowed_hosts` None accepts any Host (the token then guards, see Settings).
+    `token`: when set, every /api/ request carries it as `Authorization: Bearer <token>` and every /ws/
+    connection as `?token=<token>` (or the same header). `lock`: while a client holds it, the control
+    requests of the others are answered 423 naming the holder (stops excepted, see LOCK_EXEMPT)."""
 
-    def __init__(self, app, allowed_hosts: tuple[str, ...] | None, max_body_bytes: int = MAX_BODY_BYTES) -> None:
+    def __init__(self, app, allowed_hosts: tuple[str, ...] | None, max_body_bytes: int = MAX_BODY_BYTES,
+                 token: str | None = None, lock: OperatorLock | None = None) -> None:
         self.app = app
         self.allowed_hosts = None if allowed_hosts is None else frozenset(h.lower() for h in allowed_hosts)
         self.max_body_bytes = max_body_bytes
+        self._token = None if token is None else token.encode()
+        self.lock = lock
+
+    def _token_ok(self, scope, headers: dict[bytes, bytes]) -> bool:
+        if self._token is None or not scope["path"].startswith(TOKEN_PREFIXES):
+            return True
+        auth = headers.get(b"authorization", b"")
+        given = auth[7:].strip() if auth[:7].lower() == b"bearer " else None
+        if given is None and scope["type"] == "websocket":
+            values = parse_qs(scope.get("query_string", b"").decode("latin-1")).get("token")
+            given = values[-1].encode("latin-1", "replace") if values else None
+        return given is not None and hmac.compare_digest(given, self._token)
 
     def _host_ok(self, headers: dict[bytes, bytes]) -> bool:
         if self.allowed_hosts is None:
@@ -104,14 +158,33 @@ class ConsoleGuard:
             if not self._origin_ok(headers):
                 await send({"type": "websocket.close", "code": 1008})
                 return
+            if not self._token_ok(scope, headers):
+                await send({"type": "websocket.close", "code": 1008,
+                            "reason": "token missing or wrong: connect with ?token=<the console's token>"})
+                return
             await self.app(scope, receive, send)
             return
         method = scope["method"]
         path = scope["path"]
+        if not self._token_ok(scope, headers):
+            await _send_json(send, 401, "token missing or wrong: send the console's token as "
+                                        "'Authorization: Bearer <token>' (the page takes it from its URL, "
+                                        "/?token=...)", [(b"www-authenticate", b"Bearer")])
+            return
         if method in UNSAFE_METHODS:
             if not self._origin_ok(headers):
                 await _send_json(send, 403, "cross-origin control requests are refused; use the console's own page")
                 return
+            if self.lock is not None and path.startswith("/api/") and (method, path) not in LOCK_EXEMPT:
+                client = headers.get(CLIENT_HEADER)
+                try:
+                    self.lock.check(None if client is None else client.decode("latin-1"), f"{method} {path}")
+                except Locked as exc:
+                    payload = json.dumps({"detail": str(exc), "reason": "locked", "holder": exc.holder}).encode()
+                    await send({"type": "http.response.start", "status": 423, "headers": [
+                        (b"content-type", b"application/json"), (b"content-length", str(len(payload)).encode())]})
+                    await send({"type": "http.response.body", "body": payload})
+                    return
             ctype = headers.get(b"content-type", b"").decode("latin-1").split(";")[0].strip().lower()
             if ctype != "application/json" and (method, path) not in ALWAYS_ALLOWED:
                 await _send_json(send, 415, "control requests must be sent with Content-Type: application/json "

@@ -14,3 +14,6 @@ class Settings:
     port: int = 8000
     viewer_port: int | None = 8080  # None: no viser viewer (--headless)
     extra_hosts: tuple[str, ...] = ()  # Host names accepted besides the bound address (tests: "testserver")
+    token: str | None = None  # required on /api/ and /ws/ when set; a host beyond loopback needs one
+    lock_lease_s: float = 5.0  # [s] the operator lock of a holder without a WebSocket, after its last request
+    lock_grace_s: float = 2.0  # [s] the operator lock after its holder's last WebSocket closed

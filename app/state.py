@@ -13,6 +13,7 @@ from typing import Any, Literal, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
+from app.schemas import OperatorLockState
 from app.service.host import Published
 from controller.core.layer import Status, plain
 from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
@@ -110,7 +111,8 @@ def state_document(pub: Published) -> dict[str, Any]:
                  "speed_last": pub.timing.speed_last},
         "operation": _operation(layers.get("op")),
         "runs": [r.to_dict() for r in pub.runs],
-        "operator_acks": {p: {"seq": a.seq, "tick": a.tick, "time_s": a.time_s} for p, a in pub.setpoint_acks.items()},
+        "operator_acks": {p: {"seq": a.seq, "tick": a.tick, "time_s": a.time_s, "ignored": a.ignored}
+                          for p, a in pub.setpoint_acks.items()},
     }
 
 
@@ -131,6 +133,13 @@ def state_json(pub: Published) -> tuple[dict[str, Any], bytes]:
         doc = jsonable(doc)
         body = json.dumps(doc, separators=(",", ":"), allow_nan=False)
     return doc, body.encode()
+
+
+def with_operator_lock(body: bytes, lock) -> bytes:
+    """The encoded state document with the console's `lock` state (app.operator_lock) added as operator_lock."""
+    if lock is None:
+        return body
+    return b"".join((body[:-1], b',"operator_lock":', json.dumps(lock.state().to_dict()).encode(), b"}"))
 
 
 # ---- the response schema ------------------------------------------------------------------------------------
@@ -264,6 +273,8 @@ def state_model() -> type[BaseModel]:
         runs=(list[run_model()], Field(description="the behaviour runs kept, oldest first")),
         operator_acks=(dict[str, ack_model()], Field(
             description="per operational point, the operator's newest setpoint the robot applied")),
+        operator_lock=(OperatorLockState | None, Field(
+            default=None, description="who holds the operator lock (the console's, beside the robot's snapshot)")),
     )
 
 
@@ -292,7 +303,10 @@ def ack_model() -> type[BaseModel]:
             "SetpointAckState", __base__=_Doc,
             seq=(int, Field(description="the setpoint's sequence number (the console numbers them)")),
             tick=(int, Field(description="the control tick it was applied before")),
-            time_s=(float, Field(description="that tick's control time: the dead-man's stamp [s]")))
+            time_s=(float, Field(description="that tick's control time: the dead-man's stamp [s]")),
+            ignored=(str | None, Field(default=None, description="why it was not applied: 'hard_stop' (the hard "
+                                                                 "e-stop was engaged) or 'before_release' (sent "
+                                                                 "before the e-stop's release); null: applied")))
     return _NAMED["SetpointAckState"]
 
 

@@ -46,8 +46,21 @@ def scene_path(scene: str | Path) -> Path:
     raise ValueError(f"unknown scene {scene!r}; valid scenes: {valid} (or a path to an MJCF file)")
 
 
+#: MuJoCo's warnings of a state gone non-finite or unstable (it then resets the data to the model's defaults)
+_DIVERGED_WARNINGS = np.array([int(w) for w in (mujoco.mjtWarning.mjWARN_BADQPOS, mujoco.mjtWarning.mjWARN_BADQVEL,
+                                                 mujoco.mjtWarning.mjWARN_BADQACC)])
+
+
+class PhysicsDiverged(RuntimeError):
+    """The simulation blew up (a NaN or an unstable acceleration); the plant is halted until reset."""
+
+
 class MujocoPlant:
-    """HRP-2 No.10 in MuJoCo: 30 position servos, 4 F/T sensors, a BODY gyro and accelerometer."""
+    """HRP-2 No.10 in MuJoCo: 30 position servos, 4 F/T sensors, a BODY gyro and accelerometer.
+
+    A physics blow-up (MuJoCo's bad qpos / qvel / qacc) raises PhysicsDiverged from `step` once; the plant
+    is then halted in the last good state (velocities zeroed, the clock still advancing) until `reset`,
+    and `diverged` says what happened."""
 
     def __init__(self, scene: str | Path = "default", dt_physics: float = 0.001, keyframe: str = "home"):
         if not (np.isfinite(dt_physics) and dt_physics > 0):
@@ -69,6 +82,8 @@ class MujocoPlant:
         self._base_qpos = self._model.jnt_qposadr[self._model.body_jntadr[self._base_id]]
         self._base_dof = self._model.jnt_dofadr[self._model.body_jntadr[self._base_id]]
         self._push_end_s: dict[int, float] = {}
+        self.diverged: str | None = None
+        self._nan_next_step = False
         self.reset(keyframe)
 
     def __repr__(self) -> str:
@@ -105,6 +120,8 @@ class MujocoPlant:
             raise ValueError(f"unknown keyframe {keyframe!r}; valid keyframes: {', '.join(names)}")
         mujoco.mj_resetDataKeyframe(self._model, self._data, names.index(keyframe))
         self._push_end_s.clear()
+        self.diverged = None
+        self._nan_next_step = False
         self._sensor_mean = None
         mujoco.mj_forward(self._model, self._data)
 
@@ -157,15 +174,45 @@ class MujocoPlant:
             raise ValueError(f"n must be >= 0, got {n}")
         if n == 0:
             return
+        d = self._data
+        if self.diverged is not None:  # halted: the world holds, the clock goes on
+            d.time += n * self.dt_physics
+            return
+        qpos0, t0 = d.qpos.copy(), float(d.time)
+        bad0 = d.warning.number[_DIVERGED_WARNINGS]  # (a copy: fancy indexing)
         # The IMU and F/T sensors report the mean over the steps since the last read, as a real
         # sensor's anti-aliasing filter does: a single sample, taken in phase with the servo command
         # updates, would see the 1 kHz servo vibration as a biased acceleration.
         total = np.zeros_like(self._data.sensordata)
+        if self._nan_next_step:
+            self._nan_next_step = False
+            d.qvel[self._dof_adr[0]] = np.nan
         for _ in range(n):
-            mujoco.mj_step(self._model, self._data)
-            total += self._data.sensordata
+            mujoco.mj_step(self._model, d)
+            total += d.sensordata
             self._end_pushes()
+        # (MuJoCo resets the data at a bad state and counts a warning: checked once per call)
+        bad = d.warning.number[_DIVERGED_WARNINGS] > bad0
+        if bad.any() or not np.isfinite(d.qpos).all():
+            what = mujoco.mjtWarning(_DIVERGED_WARNINGS[int(np.argmax(bad))]).name if bad.any() else "non-finite qpos"
+            self._halt(what, qpos0, t0, n)
         self._sensor_mean = total / n
+
+    def _halt(self, what: str, qpos, t0: float, n: int) -> None:
+        """Back to the state at the start of this step, at rest; halted from now on; raise."""
+        d = self._data
+        self.diverged = f"{what} at t={t0:.3f} s"
+        d.qpos[:] = qpos
+        d.qvel[:] = 0.0
+        d.time = t0 + n * self.dt_physics
+        mujoco.mj_forward(self._model, d)
+        self._sensor_mean = None
+        raise PhysicsDiverged(f"the simulation diverged ({self.diverged}); it is halted until a reset "
+                              "(POST /api/sim/reset)")
+
+    def inject_nan(self) -> None:
+        """Test hook: the next physics step starts with a NaN joint velocity (what a blow-up looks like)."""
+        self._nan_next_step = True
 
     def push(self, body: str, force_world_n, duration_s: float) -> None:
         """Apply a world-frame force [N] at `body`'s COM for `duration_s` of simulated time."""

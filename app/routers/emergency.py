@@ -75,7 +75,7 @@ def es_changes(changes: dict[str, Any]) -> dict[str, dict[str, Any]]:
     if unknown:
         raise InvalidArgument(unknown[0], f"unknown parameter(s) {unknown}; valid: {list(ES_PARAMS)}")
     for old, name in ES_DEPRECATED.items():
-        if old in changes and name in changes and changes[old] != changes[name]:
+        if old in changes and name in changes:  # (the schema says so too: not both)
             raise InvalidArgument(old, f"{old!r} is the deprecated name of {name!r}: give one of them")
     grouped: dict[str, dict[str, Any]] = {}
     for name, value in changes.items():
@@ -116,6 +116,7 @@ def _es_body() -> dict[str, Any]:
     for old, name in ES_DEPRECATED.items():
         schema["properties"][old] = {**schema["properties"][name], "deprecated": True,
                                      "description": f"deprecated name of {name}"}
+        schema.setdefault("allOf", []).append({"not": {"required": [old, name]}})
     return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
 
 

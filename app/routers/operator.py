@@ -11,14 +11,16 @@ import math
 import time
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Body, WebSocket, WebSocketDisconnect
+from fastapi import APIRouter, Body, Header, WebSocket, WebSocketDisconnect
 from pydantic import TypeAdapter, ValidationError
 
-from app.deps import ServiceDep, get_service
+from app.deps import LockDep, ServiceDep, get_service
+from app.deps import get_lock as lock_of
 from app.errors import errors
+from app.operator_lock import Locked, check_client_id
 from app.routers.params import params_changes_body
-from app.schemas import OperatorAck, OperatorVelocityRequest
-from app.service import ServiceError
+from app.schemas import LockRequest, OperatorAck, OperatorLockState, OperatorVelocityRequest
+from app.service import ServiceError, ignored_message
 from app.service.setpoints import Setpoint, SetpointAck
 from app.state import jsonable
 
@@ -81,25 +83,82 @@ def put_params(service: ServiceDep,
     return params_document(new["op"])
 
 
+# ---- the operator lock (app.operator_lock) ------------------------------------------------------------------
+@router.get("/lock", response_model=OperatorLockState, responses=errors(),
+            summary="Who holds the operator lock (null: nobody; any client may control)")
+def lock_state(lock: LockDep) -> OperatorLockState:
+    return OperatorLockState(**lock.state().to_dict())
+
+
+@router.post("/lock", response_model=OperatorLockState, responses=errors(422, 423),
+             summary="Take the operator lock (or renew it): the others' control requests are then answered 423 "
+                     "naming the holder, except the e-stop and the motion stop. Kept while the holder has a "
+                     "WebSocket open with ?client=<id>, else for lease_s after its last request; grace_s after "
+                     "its last WebSocket closed")
+def take_lock(req: LockRequest, lock: LockDep) -> OperatorLockState:
+    return OperatorLockState(**lock.take(req.client).to_dict())
+
+
+@router.delete("/lock", response_model=OperatorLockState, responses=errors(422, 423),
+               summary="Give the operator lock back (the holder only, named by its X-Client-Id header)")
+def release_lock(lock: LockDep, x_client_id: Annotated[str | None, Header(
+        pattern=r"^[A-Za-z0-9._:-]{1,64}$", description="the holder's client id")] = None) -> OperatorLockState:
+    lock.release(x_client_id)
+    return OperatorLockState(**lock.state().to_dict())
+
+
 _REQUEST = TypeAdapter(OperatorVelocityRequest)
 
 
-def _error(detail: str, field: str | None = None, reason: str | None = None, seq: int | None = None) -> str:
+def _error(detail: str, field: str | None = None, reason: str | None = None, seq: int | None = None,
+           **extra: Any) -> str:
     return json.dumps({k: v for k, v in {"ok": False, "detail": detail, "field": field, "reason": reason,
-                                         "seq": seq}.items() if v is not None})
+                                         "seq": seq, **extra}.items() if v is not None})
+
+
+def ws_client(ws: WebSocket) -> tuple[str | None, str | None]:
+    """(the ?client= id or None, an error message naming the field)."""
+    client = ws.query_params.get("client")
+    if client is None:
+        return None, None
+    try:
+        return check_client_id(client, "client"), None
+    except ValueError as exc:
+        return None, str(exc)
+
+
+async def receive_message(ws: WebSocket) -> str | None:
+    """The next text message; None when the client left. A binary message is answered by the caller as
+    invalid (it gets b"" here)."""
+    message = await ws.receive()
+    if message["type"] == "websocket.disconnect":
+        return None
+    text = message.get("text")
+    return "" if text is None else text
 
 
 @ws_router.websocket("/ws/operator")
 async def operator_stream(ws: WebSocket) -> None:
     """Setpoints as JSON text messages, each the body of PUT /api/operator/velocity; every message is
     answered with {"ok": true, "point", "seq", "applied_seq", "tick", "time_s"} once the robot has applied
-    it (or a newer setpoint of the same point), or {"ok": false, "detail", "field"?, "reason"?}."""
+    it (or a newer setpoint of the same point), or {"ok": false, "detail", "field"?, "reason"?}: a setpoint
+    the robot ignored (the hard e-stop) says {"ok": false, "ignored": true, "reason": "hard_stop" or
+    "before_release", ...}; one refused by the operator lock {"reason": "locked", "holder"}. `?client=<id>`:
+    this connection keeps its client's operator lock (app.operator_lock)."""
     try:
         service = get_service(ws)
     except ServiceError as exc:
         await ws.close(code=1011, reason=str(exc)[:120])
         return
+    op_lock = lock_of(ws)
+    client, bad_client = ws_client(ws)
     await ws.accept()
+    if bad_client is not None:
+        await ws.send_text(_error(bad_client, field="client"))
+        await ws.close(code=1008, reason="invalid client id")
+        return
+    if client is not None:
+        op_lock.connected(client)
     pending: list[tuple[str, int, float]] = []  # (point, seq, monotonic time put)
     lock = asyncio.Lock()
 
@@ -123,7 +182,10 @@ async def operator_stream(ws: WebSocket) -> None:
             still = []
             for point, seq, put_at in pending:
                 ack = acks.get(point)
-                if ack is not None and ack.seq >= seq:
+                if ack is not None and ack.seq == seq and ack.ignored is not None:
+                    await send(_error(ignored_message(ack.ignored), reason=ack.ignored, seq=seq, ignored=True,
+                                      point=point, tick=ack.tick, time_s=ack.time_s))
+                elif ack is not None and ack.seq >= seq:
                     await send(json.dumps(jsonable(ack_body(ack, seq))))
                 elif now - put_at > ACK_GIVE_UP_S:
                     await send(_error(f"the robot did not acknowledge setpoint {seq} within {ACK_GIVE_UP_S:g} s",
@@ -135,7 +197,12 @@ async def operator_stream(ws: WebSocket) -> None:
     task = asyncio.create_task(acker())
     try:
         while True:
-            text = await ws.receive_text()
+            text = await receive_message(ws)
+            if text is None:
+                break
+            if not text:
+                await send(_error("body: send each setpoint as a JSON text message", field="body"))
+                continue
             if len(text) > MAX_MESSAGE_BYTES:
                 await send(_error(f"message of {len(text)} bytes; the limit is {MAX_MESSAGE_BYTES}", field="body"))
                 continue
@@ -147,12 +214,21 @@ async def operator_stream(ws: WebSocket) -> None:
                 await send(_error(f"{field}: {err.get('msg', 'invalid')}", field=field))
                 continue
             try:
+                op_lock.check(client, "the stick stream")
+            except Locked as exc:
+                await send(_error(str(exc), reason="locked", holder=exc.holder))
+                continue
+            try:
                 numbered = service.put_setpoint(setpoint_of(req))
             except ServiceError as exc:
-                await send(_error(str(exc), field=getattr(exc, "field", None), reason=getattr(exc, "reason", None)))
+                reason = getattr(exc, "reason", None)
+                await send(_error(str(exc), field=getattr(exc, "field", None), reason=reason,
+                                  ignored=True if reason in ("hard_stop", "fallen") else None))
                 continue
             pending.append((numbered.point, numbered.seq, time.monotonic()))
     except WebSocketDisconnect:
         pass
     finally:
         task.cancel()
+        if client is not None:
+            op_lock.disconnected(client)

@@ -79,6 +79,7 @@ class RobotBackend(Protocol):
     def refresh_info(self, timeout_s: float = 10.0) -> RobotInfo: ...
     def log_rows(self) -> np.ndarray: ...
     def put_setpoint(self, setpoint: Setpoint) -> Setpoint: ...
+    def setpoint_seq(self) -> int: ...
     def reset(self, scene: str | None = None, timeout_s: float = 30.0) -> RobotInfo: ...
     def close(self, timeout_s: float = 10.0) -> dict | None: ...
 
@@ -115,7 +116,8 @@ class OperatorService:
         return self.robot.estop()
 
     def release_estop(self) -> str:
-        return self.run(ReleaseEstop())
+        """Release the hard e-stop: nothing the operator streamed before the release runs after it."""
+        return self.run(ReleaseEstop(self.robot.setpoint_seq()))
 
     def stop_motion(self) -> str:
         return self.run(StopMotion())
@@ -208,15 +210,15 @@ class OperatorService:
 
     # ---- the operator's velocities and the behaviours ([OP] Eq. 5) -------------------------------------------
     def _refuse_setpoint(self) -> None:
-        """What refuses a motion verb refuses a setpoint too (the robot's latest published safety state)."""
+        """A fall refuses a setpoint as it refuses a motion verb (the robot's latest published safety state)."""
         if "op" not in self._info.chain:
             raise NotFound(f"the chain has no operation layer ('op'); present: {', '.join(self._info.chain)}")
         safety = self.published().snapshot.safety
         if safety.fall is not None:
             raise Refused("fallen", f"operator velocity refused: the robot has fallen ({safety.fall}); reset the "
                                     "simulation")
-        if safety.hard_stop:
-            raise Refused("hard_stop", "operator velocity refused: the hard e-stop is engaged; release it first")
+        # (the hard e-stop is the robot's to judge, at the tick the setpoint reaches: it acknowledges the setpoint
+        # as ignored; a published state up to 20 ms old would refuse the first setpoints after a release)
 
     def put_setpoint(self, setpoint: Setpoint) -> Setpoint:
         """Hand the operator's newest velocity for one point to the robot's latest-value channel (no queue);
@@ -229,7 +231,8 @@ class OperatorService:
         return self.published().setpoint_acks.get(point)
 
     def operator_velocity(self, setpoint: Setpoint, timeout_s: float = ACK_TIMEOUT_S) -> SetpointAck:
-        """Put a setpoint and wait until the robot has applied it (the tick it reached)."""
+        """Put a setpoint and wait until the robot has applied it (the tick it reached); Refused when the
+        robot acknowledged it as ignored (the hard e-stop)."""
         import time
 
         numbered = self.put_setpoint(setpoint)
@@ -237,6 +240,8 @@ class OperatorService:
         while True:
             ack = self.setpoint_ack(setpoint.point)
             if ack is not None and ack.seq >= numbered.seq:
+                if ack.ignored is not None and ack.seq == numbered.seq:
+                    raise Refused(ack.ignored, ignored_message(ack.ignored))
                 return ack
             if time.monotonic() > deadline:
                 raise Unavailable(f"the robot did not acknowledge the {setpoint.point} setpoint within "
@@ -339,6 +344,15 @@ class OperatorService:
 
     def close(self) -> dict | None:
         return self.robot.close()
+
+
+def ignored_message(reason: str) -> str:
+    """What an ignored setpoint's acknowledgement says."""
+    if reason == "hard_stop":
+        return "setpoint ignored: the hard e-stop is engaged; release it first"
+    if reason == "before_release":
+        return "setpoint ignored: it was sent before the hard e-stop's release (nothing runs that was sent before)"
+    return f"setpoint ignored ({reason})"
 
 
 def _with_params(info: RobotInfo, params: Mapping[str, Params]) -> RobotInfo:

@@ -130,6 +130,7 @@ class RobotHost:
         self.startup_params = {owner: dict(fields) for owner, fields in (params or {}).items()}
         self.setpoints = setpoints if setpoints is not None else LocalSource()
         self.setpoint_acks: dict[str, SetpointAck] = {}
+        self.release_barrier_seq = 0  # setpoints numbered up to this were sent before the last e-stop release
         self._info: RobotInfo | None = None
         self._runs_cache: tuple[int, tuple] = (-1, ())
         self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
@@ -145,6 +146,10 @@ class RobotHost:
         return self.loop.chain.layers.get("op")
 
     def _before_tick(self, time_s: float) -> None:
+        if self.loop.hard_stop_engaged:  # whatever engaged it (the operator, a fault, a fall)
+            op = self._operation_layer()
+            if op is not None:
+                op.drop_motion()
         table = self.setpoints.poll()
         if table:
             self.apply_setpoints(table, time_s)
@@ -152,7 +157,8 @@ class RobotHost:
 
     def apply_setpoints(self, table: Mapping[str, Setpoint], time_s: float | None = None) -> list[SetpointAck]:
         """Hand each point's setpoint that is newer than the last one applied to the operation layer,
-        stamped with the control time `time_s` (default: now, at this boundary)."""
+        stamped with the control time `time_s` (default: now, at this boundary); while the hard e-stop is
+        engaged, or for a setpoint sent before its release, acknowledge it as ignored instead."""
         op = self._operation_layer()
         if op is None:
             raise NotFound(f"the chain has no operation layer ('op'); present: {self.loop.chain.order()}")
@@ -163,8 +169,14 @@ class RobotHost:
             last = self.setpoint_acks.get(point)
             if last is not None and sp.seq and sp.seq <= last.seq:
                 continue
-            op.set_motion(point, sp.twist(), time_s, sp.walk())
-            self.setpoint_acks[point] = ack = SetpointAck(point, sp.seq, tick, time_s)
+            if self.loop.hard_stop_engaged:
+                ignored = "hard_stop"
+            elif sp.seq and sp.seq <= self.release_barrier_seq:
+                ignored = "before_release"
+            else:
+                ignored = None
+                op.set_motion(point, sp.twist(), time_s, sp.walk())
+            self.setpoint_acks[point] = ack = SetpointAck(point, sp.seq, tick, time_s, ignored)
             acks.append(ack)
         return acks
 
@@ -237,11 +249,21 @@ class RobotHost:
         return EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s),
                         engaged_at_monotonic_s=time.monotonic(), already_engaged=already)
 
-    def release_estop(self) -> None:
+    def release_estop(self, setpoints_before: int = 0) -> None:
+        """Release the hard e-stop; the operator's setpoints numbered up to `setpoints_before` (sent before the
+        release) are never applied, those streamed before the stop are forgotten."""
         loop = self.loop
         if loop.fall is not None and loop.fall.reason is not None:
             raise Refused("fallen", f"the robot has fallen ({loop.fall.reason}); only a reset recovers")
+        diverged = getattr(self.plant, "diverged", None)
+        if diverged:
+            raise Refused("diverged", f"the simulation has diverged ({diverged}); only a reset recovers "
+                                      "(POST /api/sim/reset)")
         self.layer("hes").release()  # InvalidState (-> 409) when not engaged
+        self.release_barrier_seq = max(self.release_barrier_seq, int(setpoints_before))
+        op = self._operation_layer()
+        if op is not None:
+            op.drop_motion()
         loop.clear_fault()
 
     # ---- parameters ------------------------------------------------------------------------------------
@@ -291,6 +313,21 @@ class RobotHost:
         if self.startup_params:
             doc = self.startup_params
             SetParams.of(self.info(), doc, {owner: f"{owner}." for owner in doc}).run(self)
+
+    def inject_fault(self, kind: str, layer: str = "st") -> str:
+        """Test hook (app.service.verbs.InjectFault): a layer that raises, or a NaN in the physics."""
+        if kind == "nan":
+            self.plant.inject_nan()
+            return "the next physics step starts from a NaN velocity"
+        if kind != "layer":
+            raise InvalidArgument("kind", f"unknown fault {kind!r}; valid: 'layer', 'nan'")
+        target = self.layer(layer)
+
+        def broken_tick(*_args, **_kwargs):
+            raise RuntimeError(f"injected fault in layer {layer!r}")
+
+        target.tick = broken_tick  # this chain's instance only: a reset builds a new one
+        return f"layer {layer!r} raises from its next tick on"
 
     def stop_loop(self) -> None:
         self.loop.request_stop()

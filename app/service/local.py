@@ -109,6 +109,9 @@ class LocalRobot:
                 self.host.apply_setpoints(table)
         return numbered
 
+    def setpoint_seq(self) -> int:
+        return self._setpoints.last_seq
+
     def estop(self, timeout_s: float = 1.0) -> EstopAck:
         if self.loop.running:
             return self.loop.call(self.host.engage_estop, timeout_s=timeout_s)

@@ -331,6 +331,9 @@ class RobotProcess:
         self._require_alive()
         return self._setpoints.put(setpoint)
 
+    def setpoint_seq(self) -> int:
+        return self._setpoints.last_seq
+
     def info(self) -> RobotInfo:
         return self._info
 

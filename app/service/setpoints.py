@@ -74,12 +74,15 @@ class Setpoint:
 
 @dataclass(frozen=True, slots=True)
 class SetpointAck:
-    """A setpoint reached the robot: its sequence number, the tick it was applied before, that tick's time."""
+    """A setpoint reached the robot: its sequence number, the tick it was applied before, that tick's time;
+    `ignored` says why it was not applied ("hard_stop": the hard e-stop was engaged; "before_release": it was
+    sent before the e-stop's release)."""
 
     point: str
     seq: int
     tick: int
     time_s: float
+    ignored: str | None = None
 
 
 class SetpointTable:
@@ -100,6 +103,11 @@ class SetpointTable:
             self._table[sp.point] = numbered
             self._publish(dict(self._table))
             return numbered
+
+    @property
+    def last_seq(self) -> int:
+        """The newest sequence number given (0: none yet)."""
+        return self._seq
 
 
 class BoardSource:

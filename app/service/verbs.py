@@ -106,9 +106,10 @@ class Verb:
 @dataclass(frozen=True)
 class ReleaseEstop(Verb):
     name = "release_estop"
+    setpoints_before: int = 0  # the console's newest setpoint number when the release was sent
 
     def run(self, host: RobotHost) -> str:
-        host.release_estop()
+        host.release_estop(self.setpoints_before)
         return "hard e-stop released"
 
 
@@ -671,6 +672,19 @@ class Reset(Verb):
     def run(self, host: RobotHost) -> str:
         host.reset(self.scene)
         return f"simulation reset (scene {host.scene!r})"
+
+
+@dataclass(frozen=True)
+class InjectFault(Verb):
+    """Test hook, reachable from Python only (no HTTP route): `kind` "layer" makes `layer`'s tick raise from
+    now on (until a reset builds a new chain); "nan" starts the next physics step from a NaN velocity."""
+
+    kind: str
+    layer: str = "st"
+    name = "inject_fault"
+
+    def run(self, host: RobotHost) -> str:
+        return host.inject_fault(self.kind, self.layer)
 
 
 @dataclass(frozen=True)

@@ -200,7 +200,10 @@ class ControlLoop:
         self._last_q_cmd = frozen_array(q_cmd)  # read-only (a copy unless already immutable): the snapshot shares it
         self._last_ref = ref
         t_phys = time.perf_counter()
-        self.plant.step(self.substeps)
+        try:
+            self.plant.step(self.substeps)
+        except Exception as exc:  # noqa: BLE001 - a physics blow-up is a fault too: safe stop, reported
+            self._on_fault(exc)
         self.physics_timer.add((time.perf_counter() - t_phys) * 1e3)
         self.tick_count += 1
         loop_ms = (time.perf_counter() - t_start) * 1e3

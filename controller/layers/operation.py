@@ -179,6 +179,12 @@ class OperationLayer(Layer):
         if point == "walk":
             self._motion_walk = walk
 
+    def drop_motion(self) -> None:
+        """Forget the operator's setpoints (the hard e-stop: nothing streamed before it runs after it)."""
+        if self._motion:
+            self._motion.clear()
+            self._version += 1
+
     def set_behavior(self, twists: Mapping[str, Twist], walk: WalkCommand | None = None) -> None:
         """The behaviours' sum per point for the next tick only (not refreshed: zero)."""
         for point, twist in twists.items():

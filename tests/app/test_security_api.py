@@ -1,0 +1,221 @@
+"""The console's token and operator lock: a console bound beyond loopback refuses to start without a token;
+with one, every /api/ request and WebSocket needs it (missing or wrong: 401 / closed with 1008); while a
+client holds the lock, the others' control requests are 423 naming the holder, the e-stop never is; the lock
+goes after a grace time once the holder's last WebSocket closed."""
+
+from __future__ import annotations
+
+import pytest
+from fastapi.testclient import TestClient
+from starlette.websockets import WebSocketDisconnect
+
+from app.main import create_app
+from app.operator_lock import Locked, OperatorLock
+from app.security import TOKEN_ENV, TokenRequired, check_token_config, token_from_env
+from app.service import OperatorService
+from app.service.local import LocalRobot
+from app.settings import Settings
+
+TOKEN = "s3cret-token-of-the-console"
+JSON = {"content-type": "application/json"}
+
+
+@pytest.fixture(scope="module")
+def robot():
+    r = LocalRobot(speed=None)
+    r.run_for(0.05)
+    yield r
+    r.stop()
+
+
+@pytest.fixture(scope="module")
+def service(robot):
+    return OperatorService(robot)
+
+
+@pytest.fixture
+def secured(service):
+    app = create_app(Settings(host="0.0.0.0", token=TOKEN), service=service)
+    with TestClient(app, headers=JSON) as c:
+        yield c
+
+
+@pytest.fixture
+def locked_app(service, robot):
+    if robot.loop.hard_stop_engaged:
+        robot.host.release_estop()
+    app = create_app(Settings(extra_hosts=("testserver",), lock_lease_s=5.0, lock_grace_s=0.2), service=service)
+    with TestClient(app, headers=JSON) as c:
+        yield c
+
+
+# ---- binding and the token ------------------------------------------------------------------------------------
+@pytest.mark.parametrize("host", ["0.0.0.0", "192.168.1.20", "::"])
+def test_a_console_beyond_loopback_refuses_to_start_without_a_token(host):
+    with pytest.raises(TokenRequired, match="--token or the environment variable HRP2_CONSOLE_TOKEN"):
+        check_token_config(host, None)
+    with pytest.raises(TokenRequired):
+        create_app(Settings(host=host))
+
+
+def test_loopback_needs_no_token_and_a_short_token_is_refused():
+    for host in ("127.0.0.1", "localhost", "::1"):
+        check_token_config(host, None)
+    with pytest.raises(TokenRequired, match="at least 16 printable characters"):
+        check_token_config("0.0.0.0", "short")
+    with pytest.raises(TokenRequired, match="without spaces"):
+        check_token_config("0.0.0.0", "a token with spaces in it")
+
+
+def test_the_token_comes_from_the_option_else_the_environment(monkeypatch):
+    monkeypatch.setenv(TOKEN_ENV, "from-the-environment-0123")
+    assert token_from_env(None) == "from-the-environment-0123"
+    assert token_from_env("given-on-the-command-line") == "given-on-the-command-line"
+    monkeypatch.delenv(TOKEN_ENV)
+    assert token_from_env(None) is None
+
+
+def test_the_cli_refuses_a_public_host_without_a_token_with_a_clear_message(capsys, monkeypatch):
+    from app.cli import run
+
+    monkeypatch.delenv(TOKEN_ENV, raising=False)
+    assert run(["--host", "0.0.0.0", "--headless", "--duration", "0.1"]) == 2
+    err = capsys.readouterr().err
+    assert "hrp2-console: error: --host 0.0.0.0 lets other machines reach the console" in err
+    assert "--token" in err and TOKEN_ENV in err
+
+
+@pytest.mark.parametrize(("headers", "status"), [
+    ({}, 401),
+    ({"authorization": "Bearer wrong-token-wrong-token"}, 401),
+    ({"authorization": TOKEN}, 401),  # without the scheme
+    ({"authorization": f"Bearer {TOKEN}"}, 200),
+])
+def test_http_needs_the_bearer_token_on_reads_and_control(secured, headers, status):
+    r = secured.get("/api/state", headers=headers)
+    assert r.status_code == status, r.text
+    r = secured.post("/api/motion/stop", headers=headers)
+    assert r.status_code == status, r.text
+    if status == 401:
+        assert r.headers["www-authenticate"] == "Bearer"
+        assert "Authorization: Bearer <token>" in r.json()["detail"]
+    else:
+        assert secured.post("/api/motion/release", headers=headers).status_code in (200, 409)
+
+
+def test_the_estop_needs_the_token_too_and_the_page_and_docs_do_not(secured):
+    assert secured.post("/api/estop").status_code == 401
+    r = secured.post("/api/estop", headers={"authorization": f"Bearer {TOKEN}"})
+    assert r.status_code == 200 and r.json()["ok"]
+    assert secured.post("/api/estop/release", headers={"authorization": f"Bearer {TOKEN}"}).status_code == 200
+    for path in ("/", "/docs", "/openapi.json"):
+        assert secured.get(path).status_code == 200, path
+
+
+@pytest.mark.parametrize("query", ["", "?token=wrong-token-wrong-token", f"?token={TOKEN[:-1]}"])
+def test_websockets_without_the_right_token_are_closed_with_1008(secured, query):
+    for path in ("/ws/operator", "/ws/telemetry"):
+        with pytest.raises(WebSocketDisconnect) as caught:
+            with secured.websocket_connect(path + query) as ws:
+                ws.receive_text()
+        assert caught.value.code == 1008
+        assert "token" in caught.value.reason
+
+
+def test_websockets_with_the_token_are_served(secured):
+    with secured.websocket_connect(f"/ws/telemetry?token={TOKEN}&rate_hz=20") as ws:
+        doc = ws.receive_json()
+        assert "emergency" in doc and "operator_lock" in doc
+    with secured.websocket_connect(f"/ws/operator?token={TOKEN}") as ws:
+        ws.send_text('{"point": "tail"}')
+        assert ws.receive_json()["ok"] is False
+
+
+# ---- the operator lock ----------------------------------------------------------------------------------------
+def test_the_lock_is_taken_explicitly_and_shown_to_all(locked_app):
+    assert locked_app.get("/api/operator/lock").json()["holder"] is None
+    r = locked_app.post("/api/operator/lock", json={"client": "alice"})
+    assert r.status_code == 200, r.text
+    assert r.json()["holder"] == "alice" and r.json()["lease_s"] == 5.0
+    assert locked_app.get("/api/state").json()["operator_lock"]["holder"] == "alice"
+    r = locked_app.post("/api/operator/lock", json={"client": "bob"})
+    assert r.status_code == 423 and r.json()["holder"] == "alice" and "'alice'" in r.json()["detail"]
+
+
+def test_control_requests_of_others_are_423_naming_the_holder_and_the_estop_always_passes(locked_app, robot):
+    locked_app.post("/api/operator/lock", json={"client": "alice"})
+    for headers in ({}, {"x-client-id": "bob"}):
+        r = locked_app.post("/api/walk/go-pos", json={"x": 0.0, "y": 0.0, "theta_deg": 0.0}, headers=headers)
+        assert r.status_code == 423, r.text
+        assert r.json() == {"detail": r.json()["detail"], "reason": "locked", "holder": "alice"}
+        assert "POST /api/walk/go-pos refused" in r.json()["detail"]
+        assert locked_app.put("/api/operator/velocity", json={"point": "rhand"}, headers=headers).status_code == 423
+        assert locked_app.post("/api/sim/reset", headers=headers).status_code == 423
+    assert locked_app.get("/api/state", headers={"x-client-id": "bob"}).status_code == 200  # watching is free
+    r = locked_app.post("/api/estop", headers={"x-client-id": "bob"})
+    assert r.status_code == 200 and robot.loop.hard_stop_engaged
+    assert locked_app.post("/api/estop/release", headers={"x-client-id": "bob"}).status_code == 423
+    r = locked_app.post("/api/estop/release", headers={"x-client-id": "alice"})
+    assert r.status_code == 200, r.text
+    assert locked_app.delete("/api/operator/lock", headers={"x-client-id": "bob"}).status_code == 423
+    assert locked_app.delete("/api/operator/lock", headers={"x-client-id": "alice"}).json()["holder"] is None
+    r = locked_app.put("/api/operator/velocity", json={"point": "rhand"}, headers={"x-client-id": "bob"})
+    assert r.status_code == 200, r.text
+
+
+def test_a_stick_stream_of_another_client_is_refused_naming_the_holder_and_the_socket_stays_usable(locked_app):
+    locked_app.post("/api/operator/lock", json={"client": "alice"})
+    with locked_app.websocket_connect("/ws/operator?client=bob") as ws:
+        ws.send_json({"point": "rhand", "linear": [0.01, 0, 0]})
+        err = ws.receive_json()
+        assert err["ok"] is False and err["reason"] == "locked" and err["holder"] == "alice"
+        locked_app.delete("/api/operator/lock", headers={"x-client-id": "alice"})
+        ws.send_json({"point": "rhand", "linear": [0.01, 0, 0]})
+        ack = ws.receive_json()
+        assert ack["ok"] is True, ack
+
+
+def test_the_lock_is_released_a_grace_time_after_the_holders_last_websocket_closed(locked_app):
+    import time
+
+    locked_app.post("/api/operator/lock", json={"client": "alice"})
+    with locked_app.websocket_connect("/ws/telemetry?client=alice&rate_hz=5") as ws:
+        ws.receive_json()
+        state = locked_app.get("/api/operator/lock").json()
+        assert state["connected"] is True and state["expires_in_s"] is None
+    state = locked_app.get("/api/operator/lock").json()
+    assert state["holder"] == "alice" and state["connected"] is False and state["expires_in_s"] <= 0.2
+    time.sleep(0.3)
+    assert locked_app.get("/api/operator/lock").json()["holder"] is None
+
+
+@pytest.mark.parametrize(("body", "field"), [({}, "client"), ({"client": ""}, "client"),
+                                             ({"client": "a b"}, "client"), ({"client": "x" * 65}, "client"),
+                                             ({"client": 7}, "client"), ({"client": "a", "extra": 1}, "extra")])
+def test_an_invalid_client_id_is_422_naming_the_field(locked_app, body, field):
+    r = locked_app.post("/api/operator/lock", json=body)
+    assert r.status_code == 422, r.text
+    assert r.json()["field"] == field
+
+
+def test_the_lock_expires_after_its_lease_without_a_websocket_and_control_renews_it():
+    now = [0.0]
+    lock = OperatorLock(lease_s=5.0, grace_s=1.0, clock=lambda: now[0])
+    lock.take("alice")
+    now[0] = 4.0
+    lock.check("alice")  # a control request of the holder renews the lease
+    now[0] = 8.9
+    with pytest.raises(Locked, match="held by 'alice'"):
+        lock.check("bob")
+    now[0] = 9.0
+    lock.check("bob")  # expired: free
+    assert lock.holder is None
+    lock.take("bob")
+    lock.connected("bob")
+    now[0] = 100.0
+    assert lock.holder == "bob"  # a holder with a WebSocket open keeps it
+    lock.disconnected("bob")
+    now[0] = 100.9
+    assert lock.holder == "bob"
+    now[0] = 101.0
+    assert lock.holder is None
