@@ -32,6 +32,7 @@ function wsUrl(path) {
   const url = new URL(path, location.href);
   url.protocol = location.protocol === "https:" ? "wss:" : "ws:";
   if (TOKEN) url.searchParams.set("token", TOKEN);
+  url.searchParams.set("client", CLIENT_ID);  // an open socket of the lock's holder keeps its lock
   return url.href;
 }
 
