@@ -121,14 +121,17 @@ def test_walk_to_ends_at_the_world_goal(rig):
     assert abs(math.degrees(yaw) - 10.0) < 2.0  # measured 0.05 deg; bound 2 deg
 
 
-def _reach_with_operator(up_m_s: float) -> np.ndarray:
-    """The right hand after a reach, with the operator streaming +up_m_s along z for 2 s from its start."""
+def _reach_with_operator(up_m_s: float, reach_at_s: float = 0.0) -> np.ndarray:
+    """The right hand after a reach started at `reach_at_s`, with the operator streaming +up_m_s along z for the
+    first 2 s."""
     from app.service.setpoints import Setpoint
 
     rig = Rig()
     try:
-        run_id = rig.service.run_behavior("reach", {"x_m": 0.3, "y_m": -0.3, "z_m": 0.7})
+        run_id = None
         for k in range(int(6.0 / DT)):
+            if k == int(reach_at_s / DT):
+                run_id = rig.service.run_behavior("reach", {"x_m": 0.3, "y_m": -0.3, "z_m": 0.7})
             if k <= int(2.0 / DT) and up_m_s:  # then the stick released: a zero setpoint
                 vz = up_m_s if k < int(2.0 / DT) else 0.0
                 rig.service.put_setpoint(Setpoint("rhand", (0.0, 0.0, vz), (0.0, 0.0, 0.0)))
@@ -148,6 +151,18 @@ def test_an_operator_command_during_a_reach_adds_to_it_seamlessly():
     print(f"seamless: operator offset {offset.round(5)}")
     assert offset[2] == pytest.approx(0.10, abs=0.01)  # measured 0.09997 m; the issue's 1 cm
     assert np.linalg.norm(offset[:2]) < 0.01  # measured 0.05 mm; bound 1 cm
+
+
+def test_a_behaviour_started_while_the_stick_is_held_adds_to_it():
+    """[OP] V-A the other way round: the stick is held from t = 0, the reach starts at 0.5 s. The reach's goal is
+    absolute (where the hand is when it starts plus its move), so what stays on top of it is the stick's motion
+    after the start: 0.05 m/s x 1.5 s = 0.075 m; the stick is neither refused nor reset by the start."""
+    alone = _reach_with_operator(0.0, reach_at_s=0.5)
+    both = _reach_with_operator(0.05, reach_at_s=0.5)
+    offset = both - alone
+    print(f"stick then behaviour: operator offset {offset.round(5)}")
+    assert offset[2] == pytest.approx(0.075, abs=0.01)  # measured 0.07498 m; the issue's 1 cm
+    assert np.linalg.norm(offset[:2]) < 0.01
 
 
 def test_a_behaviour_run_at_max_speed_is_the_same_every_time():
