@@ -37,6 +37,9 @@ LOOK_BACK_M = 0.5
 #: The open hand first comes up here (F) [m], keeping its orientation: straight from where it hangs (0.54 m
 #: high, below the table top) to the pre-grasp, its jaw caught the table's edge.
 VIA_FEET_M = (0.30, -0.30, 0.80)
+#: After the check the robot steps back this far [m] with the can held: at the grasping stance the feet
+#: centre is 0.28 m from the table's edge, and turning there the left palm met the table top (the robot fell).
+STEP_BACK_M = 0.3
 
 
 @dataclass(frozen=True)
@@ -72,7 +75,8 @@ class TakeCan(Composite):
     name = "take_can"
     Params = TakeCanParams
     summary = "Locate the can if needed, walk within reach, grasp it with the right hand and lift it"
-    phases = ("locate", "walk", "relocate", "walk", "open", "pre-grasp", "grasp", "close", "lift", "check")
+    phases = ("locate", "walk", "relocate", "walk", "open", "pre-grasp", "grasp", "close", "lift", "check",
+              "step back")
     remaining_estimate_s = 40.0
 
     def points(self) -> tuple[str, ...]:
@@ -157,5 +161,12 @@ class TakeCan(Composite):
         if load_n < p.min_load_ratio * weight_n:
             raise StepFailed(f"the can slipped or was missed: the wrist carries {load_n:.2f} N after the lift, "
                              f"less than {p.min_load_ratio:.0%} of the can's {weight_n:.2f} N")
+        self.set_phase("step back")
+        view = self.view
+        yaw = view.feet_yaw_rad
+        feet = np.asarray(view.feet_p_world_m, dtype=float)
+        self.require((yield WalkTo(WalkToParams(x_m=float(feet[0] - STEP_BACK_M * math.cos(yaw)),
+                                                y_m=float(feet[1] - STEP_BACK_M * math.sin(yaw)),
+                                                theta_deg=math.degrees(yaw)))))
         return (f"holding the can: {load_n:.2f} N at the wrist (the can weighs {weight_n:.2f} N), "
                 f"jaw at {math.degrees(jaw.q_meas_rad):.1f} deg ({CAN.diameter_m * 1e3:.0f} mm can)")
