@@ -39,7 +39,9 @@ LOOK_BACK_M = 0.5
 VIA_FEET_M = (0.30, -0.30, 0.80)
 #: After the check the robot steps back this far [m] with the can held: at the grasping stance the feet
 #: centre is 0.28 m from the table's edge, and turning there the left palm met the table top (the robot fell).
-STEP_BACK_M = 0.3
+#: 0.3 m cleared the turn, but walking on to the box along the table (the left wrist 0.33 m beside BODY, at
+#: the table top's height, BODY swaying 0.1 m) the palm met the edge again.
+STEP_BACK_M = 0.5
 
 
 @dataclass(frozen=True)
