@@ -50,7 +50,7 @@ class ThrowCan(Composite):
     name = "throw_can"
     Params = ThrowCanParams
     summary = "Locate the trash box, walk to it, bring the held can over the hole and release it"
-    phases = ("locate", "walk", "relocate", "walk", "over the hole", "release", "clear")
+    phases = ("locate", "turn", "walk", "relocate", "walk", "over the hole", "release", "clear")
     remaining_estimate_s = 40.0
 
     def points(self) -> tuple[str, ...]:
@@ -71,6 +71,12 @@ class ThrowCan(Composite):
         feet = np.asarray(view.feet_p_world_m)
         bearing = math.atan2(hole[1] - feet[1], hole[0] - feet[0])
         yaw = heading_to(math.radians(box["yaw_deg"]), bearing)
+        # Turn on the spot first: goPos clamps the sideways stride harder than the forward one, so a walk that
+        # turns as it goes bulges forward (0.25 m measured, turning 90 deg right for a 1.4 m walk) - into the
+        # table the can was taken from.
+        self.set_phase("turn")
+        self.require((yield WalkTo(WalkToParams(x_m=float(feet[0]), y_m=float(feet[1]),
+                                                theta_deg=math.degrees(yaw)))))
         self.set_phase("walk")
         x, y = stance_for(hole, yaw, LOOK_BACK_M)
         self.require((yield WalkTo(WalkToParams(x_m=x, y_m=y, theta_deg=math.degrees(yaw)))))
@@ -111,9 +117,11 @@ class ThrowCan(Composite):
         yield Wait(0.5)
         self.set_phase("clear")
         back = np.asarray(pose.p_feet_m) + np.array([-0.08, 0.0, 0.05])
-        self.require((yield Reach(ReachParams(hand="rhand", x_m=float(back[0]), y_m=float(back[1]),
-                                              z_m=float(back[2]), speed_m_s=self.params.speed_m_s,
-                                              tolerance_m=0.01))))
+        # The can is released: a hand that stops short of this retreat (19 mm, IK-limited, measured) does not
+        # fail the throw; it is reported.
+        clear = yield Reach(ReachParams(hand="rhand", x_m=float(back[0]), y_m=float(back[1]),
+                                        z_m=float(back[2]), speed_m_s=self.params.speed_m_s, tolerance_m=0.01))
+        self.result["clear"] = clear.outcome[1]
         hx, hy = TRASH_BOX.hole_m
         return (f"released the can {1e3 * along:+.0f} mm along and {1e3 * across:+.0f} mm across the "
                 f"{1e3 * hx:.0f} x {1e3 * hy:.0f} mm hole's centre (the robot's estimate)")
