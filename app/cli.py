@@ -335,6 +335,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv and argv[0] == "bench":
         code = bench(argv[1:])
+    elif argv[:2] == ["experiment", "expo"]:
+        from app.experiments.expo import main as expo_main
+
+        code = expo_main(argv[2:])
     elif argv and argv[0] == "experiment":
         code = experiment(argv[1:])
     else:

@@ -15,14 +15,17 @@ import dataclasses
 import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol
+
+import numpy as np
 
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Params
 from controller.operation.points import OperationView, Twist, WalkCommand
 
-__all__ = ["Behavior", "BehaviorParams", "Commands", "Context", "JointReading", "Output", "params_from"]
+__all__ = ["Behavior", "BehaviorParams", "Capture", "Commands", "Context", "JointReading", "Output", "params_from"]
 
 
 @dataclass(frozen=True)
@@ -39,6 +42,24 @@ class JointReading:
     q_meas_rad: float
     lower_rad: float
     upper_rad: float
+
+
+@dataclass(frozen=True, slots=True)
+class Capture:
+    """One camera image requested at a tick boundary, and what the robot knew of itself at that instant.
+
+    `frames` is rendered off the control thread; its result, indexed by the camera name, is the image (RGB,
+    depth, intrinsics; no pose). The snapshot's encoders, KalmanFilter attitude and estimated COG are the
+    inputs of the robot's own head-pose estimate (behaviors.perception.head_pose)."""
+
+    camera: str
+    frames: Future  # -> robot.images.Frames; frames.result()[camera] is the CameraImage
+    time_s: float  # control time of the state the image shows [s]
+    q_meas_rad: np.ndarray  # (30,) encoders
+    base_rpy_est_rad: np.ndarray  # (3,) KalmanFilter attitude
+    cog_world_m: np.ndarray  # (3,) estimated COG (anchored at the planned soles) [m]
+    wait_for_result: bool  # true when the loop runs as fast as possible: the result is waited for at its
+    #                        stated simulated delay, so a seeded run is the same every time
 
 
 class Commands(Protocol):
@@ -68,6 +89,23 @@ class Commands(Protocol):
 
     def joint(self, name: str) -> JointReading:
         """The command, encoder and limits of one joint, as of the last tick."""
+        ...
+
+    def wrench(self, sensor: str) -> np.ndarray:
+        """(6,) force [N] and moment [N m] of a force sensor ("rhsensor", ...) in its frame, offsets and the
+        weight of the parts below it removed (RemoveForceOffset), as of the last tick."""
+        ...
+
+    def capture(self, camera: str) -> Capture:
+        """Render `camera` from the state of this tick boundary, off the control thread."""
+        ...
+
+    def remember(self, object_name: str, recognition: Mapping[str, Any]) -> None:
+        """Keep the latest recognition of an object (published for the console; later behaviours use it)."""
+        ...
+
+    def recalled(self, object_name: str) -> Mapping[str, Any] | None:
+        """The latest recognition of an object remembered since the last reset, or None."""
         ...
 
 

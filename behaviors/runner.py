@@ -173,6 +173,7 @@ class BehaviorRunner:
                 if not isinstance(out, Output):
                     raise TypeError(f"step returned {type(out).__name__}, not Output")
                 run.progress = max(0.0, min(1.0, float(run.behavior.progress(ctx))))
+                run.result = run.behavior.result  # live (a composite's phase, a recognition); copied by status()
                 for point, twist in out.twists.items():
                     if point not in run.points:
                         raise InvalidCommand(f"{run.behavior.name} moved {point!r}, which it did not claim "

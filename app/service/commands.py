@@ -7,6 +7,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from app.service.errors import InvalidArgument, Refused
 from app.service.verbs import (
     GetFootsteps,
@@ -17,8 +19,8 @@ from app.service.verbs import (
     Verb,
     WalkStop,
 )
-from behaviors.base import JointReading
-from robot.names import joint_index
+from behaviors.base import Capture, JointReading
+from robot.names import FORCE_SENSOR_NAMES, joint_index
 
 if TYPE_CHECKING:
     from app.service.host import RobotHost
@@ -70,3 +72,23 @@ class HostCommands:
         kin = self.host.system.kin
         return JointReading(float(snap.q_cmd_rad[i]), float(snap.q_meas_rad[i]), float(kin.q_lower[i]),
                             float(kin.q_upper[i]))
+
+    def wrench(self, sensor: str) -> np.ndarray:
+        if sensor not in FORCE_SENSOR_NAMES:
+            raise Refused("state", f"unknown force sensor {sensor!r}; valid: {list(FORCE_SENSOR_NAMES)}")
+        return np.array(self.host.loop.snapshot.wrenches_ext[FORCE_SENSOR_NAMES.index(sensor)])
+
+    def capture(self, camera: str) -> Capture:
+        host = self.host
+        snap = host.loop.snapshot
+        frames = host.cameras().request_state_of(host.plant.data, cameras=(camera,))
+        loop = host.loop
+        return Capture(camera=camera, frames=frames, time_s=float(snap.time_s), q_meas_rad=snap.q_meas_rad,
+                       base_rpy_est_rad=snap.base_rpy_est_rad, cog_world_m=snap.cog_world,
+                       wait_for_result=loop.speed is None or not loop.running)
+
+    def remember(self, object_name: str, recognition: Mapping[str, Any]) -> None:
+        self.host.recognitions[object_name] = dict(recognition)
+
+    def recalled(self, object_name: str) -> Mapping[str, Any] | None:
+        return self.host.recognitions.get(object_name)

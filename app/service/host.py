@@ -133,6 +133,8 @@ class RobotHost:
         self.release_barrier_seq = 0  # setpoints numbered up to this were sent before the last e-stop release
         self._info: RobotInfo | None = None
         self._runs_cache: tuple[int, tuple] = (-1, ())
+        self.recognitions: dict[str, dict] = {}  # object -> its latest recognition (behaviours remember them)
+        self._cameras = None  # robot.camera.CameraRig of this scene, made on the first capture
         self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
         self._install_before_tick()
         self._load_startup_params()
@@ -197,6 +199,21 @@ class RobotHost:
         self.observation = obs = Observation(snap, self.plant.ground_truth())
         self.logger.record(obs)
         self.stats.update(obs)
+
+    # ---- the head cameras ----------------------------------------------------------------------------------
+    def cameras(self):
+        """The scene's camera rig (narrow_left with depth, 640 x 480): one render thread, fed copies of the
+        plant state, so no tick waits for a rendering. Made on the first use, closed at a reset."""
+        if self._cameras is None:
+            from robot.camera import CameraRig
+
+            self._cameras = CameraRig(self.plant.model, cameras=("narrow_left",))
+        return self._cameras
+
+    def close_cameras(self) -> None:
+        if self._cameras is not None:
+            self._cameras.close()
+            self._cameras = None
 
     # ---- verbs ---------------------------------------------------------------------------------------
     def apply(self, verb: Verb) -> Any:
@@ -298,6 +315,8 @@ class RobotHost:
                                            f"{', '.join(available_scenes())}")
         plant = MujocoPlant(scene)
         self.runner.cancel_all("cancelled: the simulation was reset")
+        self.close_cameras()
+        self.recognitions.clear()
         self.loop.replace_plant(plant)
         self._info = None
         self._install_before_tick()

@@ -140,4 +140,5 @@ class LocalRobot:
 
     def close(self, timeout_s: float = 10.0) -> dict:
         self.stop()
+        self.host.close_cameras()
         return self.host.stats.summary()

@@ -153,6 +153,7 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     except (EOFError, OSError):  # the console went away
         return
     publish(force=True)
+    host.close_cameras()
     try:
         cmd.send(("bye", host.stats.summary()))
     except (EOFError, OSError):

@@ -1,0 +1,84 @@
+"""Recognitions off the control thread: the head-pose estimate and the model fit run on one perception
+thread, after the render thread's image; the result enters the behaviour at a tick boundary."""
+
+# Timing: a result is taken at the first tick boundary at least RECOGNITION_DELAY_S of control time after the
+# capture at which it is ready. When the loop runs as fast as possible (`--speed max`, or a test stepping it),
+# that boundary waits for the result, so the result always arrives exactly RECOGNITION_DELAY_S after the
+# capture and a seeded run is the same every time; paced, it is never waited for (a late result enters at a
+# later boundary), so no tick is delayed.
+
+from __future__ import annotations
+
+import threading
+from concurrent.futures import Future, ThreadPoolExecutor
+from typing import Any
+
+import numpy as np
+
+from behaviors.base import Capture
+from behaviors.perception.head_pose import T_world_camera_estimate
+from behaviors.perception.locate import Recognition, locate_can, locate_trash_box
+from controller.kinematics.model import RobotKinematics
+
+#: Simulated time from a capture to its result [s]: the rendering and the fit take 0.1-0.2 s of wall time on
+#: this 2-core machine (bench --scenario recognition), so paced at real time the result is nearly always ready.
+RECOGNITION_DELAY_S = 0.3
+LOCATORS = {"can": locate_can, "trash_box": locate_trash_box}
+
+_lock = threading.Lock()
+_executor: ThreadPoolExecutor | None = None
+_local = threading.local()
+
+
+def _worker() -> ThreadPoolExecutor:
+    global _executor
+    with _lock:
+        if _executor is None:
+            _executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="perception")
+        return _executor
+
+
+def _recognise(capture: Capture, object_name: str) -> tuple[Recognition | None, Any]:
+    kin = getattr(_local, "kin", None)
+    if kin is None:  # the perception thread's own model (the controller's belongs to the loop)
+        kin = _local.kin = RobotKinematics()
+    image = capture.frames.result()[capture.camera]
+    T_world_camera = T_world_camera_estimate(kin, capture.q_meas_rad, capture.base_rpy_est_rad,
+                                             capture.cog_world_m, capture.camera)
+    locate = LOCATORS[object_name]
+    return locate(image.rgb, image.depth_m, image.intrinsics, T_world_camera, time_s=capture.time_s), image.intrinsics
+
+
+class PendingRecognition:
+    """One recognition under way: `poll(elapsed_s)` at each tick boundary gives None until the result is due,
+    then (Recognition or None when nothing was found, the camera's intrinsics)."""
+
+    def __init__(self, capture: Capture, object_name: str) -> None:
+        if object_name not in LOCATORS:
+            raise ValueError(f"unknown object {object_name!r}; valid: {sorted(LOCATORS)}")
+        self.capture = capture
+        self.object_name = object_name
+        self.future: Future = _worker().submit(_recognise, capture, object_name)
+
+    def poll(self, elapsed_s: float) -> tuple[Recognition | None, Any] | None:
+        if elapsed_s < RECOGNITION_DELAY_S - 1e-9:
+            return None
+        if not (self.capture.wait_for_result or self.future.done()):
+            return None
+        return self.future.result()
+
+    def cancel(self) -> None:
+        self.future.cancel()
+
+
+def recognition_dict(r: Recognition, intrinsics) -> dict[str, Any]:
+    """A recognition as published (JSON): object, world position [m], yaw [deg], 1-sigma per axis [m] and the
+    covariance [m^2] from the image evidence, the image region [px], whether it touches the image border."""
+    u0, v0, u1, v1 = r.bbox_px
+    at_border = u0 <= 0 or v0 <= 0 or u1 >= intrinsics.width - 1 or v1 >= intrinsics.height - 1
+    return {"object": r.object_name, "position_m": [round(float(v), 5) for v in r.position_world_m],
+            "yaw_deg": round(float(np.degrees(r.yaw_rad)), 3),
+            "sigma_m": [round(float(v), 5) for v in np.sqrt(np.diag(r.covariance_m2))],
+            "covariance_m2": [[float(v) for v in row] for row in r.covariance_m2],
+            "bbox_px": list(r.bbox_px), "n_pixels": int(r.n_pixels), "at_border": bool(at_border),
+            "time_s": round(float(r.time_s), 4)}

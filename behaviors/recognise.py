@@ -1,0 +1,48 @@
+"""`recognise`: one image of the narrow camera as the head points now, and the can or the trash box located in
+it through the robot's own head-pose estimate (the rendering and the fit off the control thread)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
+from behaviors.perception.worker import LOCATORS, RECOGNITION_DELAY_S, PendingRecognition, recognition_dict
+
+CAMERA = "narrow_left"  # the narrow stereo pair's left camera, with the depth registered to it
+
+
+@dataclass(frozen=True)
+class RecogniseParams(BehaviorParams):
+    object: str = field(default="can", metadata={"unit": "-", "choices": tuple(LOCATORS), "doc": "what to locate"})
+    require: bool = field(default=True, metadata={"unit": "-", "doc": "fail when it is not in the image"})
+
+
+class Recognise(Behavior):
+    name = "recognise"
+    Params = RecogniseParams
+    summary = "Locate the can or the trash box in the narrow camera's image as the head points now"
+
+    def nominal_duration_s(self) -> float:
+        return RECOGNITION_DELAY_S + 2.0  # paced: a rendering late by up to 2 s still counts
+
+    def start(self, ctx: Context) -> None:
+        self.pending = PendingRecognition(ctx.commands.capture(CAMERA), self.params.object)
+        self.found: dict | None = None
+
+    def step(self, ctx: Context) -> Output:
+        got = self.pending.poll(ctx.elapsed_s)
+        if got is None:
+            return NOTHING
+        recognition, intrinsics = got
+        if recognition is None:
+            message = f"no {self.params.object} in the image"
+            if self.params.require:
+                return self.fail(message, found=False)
+            return self.succeed(message, found=False)
+        self.found = recognition_dict(recognition, intrinsics)
+        p = self.found["position_m"]
+        return self.succeed(f"{self.params.object} at ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) m", found=True,
+                            recognition=self.found)
+
+    def stop(self, ctx: Context) -> None:
+        self.pending.cancel()

@@ -1,0 +1,174 @@
+"""`take_can` ([OP] VI): locate the can if it is not located, judge from the support polygon whether it is
+within the right hand's reach ([OP] IV) and walk if not (to where the head can see it, locate it again, then
+to the grasping stance), open, pre-grasp, grasp, lift; the grasp is checked from the gripper's angle and the
+wrist force sensor, and the run fails saying so when the can was missed or slipped."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from behaviors.base import BehaviorParams, Context
+from behaviors.composite import Composite, Plan, StepFailed, Wait
+from behaviors.grasp import Grasp, GraspParams
+from behaviors.gripper import gripper_joint
+from behaviors.hand_geometry import PRE_GRASP_BACK_M, approach_feet, grasp_rotation_feet, hand_point_for_can
+from behaviors.locate_can import LocateCan
+from behaviors.perception.models import CAN
+from behaviors.reach import Reach, ReachParams
+from behaviors.release import Release, ReleaseParams
+from behaviors.servo import rot_z
+from behaviors.walk_to import WalkTo, WalkToParams
+from controller.kinematics.rotations import matrix_to_rpy
+
+GRAVITY_M_S2 = 9.81
+CAN_MASS_KG = 0.33  # a full 300 ml can (robot/hrp2/README.md)
+#: The can where the right hand takes it best, relative to the support polygon's centre (the feet frame F) [m]:
+#: forward of the toes, on the right shoulder's line, at the height of the 0.70 m table (the grasp check).
+GRASP_CAN_FEET_M = (0.43, -0.22)
+#: The reachable box around it [m]: closer or farther, the 30 deg hand would meet the table or its limits.
+REACH_BOX_M = ((0.38, 0.50), (-0.28, -0.16))
+#: Located from farther than this [m], the can is located again from LOOK_BACK_M behind the grasping stance
+#: (the head cannot pitch down 57 deg to see it from the stance, and a long walk adds odometry error).
+RELOCATE_FROM_M = 1.3
+LOOK_BACK_M = 0.5
+#: The open hand first comes up here (F) [m], keeping its orientation: straight from where it hangs (0.54 m
+#: high, below the table top) to the pre-grasp, its jaw caught the table's edge.
+VIA_FEET_M = (0.30, -0.30, 0.80)
+#: After the check the robot steps back this far [m] with the can held: at the grasping stance the feet
+#: centre is 0.28 m from the table's edge, and turning there the left palm met the table top (the robot fell).
+#: 0.3 m cleared the turn, but walking on to the box along the table (the left wrist 0.33 m beside BODY, at
+#: the table top's height, BODY swaying 0.1 m) the palm met the edge again.
+STEP_BACK_M = 0.5
+
+
+@dataclass(frozen=True)
+class TakeCanParams(BehaviorParams):
+    lift_m: float = field(default=0.08, metadata={"unit": "m", "min": 0.02, "max": 0.2, "doc": "lift after the grasp"})
+    force_n: float = field(default=14.0, metadata={"unit": "N", "min": 5.0, "max": 14.0, "doc": "fingertip force"})
+    speed_m_s: float = field(default=0.1, metadata={"unit": "m/s", "min": 0.02, "max": 0.3, "doc": "hand speed"})
+    min_load_ratio: float = field(default=0.5, metadata={"unit": "-", "min": 0.1, "max": 1.0,
+                                                         "doc": "the wrist must carry this share of the can's "
+                                                                "weight after the lift"})
+    slip_deg: float = field(default=3.0, metadata={"unit": "deg", "min": 0.5, "max": 20.0,
+                                                   "doc": "the jaw closing further than this after the grasp "
+                                                          "means the can slipped"})
+
+
+def can_in_feet(view, can_world) -> np.ndarray:
+    d = np.asarray(can_world, dtype=float) - np.asarray(view.feet_p_world_m, dtype=float)
+    return rot_z(view.feet_yaw_rad).T @ d
+
+
+def stance_for(can_world, yaw_rad: float, back_m: float = 0.0) -> tuple[float, float]:
+    """The feet frame's place (world x, y) that puts the can at GRASP_CAN_FEET_M (+ back_m further ahead)."""
+    offset = rot_z(yaw_rad) @ np.array([GRASP_CAN_FEET_M[0] + back_m, GRASP_CAN_FEET_M[1], 0.0])
+    return float(can_world[0] - offset[0]), float(can_world[1] - offset[1])
+
+
+def within_reach(can_feet) -> bool:
+    (x0, x1), (y0, y1) = REACH_BOX_M
+    return x0 <= can_feet[0] <= x1 and y0 <= can_feet[1] <= y1
+
+
+class TakeCan(Composite):
+    name = "take_can"
+    Params = TakeCanParams
+    summary = "Locate the can if needed, walk within reach, grasp it with the right hand and lift it"
+    phases = ("locate", "walk", "relocate", "walk", "open", "pre-grasp", "grasp", "close", "lift", "check",
+              "step back")
+    remaining_estimate_s = 40.0
+
+    def points(self) -> tuple[str, ...]:
+        return ("head", "walk", "rhand")
+
+    def resources(self) -> tuple[str, ...]:
+        return (*self.points(), "rhand.gripper")
+
+    def _reach(self, p_feet, R_feet=None) -> Reach:
+        kw = {}
+        if R_feet is not None:
+            roll, pitch, yaw = np.degrees(matrix_to_rpy(R_feet))
+            kw = {"keep_orientation": False, "roll_deg": float(roll), "pitch_deg": float(pitch),
+                  "yaw_deg": float(yaw)}
+        return Reach(ReachParams(hand="rhand", x_m=float(p_feet[0]), y_m=float(p_feet[1]), z_m=float(p_feet[2]),
+                                 speed_m_s=self.params.speed_m_s, tolerance_m=0.01, tolerance_deg=3.0, **kw))
+
+    def _locate_near(self, can_world) -> LocateCan:
+        return LocateCan(LocateCan.Params(x_m=float(can_world[0]), y_m=float(can_world[1]),
+                                          z_m=float(can_world[2]), views=1))
+
+    def plan(self, ctx: Context) -> Plan:
+        p = self.params
+        commands = ctx.commands
+        self.set_phase("locate")
+        can = commands.recalled("can")
+        if can is None:
+            self.require((yield LocateCan()))
+            can = commands.recalled("can")
+        can_world = np.array(can["position_m"])
+        view = self.view
+        yaw = view.feet_yaw_rad
+        can_f = can_in_feet(view, can_world)
+        self.result["can_feet_m"] = [round(float(v), 4) for v in can_f]
+        if not within_reach(can_f):
+            if can.get("from_m", 0.0) > RELOCATE_FROM_M:
+                self.set_phase("walk")
+                x, y = stance_for(can_world, yaw, LOOK_BACK_M)
+                self.require((yield WalkTo(WalkToParams(x_m=x, y_m=y, theta_deg=math.degrees(yaw)))))
+                self.set_phase("relocate")
+                self.require((yield self._locate_near(can_world)))
+                can_world = np.array(commands.recalled("can")["position_m"])
+            self.set_phase("walk")
+            x, y = stance_for(can_world, yaw)
+            self.require((yield WalkTo(WalkToParams(x_m=x, y_m=y, theta_deg=math.degrees(yaw),
+                                                    tolerance_m=0.02))))
+            yield Wait(0.5)
+        view = self.view
+        can_f = can_in_feet(view, can_world)
+        self.result["can_feet_m"] = [round(float(v), 4) for v in can_f]
+        if not within_reach(can_f):
+            raise StepFailed(f"the can is at ({can_f[0]:.3f}, {can_f[1]:.3f}) m of the feet after the walk, "
+                             f"outside the reach box {REACH_BOX_M}")
+        R = grasp_rotation_feet()
+        grasp_f = hand_point_for_can(can_f, R)
+        pre_f = grasp_f - PRE_GRASP_BACK_M * approach_feet()
+        self.set_phase("open")
+        self.require((yield Release(ReleaseParams(hand="rhand", time_s=0.5))))
+        self.set_phase("pre-grasp")
+        self.require((yield self._reach(np.array(VIA_FEET_M))))
+        self.require((yield self._reach(pre_f, R)))
+        self.set_phase("grasp")
+        self.require((yield self._reach(grasp_f, R)))
+        unloaded_n = float(np.linalg.norm(commands.wrench("rhsensor")[:3]))
+        self.set_phase("close")
+        grasp = yield Grasp(GraspParams(hand="rhand", force_n=p.force_n))
+        if not grasp.outcome[0]:
+            raise StepFailed(f"the can was missed: {grasp.outcome[1]}")
+        jaw_grasped = commands.joint(gripper_joint("rhand")).q_meas_rad
+        self.set_phase("lift")
+        self.require((yield self._reach(grasp_f + np.array([0.0, 0.0, p.lift_m]))))
+        yield Wait(0.3)
+        self.set_phase("check")
+        load_n = float(np.linalg.norm(commands.wrench("rhsensor")[:3])) - unloaded_n
+        jaw = commands.joint(gripper_joint("rhand"))
+        closed_more_deg = math.degrees(jaw.q_meas_rad - jaw_grasped)
+        weight_n = CAN_MASS_KG * GRAVITY_M_S2
+        self.result.update(wrist_load_n=round(load_n, 3), jaw_deg=round(math.degrees(jaw.q_meas_rad), 3),
+                           jaw_closed_after_grasp_deg=round(closed_more_deg, 3))
+        if closed_more_deg > p.slip_deg or jaw.upper_rad - jaw.q_meas_rad < math.radians(2.0):
+            raise StepFailed(f"the can slipped: the jaw closed {closed_more_deg:.1f} deg further after the grasp")
+        if load_n < p.min_load_ratio * weight_n:
+            raise StepFailed(f"the can slipped or was missed: the wrist carries {load_n:.2f} N after the lift, "
+                             f"less than {p.min_load_ratio:.0%} of the can's {weight_n:.2f} N")
+        self.set_phase("step back")
+        view = self.view
+        yaw = view.feet_yaw_rad
+        feet = np.asarray(view.feet_p_world_m, dtype=float)
+        self.require((yield WalkTo(WalkToParams(x_m=float(feet[0] - STEP_BACK_M * math.cos(yaw)),
+                                                y_m=float(feet[1] - STEP_BACK_M * math.sin(yaw)),
+                                                theta_deg=math.degrees(yaw)))))
+        return (f"holding the can: {load_n:.2f} N at the wrist (the can weighs {weight_n:.2f} N), "
+                f"jaw at {math.degrees(jaw.q_meas_rad):.1f} deg ({CAN.diameter_m * 1e3:.0f} mm can)")
