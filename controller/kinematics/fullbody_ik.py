@@ -88,30 +88,25 @@ class FullbodyIK:
         tol = p.com_tolerance_m
         gain = p.move_base_gain
         bz = float(base_z_m)
-        for it in range(1, p.max_iterations + 1):  # noqa: B007 - reported after the loop
+        def legs_at(bx: float, by: float):
+            """Both legs' IK for BODY at (bx, by, bz), written into qp; (q right, q left, reachable, COM)."""
             base_l = [bx, by, bz]
             qr, ok_r = leg_ik_floats(RLEG, base_l, R_rows, *rsole)
             ql, ok_l = leg_ik_floats(LLEG, base_l, R_rows, *lsole)
-            reachable = ok_r and ok_l
             qp[0], qp[1], qp[2] = bx, by, bz
             qp[idx_r] = qr
             qp[idx_l] = ql
-            com = pin.centerOfMass(model, data, qp, False)
-            cx, cy = com[0], com[1]
-            ex, ey = tx - cx, ty - cy
+            return qr, ql, ok_r and ok_l, pin.centerOfMass(model, data, qp, False)
+
+        for it in range(1, p.max_iterations + 1):  # noqa: B007 - reported after the loop
+            qr, ql, reachable, com = legs_at(bx, by)
+            ex, ey = tx - com[0], ty - com[1]
             if math.hypot(ex, ey) < tol:
                 break
             bx, by = bx + gain * ex, by + gain * ey
         else:
             # the last correction was not applied to the legs yet: finish with it
-            base_l = [bx, by, bz]
-            qr, ok_r = leg_ik_floats(RLEG, base_l, R_rows, *rsole)
-            ql, ok_l = leg_ik_floats(LLEG, base_l, R_rows, *lsole)
-            reachable = ok_r and ok_l
-            qp[0], qp[1], qp[2] = bx, by, bz
-            qp[idx_r] = qr
-            qp[idx_l] = ql
-            com = pin.centerOfMass(model, data, qp, False)
+            qr, ql, reachable, com = legs_at(bx, by)
         com = np.array(com)
         q[_RLEG_SLICE] = qr
         q[_LLEG_SLICE] = ql
