@@ -152,6 +152,8 @@ class RobotHost:
             op = self._operation_layer()
             if op is not None:
                 op.drop_motion()
+            if self.runner.active:  # nothing started before the stop goes on after its release
+                self.runner.cancel_all("cancelled: the hard e-stop was engaged")
         table = self.setpoints.poll()
         if table:
             self.apply_setpoints(table, time_s)

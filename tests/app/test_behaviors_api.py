@@ -88,3 +88,22 @@ def test_a_sequence_runs_its_steps(client, runtime):
 def test_behaviour_routes_are_refused_from_another_origin(client):
     r = client.post("/api/behaviors/release", json={}, headers={"origin": "http://evil.example"})
     assert r.status_code == 403
+
+
+def test_the_hard_estop_cancels_a_running_behaviour_and_nothing_resumes_on_release(runtime, service):
+    runtime.run_for(2.5)  # the AutoBalancer running
+    run_id = service.run_behavior("squat", {"depth_m": 0.15})
+    runtime.run_for(0.8)
+    assert service.get_run(run_id).state == "running"
+    service.estop()
+    runtime.run_for(0.1)
+    run = service.get_run(run_id)
+    assert run.state == "cancelled" and "e-stop" in run.message
+    service.release_estop()
+    runtime.run_for(1.0)
+    op = runtime.loop.chain.layers["op"]
+    z0_m = op.view().waist_height_m
+    runtime.run_for(2.0)
+    assert service.get_run(run_id).state == "cancelled"
+    assert not runtime.host.observation.fallen and runtime.loop.fault is None
+    assert abs(op.view().waist_height_m - z0_m) < 1e-3  # the squat did not go on after the release
