@@ -8,7 +8,7 @@ from typing import Annotated, Any, Literal, Union
 
 from fastapi import APIRouter, Body, Path, Request
 from fastapi.responses import JSONResponse
-from pydantic import BaseModel, ConfigDict, Field, create_model
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, create_model
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from app.deps import ServiceDep
@@ -30,6 +30,17 @@ class _Params(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
 
 
+def _integral(value: Any) -> Any:
+    """JSON Schema's "integer" includes 3.0: an integral float is taken as that integer (as the parameter PUTs
+    do); 3.5, true and "3" still fail the strict int check that follows."""
+    if isinstance(value, float) and value.is_integer() and abs(value) < 2**53:
+        return int(value)
+    return value
+
+
+Integral = Annotated[int, BeforeValidator(_integral)]
+
+
 def params_model(cls: type[BaseModel] | type[BehaviorParams], title: str) -> type[BaseModel]:
     """A pydantic body from a behaviour's Params dataclass: each field's type, range, choices, unit, default."""
     fields: dict[str, Any] = {}
@@ -42,7 +53,8 @@ def params_model(cls: type[BaseModel] | type[BehaviorParams], title: str) -> typ
             tp: Any = Literal[tuple(meta["choices"])]
             fields[f.name] = (tp, Field(default=f.default, description=desc))
         elif kind in (int, float):
-            fields[f.name] = (kind, Field(default=f.default, ge=meta.get("min"), le=meta.get("max"), description=desc))
+            fields[f.name] = (Integral if kind is int else float,
+                              Field(default=f.default, ge=meta.get("min"), le=meta.get("max"), description=desc))
         elif kind is bool:
             fields[f.name] = (bool, Field(default=f.default, description=desc))
         elif f.name == "steps":
