@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -72,8 +73,11 @@ class AutoBalancerParams(Params):
 
     transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
     use_hand_force_offset: bool = field(default=True, metadata={"unit": "-"})
-    preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6})
-    preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0})
+    # preview-control weights (ZMP error, jerk); a change applies at the next standstill (PREVIEW_GAINS_DELAY_S)
+    preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6,
+                                                    "doc": "preview control's ZMP-error weight"})
+    preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0,
+                                                     "doc": "preview control's jerk weight"})
     # gait (hrpsys default_step_time, rounded to whole control ticks; default_step_height; toe/heel angles)
     step_time_s: float = field(default=1.0, metadata={"unit": "s", "min": 0.4, "max": 5.0})
     step_height_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.2})
@@ -131,6 +135,14 @@ class AutoBalancerStatus(Status):
     footsteps: tuple[FootstepStatus, ...] = field(metadata=described("the footsteps not landed yet"))
     walk_point: str = field(default="idle", metadata=described(
         "the walking point (Ports.walk_command): 'idle', 'walking' (abc walks at it), or 'ignored: <why>'"))
+    preview_gains: str = field(default="current", metadata=described(
+        "'current', or 'pending': new preview_q / preview_r wait for the next standstill"))
+
+
+#: New preview gains (preview_q / preview_r) are computed off the control thread (a Riccati solve, ~15 ms) and
+#: swapped in at the first standstill tick at least this long after the change: a fixed delay in ticks keeps a
+#: run at `--speed max` deterministic, and is far longer than the solve.
+PREVIEW_GAINS_DELAY_S = 0.2
 
 
 class AutoBalancer(Layer):
@@ -162,6 +174,9 @@ class AutoBalancer(Layer):
         self.preview = PreviewController(PreviewControlParams(
             dt_s=dt_s, com_height_m=self.com_height_m, q=self.params.preview_q, r=self.params.preview_r))
         self.preview.reset(self.gait.tick().zmp_world[:2])
+        self._gains_pool: ThreadPoolExecutor | None = None
+        self._pending_preview: Future[PreviewController] | None = None  # new gains being computed
+        self._pending_ticks = 0  # ticks to wait before the pending gains may be swapped in
         self._hand_pos = np.zeros((2, 3))
         self._hand_pos_stale = False  # True once a solve has moved the hands
         self._hand_frame_ids = [self.kin.model.getFrameId(n) for n in ("rarm_end", "larm_end")]
@@ -196,11 +211,35 @@ class AutoBalancer(Layer):
 
     def set_params(self, params: AutoBalancerParams) -> None:
         """New parameters; the gait's apply to the footsteps planned from now on (hrpsys setGaitGeneratorParam)."""
+        gains_changed = (params.preview_q, params.preview_r) != (self.params.preview_q, self.params.preview_r)
         self.params = params
+        if gains_changed:
+            self._compute_preview_gains(params)
         gait = self.gait
         gait.configure(params=params.gait_params(gait.params),
                        footstep_params=params.footstep_params(self.dt_s, gait.footstep_params),
                        stride_limits=params.stride_limits())
+
+    def _compute_preview_gains(self, params: AutoBalancerParams) -> None:
+        """Start the Riccati solve for new preview gains on a worker thread; `_swap_preview` puts them in."""
+        if self._gains_pool is None:
+            self._gains_pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="abc-preview-gains")
+        self._pending_preview = self._gains_pool.submit(PreviewController, PreviewControlParams(
+            dt_s=self.dt_s, com_height_m=self.com_height_m, q=params.preview_q, r=params.preview_r))
+        self._pending_ticks = max(1, round(PREVIEW_GAINS_DELAY_S / self.dt_s))
+
+    def _swap_preview(self) -> None:
+        """Pending preview gains replace the current ones at a standstill (not walking): the new controller
+        starts from the COG's planned position and velocity; a walk keeps the gains it started with."""
+        if self._pending_ticks > 0:
+            self._pending_ticks -= 1
+            return
+        if self.gait.walking:
+            return
+        new = self._pending_preview.result()  # done long ago in practice: the delay is ~15x the solve
+        new.reset(self.preview.x[0].copy(), self.preview.x[1].copy())
+        self.preview = new
+        self._pending_preview = None
 
     @property
     def walking_stop(self) -> bool:
@@ -350,6 +389,8 @@ class AutoBalancer(Layer):
             self._walk_at(cmd)
         elif self._walk_point != "idle":
             self._walk_point = "idle"
+        if self._pending_preview is not None:
+            self._swap_preview()
         future = self.gait.zmp_preview(self.preview.preview_length)
         cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
         g = self.gait.tick()
@@ -427,7 +468,8 @@ class AutoBalancer(Layer):
                                   walking=bool(g.walking) if g else False, support=g.support if g else "both",
                                   walking_stop=self.walking_stop, has_ik_failed=self.has_ik_failed,
                                   footsteps=self._status_footsteps() if self.gait.walking else (),
-                                  walk_point=self._walk_point)
+                                  walk_point=self._walk_point,
+                                  preview_gains="current" if self._pending_preview is None else "pending")
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes
