@@ -240,6 +240,9 @@ class AutoBalancer(Layer):
         new.reset(self.preview.x[0].copy(), self.preview.x[1].copy())
         self.preview = new
         self._pending_preview = None
+        if self._gains_pool is not None:  # no idle thread left behind (a reset builds a new AutoBalancer)
+            self._gains_pool.shutdown(wait=False)
+            self._gains_pool = None
 
     @property
     def walking_stop(self) -> bool:
