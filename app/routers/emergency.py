@@ -107,7 +107,9 @@ def get_es_params(service: ServiceDep) -> dict[str, Any]:
     return es_document(service.params("es", "st"))
 
 
-def _es_body() -> dict[str, Any]:
+def es_changes_schema() -> dict[str, Any]:
+    """The JSON schema of some EmergencyStopper parameters in the presented names (the PUT's body, and an
+    experiment's `params`), from the owning layers' declarations."""
     from controller.core.system import layer_params_classes
 
     classes = layer_params_classes()
@@ -117,7 +119,11 @@ def _es_body() -> dict[str, Any]:
         schema["properties"][old] = {**schema["properties"][name], "deprecated": True,
                                      "description": f"deprecated name of {name}"}
         schema.setdefault("allOf", []).append({"not": {"required": [old, name]}})
-    return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
+    return schema
+
+
+def _es_body() -> dict[str, Any]:
+    return {"requestBody": {"required": True, "content": {"application/json": {"schema": es_changes_schema()}}}}
 
 
 @params_router.put("/params", responses=errors(404, 422), openapi_extra=_es_body(),

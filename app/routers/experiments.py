@@ -12,14 +12,15 @@ import multiprocessing
 import threading
 from collections import OrderedDict
 from concurrent.futures import ProcessPoolExecutor
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, Path, Request
 from fastapi.responses import Response
+from pydantic import Field, WithJsonSchema
 
 from app import experiments
 from app.errors import errors
-from app.routers.emergency import ES_DEPRECATED, ES_PARAMS, es_changes
+from app.routers.emergency import ES_DEPRECATED, ES_PARAMS, es_changes, es_changes_schema
 from app.schemas import ExperimentInfo, ExperimentList, ExperimentRequest, ExperimentResponse
 from app.service import InvalidArgument, NotFound, Refused
 from app.service.verbs import typed_changes
@@ -34,6 +35,15 @@ _MEDIA = {"csv": "text/csv", "png": "image/png"}
 
 #: the params a fresh simulation starts from (ControllerSystem builds its layers with the defaults)
 _FRESH_PARAMS = {"es": EmergencyStopperParams(), "st": StabilizerParams()}
+
+
+class ExperimentRunRequest(ExperimentRequest):
+    # the schema of `params` is the EmergencyStopper PUT's (names, types, ranges); the values are checked as
+    # there, with the field named `params.<name>` in a 422
+    params: Annotated[dict[str, Any], WithJsonSchema(es_changes_schema())] | None = Field(
+        default=None, description="EmergencyStopper parameters for this run only, named and bounded as in "
+                                  "PUT /api/emergency-stopper/params; the others keep their defaults",
+        examples=[{"cp_threshold_m": 0.03}])
 
 
 class ExperimentRunner:
@@ -95,8 +105,8 @@ def list_experiments() -> ExperimentList:
              summary="Run an experiment in a fresh simulation (its own process, not the live robot) and return "
                      "its verdict and figures; with `save`, its CSV and PNG are downloadable by run id")
 def run(name: Annotated[str, Path(description="experiment name (GET /api/experiments)", max_length=64)],
-        request: Request, req: Annotated[ExperimentRequest | None, Body()] = None) -> ExperimentResponse:
-    req = req or ExperimentRequest()
+        request: Request, req: Annotated[ExperimentRunRequest | None, Body()] = None) -> ExperimentResponse:
+    req = req or ExperimentRunRequest()
     table = experiments.EXPERIMENTS
     if name not in table:
         raise NotFound(f"unknown experiment {name!r}; available: {', '.join(table)}")
@@ -104,7 +114,10 @@ def run(name: Annotated[str, Path(description="experiment name (GET /api/experim
     if req.variant is not None and req.variant not in variants:
         raise InvalidArgument("variant", f"unknown variant {req.variant!r} of {name}; available: {', '.join(variants)}")
     grouped = {}
-    if req.params:
+    if req.params is not None:
+        if not req.params:
+            raise InvalidArgument("params", f"give at least one parameter, or leave `params` out; valid: "
+                                            f"{list(ES_PARAMS)}")
         try:
             by_layer = es_changes(req.params)
         except InvalidArgument as exc:

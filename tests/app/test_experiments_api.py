@@ -63,6 +63,7 @@ def test_a_bad_body_is_a_422_naming_the_field(client, body, word):
     ({"mode": "panic"}, ["params.mode", "cp_error", "cp_support", "none"]),
     ({"t1_s": 1.0}, ["params.t1_s", "t1", "t2", "recover_time", "cp_threshold_m", "mode"]),
     ({"t2": "later"}, ["params.t2", "number"]),
+    ({}, ["params", "at least one", "t1", "cp_threshold_m"]),
 ])
 def test_bad_run_params_are_a_422_naming_the_field_and_range(client, params, words):
     name = next(iter(experiments.EXPERIMENTS))
@@ -166,3 +167,16 @@ def test_thirty_runs_leave_the_console_no_bigger_and_no_folder_behind(client, tm
     assert set(glob.glob(pattern)) == folders  # every run's folder went with its worker
     kept = client.app.fastapi.state.experiments.results
     assert len(kept) == experiments_router.KEEP_RESULTS
+
+
+def test_the_run_params_schema_is_the_emergency_stopper_changes_schema(client):
+    """Not a free object: names, types and ranges as PUT /api/emergency-stopper/params declares them."""
+    doc = client.get("/openapi.json").json()
+    op = doc["paths"]["/api/experiments/{name}"]["post"]
+    ref = op["requestBody"]["content"]["application/json"]["schema"]
+    name = (ref.get("$ref") or next(s["$ref"] for s in ref["anyOf"] if "$ref" in s)).rsplit("/", 1)[1]
+    params = doc["components"]["schemas"][name]["properties"]["params"]
+    es = next(s for s in params["anyOf"] if s.get("type") == "object")
+    put = doc["paths"]["/api/emergency-stopper/params"]["put"]["requestBody"]["content"]["application/json"]
+    assert es == {k: v for k, v in put["schema"].items() if k != "description"}
+    assert es["additionalProperties"] is False and es["properties"]["cp_threshold_m"]["maximum"] == 0.5
