@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from app.bench_cameras import CAMERA_SCENARIOS, run_camera_bench, run_recognition_bench
+from app.bench_cameras import CAMERA_SCENARIOS, run_camera_bench, run_recognition_bench, run_recognition_paced_bench
 from app.service import OperatorService
 from app.service.local import LocalRobot
 from controller.core.chain import CHAIN_ORDER
@@ -210,6 +210,8 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     if scenario in CAMERA_SCENARIOS:
         if layers is not None:
             raise ValueError(f"scenario {scenario!r} times the cameras; --layers/--chain do not apply")
+        if scenario == "recognition-paced":
+            return run_recognition_paced_bench(duration_s)
         return run_camera_bench() if scenario == "camera" else run_recognition_bench()
     if scenario in CONSOLE_SCENARIOS:
         if layers is not None:

@@ -23,6 +23,9 @@ CAMERA_SCENARIOS = {
     "recognition": f"the standing robot recognises the can {RENDERS} times (render narrow_left colour + depth, "
                    "camera pose from its snapshot, locate_can): wall time per recognition against the "
                    f"{RECOGNITION_GOAL_S} s goal",
+    "recognition-paced": "the console at real time (`--speed 1.0`, EXPO scene): tick start-lateness while standing "
+                         "without recognitions, then while locate_can runs back to back for as long (issue 11: "
+                         "the tick p99 with recognition equals the p99 without, no late tick)",
 }
 
 
@@ -101,3 +104,54 @@ def run_recognition_bench(recognitions: int = RENDERS) -> dict[str, Any]:
             "found": found, "wall_s": _wall_stats_s(walls), "render_s": _wall_stats_s(renders),
             "pose_and_locate_s": _wall_stats_s(locates), "goal_s": RECOGNITION_GOAL_S,
             "within_goal": median <= RECOGNITION_GOAL_S}
+
+
+#: The can scan's view point for the paced bench: on the table's near half, at the table top's height (world) [m].
+_LOOK_AT_TABLE_M = {"x_m": 2.15, "y_m": 0.0, "z_m": 0.75}
+
+
+def _lateness(report: dict[str, Any]) -> dict[str, Any]:
+    keys = ("ticks", "lateness_p50_ms", "lateness_p99_ms", "lateness_max_ms", "late_ticks_over_1ms", "speed_min")
+    return {k: report[k] for k in keys}
+
+
+def run_recognition_paced_bench(duration_s: float = 20.0) -> dict[str, Any]:
+    """A real console at real time in the EXPO scene, the head on the table: the loop's tick start-lateness over
+    `duration_s` of standing, then over `duration_s` of back-to-back locate_can runs (each renders the narrow
+    pair on the render thread and fits on the perception thread), read from GET /api/loop/timing."""
+    from app.console_process import Console
+
+    with Console("--speed", "1.0", "--scene", "expo") as console:
+        conn = console.connection()
+
+        def run(name: str, body: dict) -> dict:
+            status, reply = console.request("POST", f"/api/behaviors/{name}", body=body, conn=conn)
+            if status != 200:
+                raise RuntimeError(f"{name}: {status} {reply}")
+            while True:
+                time.sleep(0.05)
+                _, run_doc = console.request("GET", f"/api/behaviors/runs/{reply['id']}", conn=conn)
+                if run_doc["state"] != "running":
+                    return run_doc
+
+        time.sleep(3.0)  # the AutoBalancer's start blend
+        run("look_at", _LOOK_AT_TABLE_M)
+        time.sleep(duration_s)
+        _, without = console.request("GET", f"/api/loop/timing?last_s={duration_s:g}", conn=conn)
+        start = time.monotonic()
+        runs, found, per_run_max_ms = 0, 0, []
+        while time.monotonic() - start < duration_s:
+            run_start = time.monotonic()
+            doc = run("locate_can", {**_LOOK_AT_TABLE_M, "views": 1})
+            runs += 1
+            found += doc["state"] == "succeeded"
+            _, timing = console.request("GET", f"/api/loop/timing?last_s={time.monotonic() - run_start:.3f}",
+                                        conn=conn)
+            per_run_max_ms.append(timing["lateness_max_ms"])
+        took_s = time.monotonic() - start
+        _, with_ = console.request("GET", f"/api/loop/timing?last_s={took_s:.3f}", conn=conn)
+        conn.close()
+    return {"scenario": "recognition-paced", "scene": "expo", "duration_s": duration_s,
+            "without_recognition": _lateness(without), "with_recognition": _lateness(with_),
+            "locate_can_runs": runs, "found": found, "runs_per_s": round(runs / took_s, 2),
+            "lateness_max_ms_per_run": per_run_max_ms}

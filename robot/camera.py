@@ -9,6 +9,7 @@ import time
 from collections.abc import Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -238,6 +239,179 @@ class CameraRig:
             self._executor.shutdown(wait=True)
 
     def __enter__(self) -> CameraRig:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: int,
+           depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None) -> None:
+    """The camera process: a CameraRig of its own, rendering each request it receives until None arrives."""
+    try:
+        rig = CameraRig(scene_file, cameras, width, height, depth_cameras, disparity_noise_px, seed)
+    except Exception as err:  # noqa: BLE001 - reported to the parent, which raises it in the requests
+        conn.send(("error", f"{type(err).__name__}: {err}"))
+        return
+    conn.send(("ready", None))
+    with rig:
+        while True:
+            try:
+                msg = conn.recv()
+            except (EOFError, OSError):
+                return  # the parent has gone
+            if msg is None:
+                return
+            try:
+                conn.send(("ok", rig.render(*msg)))
+            except Exception as err:  # noqa: BLE001 - one request's failure, reported in its future
+                conn.send(("error", f"{type(err).__name__}: {err}"))
+
+
+class CameraProcess:
+    """CameraRig's interface with the renderer in a child process of its own.
+
+    Why: MuJoCo's renderer holds Python's interpreter lock while it works. A render thread in the robot's
+    process therefore stops the control loop too: measured here, making the EGL context ~0.5 s and each 640 x
+    480 colour + depth frame 2-5 ms, during which no tick can start. In a child process only the copies of the
+    request (qpos, mocap poses) and of the images (~2 MB) cost the parent, on its pipe thread that waits on the
+    pipe without the lock. The child is spawned at construction and makes its renderer meanwhile: requests
+    queue behind it (the first one waits the ~1-2 s the child needs to start).
+
+    `model` is the scene's model in the parent (the plant's): its sizes check the requests and give the
+    intrinsics; the child loads `scene` itself. Bad requests raise ValueError at once, as CameraRig's do; a
+    failure in the child (no renderer, a crash) fails the requests' futures with RuntimeError.
+    """
+
+    def __init__(self, scene: str | Path, model: mujoco.MjModel, cameras: Sequence[str] = HEAD_CAMERAS,
+                 width: int = 640, height: int = 480, depth_cameras: Sequence[str] | None = None,
+                 disparity_noise_px: float = 0.0, seed: int | None = None) -> None:
+        import multiprocessing
+
+        known = [model.camera(i).name for i in range(model.ncam)]
+        cameras = tuple(cameras)
+        unknown = [c for c in (*cameras, *(depth_cameras or ())) if c not in known]
+        if unknown or not cameras:
+            raise ValueError(f"unknown camera(s) {unknown or cameras}; valid cameras: {', '.join(known)}")
+        self._cameras = cameras
+        self._nq, self._nmocap = model.nq, model.nmocap
+        self._intrinsics = {name: camera_intrinsics(model, name, width, height) for name in cameras}
+        ctx = multiprocessing.get_context("spawn")  # no fork of a process with threads and a GL context
+        self._conn, child = ctx.Pipe()
+        self._proc = ctx.Process(target=_serve, name="camera-render", daemon=True, args=(
+            child, str(scene_path(scene)), cameras, width, height,
+            None if depth_cameras is None else tuple(depth_cameras), float(disparity_noise_px), seed))
+        self._ready = False
+        self._lock = threading.Lock()
+        self._closed = False
+        self._executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="camera-pipe")
+        # started on the pipe thread too (spawning takes 10-40 ms): the constructor returns at once
+        self._executor.submit(self._start, child)
+
+    def _start(self, child) -> None:
+        self._proc.start()
+        child.close()
+
+    def __repr__(self) -> str:
+        return f"CameraProcess(cameras={self._cameras}, pid={self._proc.pid}, closed={self._closed})"
+
+    @property
+    def cameras(self) -> tuple[str, ...]:
+        return self._cameras
+
+    @property
+    def intrinsics(self) -> dict[str, CameraIntrinsics]:
+        return dict(self._intrinsics)
+
+    @property
+    def pid(self) -> int | None:
+        return self._proc.pid
+
+    def _receive(self) -> Any:
+        try:
+            kind, payload = self._conn.recv()
+        except (EOFError, OSError):
+            raise RuntimeError(f"the camera process ended (exit code {self._proc.exitcode})") from None
+        if kind == "error":
+            raise RuntimeError(f"camera process: {payload}")
+        return payload
+
+    def _ensure_ready(self) -> None:
+        if not self._ready:
+            self._receive()  # "ready": the child's renderer exists
+            self._ready = True
+
+    def wait_ready(self, timeout_s: float = 60.0) -> None:
+        """Block until the child has started and made its renderer (raises RuntimeError if it could not)."""
+        self._executor.submit(self._ensure_ready).result(timeout_s)
+
+    def _roundtrip(self, msg: tuple) -> Frames:
+        self._ensure_ready()
+        try:
+            self._conn.send(msg)
+        except OSError:  # a broken pipe: the child is gone
+            self._proc.join(1.0)
+            raise RuntimeError(f"the camera process ended (exit code {self._proc.exitcode})") from None
+        frames: Frames = self._receive()
+        for image in frames.images.values():  # read-only, as CameraRig's
+            image.rgb.flags.writeable = False
+            if image.depth_m is not None:
+                image.depth_m.flags.writeable = False
+        return frames
+
+    def request(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
+                cameras: Sequence[str] | None = None) -> Future[Frames]:
+        """As CameraRig.request: the arrays are copied now; the future's result is a Frames."""
+        q = np.array(qpos, dtype=float, copy=True)
+        if q.shape != (self._nq,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"qpos must be {self._nq} finite numbers, got shape {q.shape}")
+        pos = None if mocap_pos is None else np.array(mocap_pos, dtype=float, copy=True).reshape(-1, 3)
+        quat = None if mocap_quat is None else np.array(mocap_quat, dtype=float, copy=True).reshape(-1, 4)
+        for name, a in (("mocap_pos", pos), ("mocap_quat", quat)):
+            if a is not None and a.shape[0] != self._nmocap:
+                raise ValueError(f"{name} must have {self._nmocap} rows (one per mocap body), got {a.shape}")
+        chosen = self._cameras if cameras is None else tuple(cameras)
+        unknown = [c for c in chosen if c not in self._cameras]
+        if unknown or not chosen:
+            raise ValueError(f"cameras {unknown or chosen} not rendered by this rig; valid: {', '.join(self._cameras)}")
+        with self._lock:
+            if self._closed:
+                raise RuntimeError("CameraProcess is closed")
+            return self._executor.submit(self._roundtrip, (q, float(time_s), pos, quat, chosen))
+
+    def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None) -> Future[Frames]:
+        return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras)
+
+    def render(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
+               cameras: Sequence[str] | None = None) -> Frames:
+        return self.request(qpos, time_s, mocap_pos, mocap_quat, cameras).result()
+
+    def _stop_child(self) -> None:
+        if self._proc.pid is None:
+            return
+        try:
+            self._conn.send(None)
+        except (OSError, ValueError):
+            pass
+
+    def close(self, timeout_s: float = 5.0) -> None:
+        """Pending requests finish, the child ends (terminated after `timeout_s`). Idempotent."""
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+        try:
+            self._executor.submit(self._stop_child).result()
+        finally:
+            self._executor.shutdown(wait=True)
+            if self._proc.pid is not None:  # (started)
+                self._proc.join(timeout_s)
+                if self._proc.is_alive():
+                    self._proc.terminate()
+                    self._proc.join(1.0)
+            self._conn.close()
+
+    def __enter__(self) -> CameraProcess:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -134,7 +134,8 @@ class RobotHost:
         self._info: RobotInfo | None = None
         self._runs_cache: tuple[int, tuple] = (-1, ())
         self.recognitions: dict[str, dict] = {}  # object -> its latest recognition (behaviours remember them)
-        self._cameras = None  # robot.camera.CameraRig of this scene, made on the first capture
+        self._cameras = None  # robot.camera.CameraProcess of `_cameras_scene`, made on the first capture
+        self._cameras_scene: str | None = None
         self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
         self._install_before_tick()
         self._load_startup_params()
@@ -204,13 +205,22 @@ class RobotHost:
 
     # ---- the head cameras ----------------------------------------------------------------------------------
     def cameras(self):
-        """The scene's camera rig (narrow_left with depth, 640 x 480): one render thread, fed copies of the
-        plant state, so no tick waits for a rendering. Made on the first use, closed at a reset."""
+        """The scene's camera rig (narrow_left with depth, 640 x 480), fed copies of the plant state so that no
+        tick waits for a rendering. Its renderer runs in a process of its own (robot.camera.CameraProcess):
+        MuJoCo's holds the interpreter lock while it works (~0.5 s to make its GL context, 2-5 ms a frame),
+        which in this process would stop the loop. Made on the first use (or by start_cameras), kept across a
+        reset to the same scene (the objects' poses come with each request)."""
         if self._cameras is None:
-            from robot.camera import CameraRig
+            from robot.camera import CameraProcess
 
-            self._cameras = CameraRig(self.plant.model, cameras=("narrow_left",))
+            self._cameras = CameraProcess(self.scene, self.plant.model, cameras=("narrow_left",))
+            self._cameras_scene = self.scene
         return self._cameras
+
+    def start_cameras(self, timeout_s: float = 60.0) -> None:
+        """Make the camera process now and wait for its renderer: starting one takes 1-2 s of CPU, which a
+        first recognition while the loop runs at real time would otherwise share with it (ticks late)."""
+        self.cameras().wait_ready(timeout_s)
 
     def close_cameras(self) -> None:
         if self._cameras is not None:
@@ -317,7 +327,8 @@ class RobotHost:
                                            f"{', '.join(available_scenes())}")
         plant = MujocoPlant(scene)
         self.runner.cancel_all("cancelled: the simulation was reset")
-        self.close_cameras()
+        if scene != self._cameras_scene:
+            self.close_cameras()
         self.recognitions.clear()
         self.loop.replace_plant(plant)
         self._info = None

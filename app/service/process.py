@@ -97,6 +97,10 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     # a paced loop sleeps most of each tick and deserves the CPU when it wakes; one running as fast as it can
     # never sleeps, and with SCHED_FIFO it would starve the HTTP process (and everything else) of a core
     priority = _raise_priority() if cfg.realtime_priority and cfg.speed is not None else "default"
+    try:
+        host.start_cameras()  # before the loop runs at real time (robot.camera.CameraProcess)
+    except Exception as exc:  # noqa: BLE001 - no cameras (no GL here): perception fails, the robot runs
+        log.error("no head cameras: %s", exc)
     board.put(host.publish())
     cmd.send(("ready", host.info(), priority))
     loop = host.loop
