@@ -180,6 +180,17 @@ class GazeTarget:
         if self.look_at_world is not None:
             object.__setattr__(self, "look_at_world", _vector(self.look_at_world, 3, "GazeTarget.look_at_world"))
 
+    @classmethod
+    def trusted_look_at(cls, look_at_world: np.ndarray) -> GazeTarget:
+        """A look-at target the caller computed from finite data (a (3,) float64 array it hands over),
+        unchecked: the checks of __init__ are most of its cost, every tick."""
+        t = object.__new__(cls)
+        object.__setattr__(t, "yaw_rad", 0.0)
+        object.__setattr__(t, "pitch_rad", 0.0)
+        look_at_world.flags.writeable = False
+        object.__setattr__(t, "look_at_world", look_at_world)
+        return t
+
 
 @dataclass(frozen=True)
 class WaistTarget:
@@ -611,7 +622,10 @@ class _Head(_Point):
                                         ik.params.head_angular_speed_rad_s * ik.params.dt_s)
         goal = (q_yaw + d_yaw, q_pitch + d_pitch)
         if goal != self.goal:
-            self.tasks[0].set_joints(dict(zip(self._JOINTS, goal, strict=True)))
+            task = self.tasks[0]
+            for joint, value, last in zip(self._JOINTS, goal, self.goal or (None, None), strict=True):
+                if value != last:  # one joint at a time: no dict to convert
+                    task.set_joint(joint, value)
             self.goal = goal
         self.requested = (q_yaw, q_pitch, d_yaw, d_pitch, yaw, pitch)
 
@@ -702,6 +716,9 @@ class OperationIK:
             self._com.mask.set_axises("xy")
         self._base_key: tuple | None = None  # upper-body mode: the base pose last written
         self._base_rows: tuple = (None, None)  # (base key, its rotation rows)
+        self._base_arg: tuple = (None, None, None)  # (base position, rpy arrays, their key): last read
+        self._base_arrays: tuple = (None, None, None)  # (base key, position, rpy): the result's arrays
+        self._masked_settled: list | None = None  # the reference the masked chains have reached
         self._com_polygon = None  # the constraint, while the COM is near the edge
         self._com_tracking = False  # the caller gives the COM target (com_track_weight)
         self._com_polygon_hard = True
@@ -798,6 +815,8 @@ class OperationIK:
         self._bound_K = k * np.concatenate((self.q_upper[self._free], -self.q_lower[self._free]))
         if self._bounds is not None:
             solver.remove_constraint(self._bounds)
+        self._bound_buffers = (np.empty(2 * n), np.empty(2 * n))
+        self._masked_settled = None
         A = np.zeros((2 * n, self.nq))
         A[np.arange(2 * n), self._bound_q] = self._bound_sign
         self._bounds = solver.add_joint_space_half_spaces_constraint(A, np.zeros(2 * n))
@@ -861,6 +880,7 @@ class OperationIK:
         self.robot.state.q = self.q
         self._forward_kinematics()
         self._seeded = True
+        self._masked_settled = None
 
     def solve(self, q_rad: np.ndarray, base_pos_world: np.ndarray, base_rpy_rad: np.ndarray,
               targets: OperationTargets, feet: FeetPoses | None = None,
@@ -889,7 +909,7 @@ class OperationIK:
             self.q = self.to_placo(q_clip, base_pos_world, rpy_to_rows(*np.asarray(base_rpy_rad).tolist()))
             self._hold = None
         elif self.upper_body:  # the base where the caller has it now (the AutoBalancer moves it)
-            key = (*np.asarray(base_pos_world, dtype=float).tolist(), *np.asarray(base_rpy_rad, dtype=float).tolist())
+            key = self._base_key_of(base_pos_world, base_rpy_rad)
             if key != self._base_key:
                 self.q[:3] = key[:3]
                 self.q[3:7] = pin.Quaternion(np.array(rpy_to_rows(*key[3:]))).coeffs()
@@ -906,11 +926,15 @@ class OperationIK:
         step = p.joint_velocity_limit_rad_s * p.dt_s
         # the chains nobody operates, and the grippers: toward the reference, no faster than the limit
         moved = seeding or seeding_base
-        for i, j in self._masked:
-            d = min(upper[i], max(lower[i], q_ref[i])) - q[j]
-            if d:
-                q[j] += d if -step <= d <= step else (step if d > 0.0 else -step)
-                moved = True
+        if seeding or q_ref != self._masked_settled:  # (settled on this reference: nothing left to move)
+            settled = True
+            for i, j in self._masked:
+                d = min(upper[i], max(lower[i], q_ref[i])) - q[j]
+                if d:
+                    q[j] += d if -step <= d <= step else (step if d > 0.0 else -step)
+                    moved = True
+                    settled = False
+            self._masked_settled = q_ref if settled else None
         if moved:
             robot.state.q = q
             self._forward_kinematics()
@@ -951,8 +975,7 @@ class OperationIK:
             self._hold = None
         self._update_com_polygon()
         # step bounds on the free joints: velocity limit, and braking toward the position limits
-        Q = q[self._bound_q] * self._bound_sign
-        self._bounds.b = np.minimum((1.0 - self._bound_k) * Q + self._bound_K, Q + step)
+        self._update_bounds(q, step)
         ok = True
         try:
             for it in range(p.iterations):
@@ -977,8 +1000,7 @@ class OperationIK:
         p, robot = self.params, self.robot
         lower, upper = self._lower, self._upper
         step = p.joint_velocity_limit_rad_s * p.dt_s
-        self._base_key = (*np.asarray(base_pos_world, dtype=float).tolist(),
-                          *np.asarray(base_rpy_rad, dtype=float).tolist())
+        self._base_key = self._base_key_of(base_pos_world, base_rpy_rad)
         if seeding:  # the guard around the COM as it is at activation, in the BODY frame
             x, y, _ = self._com_in_base()
             self._polygon = _GuardBox(x, y, p.com_guard_m)
@@ -1008,8 +1030,7 @@ class OperationIK:
                 [np.array((base[0] + R[0][0] * v[0] + R[0][1] * v[1], base[1] + R[1][0] * v[0] + R[1][1] * v[1]))
                  for v in self._polygon.clockwise], 0.0)
             self._configure_com_polygon(True)
-        Q = q[self._bound_q] * self._bound_sign
-        self._bounds.b = np.minimum((1.0 - self._bound_k) * Q + self._bound_K, Q + step)
+        self._update_bounds(q, step)
         ok = True
         try:
             for it in range(p.iterations):
@@ -1024,10 +1045,36 @@ class OperationIK:
         points = self._results(targets, q_prev, step, ok)
         com = self._com_now()
         cx, cy, _ = self._com_in_base()
+        base = self._base_arrays
+        if base[0] != self._base_key:  # the base arrays of the result, rebuilt when the base moves
+            base = self._base_arrays = (self._base_key, _frozen(np.array(self._base_key[:3])),
+                                        _frozen(np.array(self._base_key[3:])))
         return OperationIKResult(
-            q_rad=_frozen(self.q[self.idx_q]), base_pos_world=_frozen(np.array(self._base_key[:3])),
-            base_rpy_rad=_frozen(np.array(self._base_key[3:])), points=MappingProxyType(points),
-            active=True, ok=ok, com_world=_frozen(np.array(com)), com_margin_m=self._polygon.margin(cx, cy))
+            q_rad=_frozen(self.q[self.idx_q]), base_pos_world=base[1], base_rpy_rad=base[2],
+            points=MappingProxyType(points), active=True, ok=ok, com_world=_frozen(np.array(com)),
+            com_margin_m=self._polygon.margin(cx, cy))
+
+    def _base_key_of(self, base_pos_world, base_rpy_rad) -> tuple[float, ...]:
+        """The base pose as 6 floats; the last one again for the same two read-only arrays (the caller's
+        constants, e.g. the upper-body caller's BODY frame origin)."""
+        last = self._base_arg
+        if base_pos_world is last[0] and base_rpy_rad is last[1]:
+            return last[2]
+        key = (*np.asarray(base_pos_world, dtype=float).tolist(), *np.asarray(base_rpy_rad, dtype=float).tolist())
+        frozen = all(isinstance(a, np.ndarray) and not a.flags.writeable for a in (base_pos_world, base_rpy_rad))
+        self._base_arg = (base_pos_world, base_rpy_rad, key) if frozen else (None, None, None)
+        return key
+
+    def _update_bounds(self, q: np.ndarray, step: float) -> None:
+        """The step bounds' b for this tick: b = min((1 - k) Q + K, Q + step), Q = [q; -q] on the free joints."""
+        Q, a = self._bound_buffers
+        np.take(q, self._bound_q, out=Q)
+        Q *= self._bound_sign
+        np.multiply(Q, 1.0 - self._bound_k, out=a)
+        a += self._bound_K
+        Q += step
+        np.minimum(a, Q, out=a)
+        self._bounds.b = a
 
     def _com_in_base(self) -> tuple[float, float, float]:
         """The COM in the BODY frame [m] (upper-body mode: the frame of the COM guard)."""

@@ -18,7 +18,7 @@ from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
-from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
+from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
 from controller.operation.deadman import deadman_factor
 from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist, speed_scale
 from controller.operation.points import (
@@ -96,10 +96,21 @@ def _six(t: Twist) -> tuple[float, ...]:
 class _Frame:
     """A planar frame (origin, yaw) with the world <-> frame maps for points and rotations."""
 
-    __slots__ = ("p", "yaw", "R")
+    __slots__ = ("p", "yaw", "R", "_cs")
 
     def __init__(self, p: np.ndarray, yaw: float) -> None:
         self.p, self.yaw, self.R = np.asarray(p, dtype=float), float(yaw), yaw_rotation(yaw)
+        self._cs = (math.cos(self.yaw), math.sin(self.yaw))
+
+    def to_local_rpy(self, p_world: np.ndarray, rpy_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """to_local(p_world, rpy_to_matrix(rpy_world)) on floats (Rz^T: a planar turn), once per tick."""
+        c, s = self._cs
+        x, y, z = (np.asarray(p_world, dtype=float) - self.p).tolist()
+        r0, r1, r2 = rpy_to_rows(*np.asarray(rpy_world, dtype=float).tolist())
+        return (np.array((c * x + s * y, c * y - s * x, z)),
+                np.array(((c * r0[0] + s * r1[0], c * r0[1] + s * r1[1], c * r0[2] + s * r1[2]),
+                          (c * r1[0] - s * r0[0], c * r1[1] - s * r0[1], c * r1[2] - s * r0[2]),
+                          r2)))
 
     def to_local(self, p_world, R_world=None):
         p = self.R.T @ (np.asarray(p_world, dtype=float) - self.p)
@@ -309,14 +320,18 @@ class OperationLayer(Layer):
         q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
         if "waist" in self._targets:
             base_out, rpy_out = self._waist(ref, gait, F, stopped)
-        ik_targets = self._ik_targets(p_body - anchor, R_body)
+        p_rel = p_body - anchor  # BODY relative to the anchor, in F
+        ik_targets = self._ik_targets(p_rel, R_body)
         if ik_targets.active:
             res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, ik_targets)
             q_out = np.array(ref.q_rad, dtype=float)
             q_out[_UPPER] = res.q_rad[_UPPER]
             for point, r in res.points.items():
-                T = r.T_world
-                achieved = self._achieved_of(point, p_body - anchor + R_body @ T[:3, 3], R_body @ T[:3, :3])
+                T = r.T_world  # in BODY: the achieved pose in F is BODY's pose in F times it
+                if point == "head":
+                    achieved = GazeAngles.of_direction(R_body @ T[:3, 0])
+                else:
+                    achieved = HandPose.owned(p_rel + R_body @ T[:3, 3], R_body @ T[:3, :3])
                 self._achieved[point] = achieved
                 if stopped:
                     self._limited[point] = MOTION_STOP
@@ -356,10 +371,10 @@ class OperationLayer(Layer):
         the COG balances, legs on the soles); without a gait, F and BODY of the reference itself."""
         if gait is not None and gait.base_pos_world is not None:
             F = _Frame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
-            p_body, R_body = F.to_local(gait.base_pos_world, rpy_to_matrix(gait.base_rpy_rad))
+            p_body, R_body = F.to_local_rpy(gait.base_pos_world, gait.base_rpy_rad)
             return F, p_body, R_body
         F = self._reference_frame(ref)
-        p_body, R_body = F.to_local(ref.base_pos_world, rpy_to_matrix(ref.base_rpy_rad))
+        p_body, R_body = F.to_local_rpy(ref.base_pos_world, ref.base_rpy_rad)
         return F, p_body, R_body
 
     def _reference_frame(self, ref: Reference) -> _Frame:
@@ -430,7 +445,7 @@ class OperationLayer(Layer):
         if "head" in t:
             neck = self._neck_feet if self._neck_feet is not None else np.zeros(3)
             look = neck + _LOOK_AT_DISTANCE_M * t["head"].direction_feet()
-            kw["head"] = GazeTarget(look_at_world=R_body.T @ (look - p_body))
+            kw["head"] = GazeTarget.trusted_look_at(R_body.T @ (look - p_body))
         return OperationTargets(**kw)
 
     @staticmethod

@@ -57,7 +57,8 @@ class Twist:
 
     @property
     def is_zero(self) -> bool:
-        return not (self.linear_m_s.any() or self.angular_rad_s.any())
+        # on lists: ndarray.any() costs a microsecond, and this is asked a few times per point and tick
+        return not (any(self.linear_m_s.tolist()) or any(self.angular_rad_s.tolist()))
 
 
 ZERO_TWIST = Twist.of()

@@ -26,6 +26,12 @@ def yaw_rotation(yaw_rad: float) -> np.ndarray:
     return np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
 
 
+def _owned(a: np.ndarray) -> np.ndarray:
+    """A float64 array just computed (owning its data), made read-only in place instead of copied."""
+    a.flags.writeable = False
+    return a
+
+
 @dataclass(frozen=True, slots=True)
 class HandPose:
     """A hand target in F: position [m] and rotation (F <- hand)."""
@@ -37,12 +43,23 @@ class HandPose:
     def of(p_feet_m, R_feet_hand) -> HandPose:
         return HandPose(frozen_array(p_feet_m, (3,)), frozen_array(R_feet_hand, (3, 3)))
 
+    @staticmethod
+    def owned(p_feet_m: np.ndarray, R_feet_hand: np.ndarray) -> HandPose:
+        """of() for float64 arrays (3,) and (3, 3) the caller has just computed and hands over: frozen in
+        place, not copied."""
+        return HandPose(_owned(p_feet_m), _owned(R_feet_hand))
+
     def integrated(self, twist: Twist, dt_s: float) -> HandPose:
         """One tick of `twist` (F axes): p += v dt, R = exp([w] dt) R."""
-        if twist.is_zero:
-            return self
-        R = pin.exp3(np.asarray(twist.angular_rad_s, dtype=float) * dt_s) @ self.R_feet_hand
-        return HandPose.of(self.p_feet_m + twist.linear_m_s * dt_s, R)
+        v, w = twist.linear_m_s.tolist(), twist.angular_rad_s.tolist()
+        if not any(w):  # a pure translation keeps the rotation (exp(0) R = R)
+            if not any(v):
+                return self
+            R = self.R_feet_hand
+        else:
+            R = _owned(pin.exp3(twist.angular_rad_s * dt_s) @ self.R_feet_hand)
+        p = self.p_feet_m if not any(v) else _owned(self.p_feet_m + twist.linear_m_s * dt_s)
+        return HandPose(p, R)  # both read-only float64 arrays of their own (what HandPose.of makes)
 
 
 @dataclass(frozen=True, slots=True)
