@@ -815,7 +815,8 @@ class OperationIK:
         self._bound_K = k * np.concatenate((self.q_upper[self._free], -self.q_lower[self._free]))
         if self._bounds is not None:
             solver.remove_constraint(self._bounds)
-        self._bound_buffers = (np.empty(2 * n), np.empty(2 * n))
+        self._bound_sign_k = (1.0 - k) * self._bound_sign
+        self._bound_step = (None, None)
         self._masked_settled = None
         A = np.zeros((2 * n, self.nq))
         A[np.arange(2 * n), self._bound_q] = self._bound_sign
@@ -1066,15 +1067,17 @@ class OperationIK:
         return key
 
     def _update_bounds(self, q: np.ndarray, step: float) -> None:
-        """The step bounds' b for this tick: b = min((1 - k) Q + K, Q + step), Q = [q; -q] on the free joints."""
-        Q, a = self._bound_buffers
-        np.take(q, self._bound_q, out=Q)
-        Q *= self._bound_sign
-        np.multiply(Q, 1.0 - self._bound_k, out=a)
-        a += self._bound_K
-        Q += step
-        np.minimum(a, Q, out=a)
-        self._bounds.b = a
+        """The step bounds' b for this tick: b = min((1 - k) Q + K, Q + step), Q = [q; -q] on the free joints
+        ((1 - k) and step as arrays: a float scalar costs a numpy operation as much as the operation)."""
+        if self._bound_step[0] != step:
+            self._bound_step = (step, np.full(len(self._bound_q), step))
+        qi = q[self._bound_q]
+        b = qi * self._bound_sign_k  # (1 - k) Q
+        b += self._bound_K
+        Q = qi * self._bound_sign
+        Q += self._bound_step[1]
+        np.minimum(b, Q, out=b)
+        self._bounds.b = b
 
     def _com_in_base(self) -> tuple[float, float, float]:
         """The COM in the BODY frame [m] (upper-body mode: the frame of the COM guard)."""

@@ -30,6 +30,12 @@ def matrix_to_rpy(R: np.ndarray) -> np.ndarray:
     return np.array([roll, pitch, yaw])
 
 
+def matrix_to_rpy_floats(R: np.ndarray) -> tuple[float, float, float]:
+    """matrix_to_rpy as three floats (math on a 3x3 costs a fraction of numpy's per-call overhead)."""
+    (r00, _, _), (r10, _, _), (r20, r21, r22) = np.asarray(R, dtype=float).tolist()
+    return math.atan2(r21, r22), math.asin(max(-1.0, min(1.0, -r20))), math.atan2(r10, r00)
+
+
 def quat_wxyz_to_matrix(q: np.ndarray) -> np.ndarray:
     w, x, y, z = np.asarray(q, dtype=float) / np.linalg.norm(q)
     return np.array([

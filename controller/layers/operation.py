@@ -18,7 +18,7 @@ from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
-from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
+from controller.kinematics.rotations import matrix_to_rpy, matrix_to_rpy_floats, rpy_to_matrix, rpy_to_rows
 from controller.operation.deadman import deadman_factor
 from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist, speed_scale
 from controller.operation.points import (
@@ -91,6 +91,9 @@ class OperationStatus(Status):
 
 def _six(t: Twist) -> tuple[float, ...]:
     return (*t.linear_m_s.tolist(), *t.angular_rad_s.tolist())
+
+
+_ZERO_SIX = _six(ZERO_TWIST)
 
 
 class _Frame:
@@ -524,7 +527,8 @@ class OperationLayer(Layer):
                 achieved = _layout(self._achieved.get(point), self._anchor)
                 limited = self._limited.get(point) if point in self._targets else None
             pts[point] = PointStatus(target=target, achieved=achieved, limited=limited,
-                                     motion=_six(motion), behavior=_six(behavior))
+                                     motion=_ZERO_SIX if motion is ZERO_TWIST else _six(motion),
+                                     behavior=_ZERO_SIX if behavior is ZERO_TWIST else _six(behavior))
         return OperationStatus(enabled=self.enabled, active=bool(self._targets), motion_stopped=self._stopped,
                                points=pts)
 
@@ -534,7 +538,7 @@ def _layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
     if pose is None:
         return None
     if isinstance(pose, HandPose):
-        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy(pose.R_feet_hand).tolist())
+        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy_floats(pose.R_feet_hand))
     if isinstance(pose, GazeAngles):
         return (pose.pitch_rad, pose.yaw_rad)
     return (pose.height_m, *pose.rpy_rad)
