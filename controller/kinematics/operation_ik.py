@@ -18,6 +18,9 @@ import placo
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, convex_hull_2d, shrink_polygon
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Params
+from controller.kinematics.rotations import rows_mul as _mul
+from controller.kinematics.rotations import rows_tmul as _tmul
+from controller.kinematics.rotations import rows_tmulv as _tmulv
 from controller.kinematics.rotations import rpy_to_rows
 from robot.names import END_EFFECTORS, JOINT_GROUPS, JOINT_NAMES, PARAMETERS_JSON, URDF
 
@@ -150,6 +153,15 @@ class HandTarget:
         object.__setattr__(self, "p_world", p)
         object.__setattr__(self, "R_world", R)
         object.__setattr__(self, "_floats", (tuple(p.tolist()), tuple(map(tuple, R.tolist()))))
+
+    @classmethod
+    def from_rows(cls, p_world: tuple[float, float, float], R_world: tuple) -> HandTarget:
+        """trusted() from floats: a position 3-tuple and the rotation's 3 row tuples (kept as `_floats`)."""
+        t = object.__new__(cls)
+        object.__setattr__(t, "p_world", _frozen(np.array(p_world)))
+        object.__setattr__(t, "R_world", _frozen(np.array(R_world)))
+        object.__setattr__(t, "_floats", (p_world, R_world))
+        return t
 
     @classmethod
     def trusted(cls, p_world: np.ndarray, R_world: np.ndarray) -> HandTarget:
@@ -292,31 +304,6 @@ _NO_POINTS: Mapping[str, PointResult] = MappingProxyType({})
 # ---------------------------------------------------------------------------------------------- SO(3) on floats
 # Rotations as 3 row tuples, vectors as 3-tuples: on 3x3 data plain floats are several times faster than
 # numpy's per-call overhead, and this runs a few times per point per 5 ms tick.
-
-
-def _mul(A, B):
-    """A B."""
-    (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = A
-    (b0, b1, b2), (b3, b4, b5), (b6, b7, b8) = B
-    return ((a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8),
-            (a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8),
-            (a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8))
-
-
-def _tmul(A, B):
-    """A^T B."""
-    (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = A
-    (b0, b1, b2), (b3, b4, b5), (b6, b7, b8) = B
-    return ((a0 * b0 + a3 * b3 + a6 * b6, a0 * b1 + a3 * b4 + a6 * b7, a0 * b2 + a3 * b5 + a6 * b8),
-            (a1 * b0 + a4 * b3 + a7 * b6, a1 * b1 + a4 * b4 + a7 * b7, a1 * b2 + a4 * b5 + a7 * b8),
-            (a2 * b0 + a5 * b3 + a8 * b6, a2 * b1 + a5 * b4 + a8 * b7, a2 * b2 + a5 * b5 + a8 * b8))
-
-
-def _tmulv(A, v):
-    """A^T v."""
-    (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = A
-    x, y, z = v
-    return (a0 * x + a3 * y + a6 * z, a1 * x + a4 * y + a7 * z, a2 * x + a5 * y + a8 * z)
 
 
 def _log3(R) -> tuple[float, float, float]:

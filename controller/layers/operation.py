@@ -18,7 +18,16 @@ from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
-from controller.kinematics.rotations import matrix_to_rpy, matrix_to_rpy_floats, rpy_to_matrix, rpy_to_rows
+from controller.kinematics.rotations import (
+    matrix_to_rpy,
+    matrix_to_rpy_floats,
+    rows_mul,
+    rows_mulv,
+    rows_tmul,
+    rows_tmulv,
+    rpy_to_matrix,
+    rpy_to_rows,
+)
 from controller.operation.deadman import deadman_factor
 from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist, speed_scale
 from controller.operation.points import (
@@ -99,11 +108,18 @@ _ZERO_SIX = _six(ZERO_TWIST)
 class _Frame:
     """A planar frame (origin, yaw) with the world <-> frame maps for points and rotations."""
 
-    __slots__ = ("p", "yaw", "R", "_cs")
+    __slots__ = ("p", "yaw", "_R", "_cs")
 
     def __init__(self, p: np.ndarray, yaw: float) -> None:
-        self.p, self.yaw, self.R = np.asarray(p, dtype=float), float(yaw), yaw_rotation(yaw)
+        self.p, self.yaw, self._R = np.asarray(p, dtype=float), float(yaw), None
         self._cs = (math.cos(self.yaw), math.sin(self.yaw))
+
+    @property
+    def R(self) -> np.ndarray:
+        """Rz(yaw) (3, 3), built on first use (most ticks need only to_local_rpy)."""
+        if self._R is None:
+            self._R = yaw_rotation(self.yaw)
+        return self._R
 
     def to_local_rpy(self, p_world: np.ndarray, rpy_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """to_local(p_world, rpy_to_matrix(rpy_world)) on floats (Rz^T: a planar turn), once per tick."""
@@ -176,6 +192,7 @@ class OperationLayer(Layer):
         self._time_s = 0.0
         self._version = 0
         self._status = SharedStatus()
+        self._limits_of: tuple = (None, None)  # (params, speed limits per IK point)
 
     # ---- commands (at a tick boundary) ---------------------------------------------------------------
     def set_params(self, params: OperationParams) -> None:
@@ -311,11 +328,7 @@ class OperationLayer(Layer):
                         self.kin.update(p_body, R_body, ref.q_rad)  # FK in F of the posture as balanced
                         seeded = True
                     self._targets[point] = self._seed(point, anchor, float(F.p[2]) - self._ground_z(gait, F))
-                limits = {"rhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
-                          "lhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
-                          "head": (1.0, p.head_angular_speed_rad_s),
-                          "waist": (p.waist_speed_m_s, p.waist_angular_speed_rad_s)}[point]
-                limited = limit_twist(twist, *limits)
+                limited = limit_twist(twist, *self._speed_limits(point))
                 self._targets[point] = self._targets[point].integrated(limited.twist, dt)
                 self._limited[point] = VELOCITY if limited.scale < 1.0 else None
             if self._reset_blend is not None:  # a new motion during a reset: from where the blend is
@@ -323,19 +336,14 @@ class OperationLayer(Layer):
         q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
         if "waist" in self._targets:
             base_out, rpy_out = self._waist(ref, gait, F, stopped)
-        p_rel = p_body - anchor  # BODY relative to the anchor, in F
-        ik_targets = self._ik_targets(p_rel, R_body)
+        p_rel, R_rows = _sub(p_body.tolist(), anchor.tolist()), R_body.tolist()  # BODY in F, from the anchor
+        ik_targets = self._ik_targets(p_rel, R_rows)
         if ik_targets.active:
             res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, ik_targets)
             q_out = np.array(ref.q_rad, dtype=float)
             q_out[_UPPER] = res.q_rad[_UPPER]
             for point, r in res.points.items():
-                T = r.T_world  # in BODY: the achieved pose in F is BODY's pose in F times it
-                if point == "head":
-                    achieved = GazeAngles.of_direction(R_body @ T[:3, 0])
-                else:
-                    achieved = HandPose.owned(p_rel + R_body @ T[:3, 3], R_body @ T[:3, :3])
-                self._achieved[point] = achieved
+                achieved = self._achieved[point] = self._achieved_pose(point, r.T_world, p_rel, R_rows)
                 if stopped:
                     self._limited[point] = MOTION_STOP
                 elif r.limited is not None:
@@ -351,9 +359,22 @@ class OperationLayer(Layer):
             h.append((ctx.time_s, dict(self._targets), self.ik.q.copy()))
             while len(h) > 1 and h[0][0] < ctx.time_s - p.history_s:
                 h.popleft()
-        out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
+        if base_out is ref.base_pos_world:  # no waist target: only the joints change
+            out = ref.with_owned(q_rad=q_out) if q_out is not ref.q_rad else ref
+        else:
+            out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
         self._last_out = out
         return out
+
+    def _speed_limits(self, point: str) -> tuple[float, float]:
+        """(linear [m/s], angular [rad/s]) speed limit of an IK point, from the parameters (kept per params)."""
+        p = self.params
+        if self._limits_of[0] is not p:
+            self._limits_of = (p, {"rhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
+                                   "lhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
+                                   "head": (1.0, p.head_angular_speed_rad_s),
+                                   "waist": (p.waist_speed_m_s, p.waist_angular_speed_rad_s)})
+        return self._limits_of[1][point]
 
     def _re_anchor(self, shift: np.ndarray) -> None:
         """Walking started (shift = BODY in F) or stopped (shift = -BODY in F): the hand targets and the
@@ -438,24 +459,32 @@ class OperationLayer(Layer):
             return GazeAngles.of_direction(R[:, 0])
         return WaistPose(float(p[2]) + ground_in_feet_m, tuple(matrix_to_rpy(R).tolist()))
 
-    def _ik_targets(self, p_body: np.ndarray, R_body: np.ndarray) -> OperationTargets:
-        """The hand and gaze targets in the BODY frame (where the upper-body IK works)."""
+    def _ik_targets(self, p_body: list, R_body: list) -> OperationTargets:
+        """The hand and gaze targets in the BODY frame (where the upper-body IK works); BODY's pose in F
+        (relative to the anchor) as floats: position (3,) and rotation rows."""
         t = self._targets
         kw = {}
         for point in ("rhand", "lhand"):
             if point in t:
-                kw[point] = HandTarget.trusted(R_body.T @ (t[point].p_feet_m - p_body), R_body.T @ t[point].R_feet_hand)
+                pose = t[point]
+                kw[point] = HandTarget.from_rows(rows_tmulv(R_body, _sub(pose.p_feet_m.tolist(), p_body)),
+                                                 rows_tmul(R_body, pose.R_feet_hand.tolist()))
         if "head" in t:
-            neck = self._neck_feet if self._neck_feet is not None else np.zeros(3)
-            look = neck + _LOOK_AT_DISTANCE_M * t["head"].direction_feet()
-            kw["head"] = GazeTarget.trusted_look_at(R_body.T @ (look - p_body))
+            nx, ny, nz = self._neck_feet.tolist() if self._neck_feet is not None else (0.0, 0.0, 0.0)
+            dx, dy, dz = t["head"].direction_feet().tolist()
+            look = (nx + _LOOK_AT_DISTANCE_M * dx, ny + _LOOK_AT_DISTANCE_M * dy, nz + _LOOK_AT_DISTANCE_M * dz)
+            kw["head"] = GazeTarget.trusted_look_at(np.array(rows_tmulv(R_body, _sub(look, p_body))))
         return OperationTargets(**kw)
 
     @staticmethod
-    def _achieved_of(point: str, p_feet: np.ndarray, R_feet: np.ndarray):
-        if point in ("rhand", "lhand"):
-            return HandPose.of(p_feet, R_feet)
-        return GazeAngles.of_direction(R_feet[:, 0])
+    def _achieved_pose(point: str, T_body_point: np.ndarray, p_body: list, R_body: list):
+        """A point's achieved pose in F from the IK's (in BODY), BODY's pose in F as in _ik_targets."""
+        (a0, a1, a2, x), (a3, a4, a5, y), (a6, a7, a8, z), _ = T_body_point.tolist()
+        if point == "head":  # the gaze: the x axis
+            return GazeAngles.of_direction(rows_mulv(R_body, (a0, a3, a6)))
+        px, py, pz = rows_mulv(R_body, (x, y, z))
+        return HandPose.owned(np.array((p_body[0] + px, p_body[1] + py, p_body[2] + pz)),
+                              np.array(rows_mul(R_body, ((a0, a1, a2), (a3, a4, a5), (a6, a7, a8)))))
 
     def _on_release(self) -> None:
         """The EmergencyStopper released the motion: restart from the targets its revert went back to."""
@@ -542,6 +571,10 @@ def _layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
     if isinstance(pose, GazeAngles):
         return (pose.pitch_rad, pose.yaw_rad)
     return (pose.height_m, *pose.rpy_rad)
+
+
+def _sub(a, b) -> tuple[float, float, float]:
+    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
 
 
 def _ro(a: np.ndarray) -> np.ndarray:

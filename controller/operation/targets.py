@@ -16,8 +16,11 @@ def feet_frame(p_rsole_world: np.ndarray, R_rsole_world: np.ndarray, p_lsole_wor
                R_lsole_world: np.ndarray) -> tuple[np.ndarray, float]:
     """The feet frame F (points.py): origin (3,) [m] midway between the soles, yaw [rad] their mean yaw
     (of the summed x axes, as the AutoBalancer turns BODY)."""
-    yaw = math.atan2(float(R_rsole_world[1, 0] + R_lsole_world[1, 0]), float(R_rsole_world[0, 0] + R_lsole_world[0, 0]))
-    return 0.5 * (np.asarray(p_rsole_world, dtype=float) + np.asarray(p_lsole_world, dtype=float)), yaw
+    (r00, _, _), (r10, _, _), _ = np.asarray(R_rsole_world, dtype=float).tolist()
+    (l00, _, _), (l10, _, _), _ = np.asarray(R_lsole_world, dtype=float).tolist()
+    xr, yr, zr = np.asarray(p_rsole_world, dtype=float).tolist()
+    xl, yl, zl = np.asarray(p_lsole_world, dtype=float).tolist()
+    return np.array((0.5 * (xr + xl), 0.5 * (yr + yl), 0.5 * (zr + zl))), math.atan2(r10 + l10, r00 + l00)
 
 
 def yaw_rotation(yaw_rad: float) -> np.ndarray:
