@@ -31,7 +31,7 @@ def yaw_rotation(yaw_rad: float) -> np.ndarray:
 
 def _owned(a: np.ndarray) -> np.ndarray:
     """A float64 array just computed (owning its data), made read-only in place instead of copied."""
-    a.flags.writeable = False
+    a.setflags(write=False)  # (half the cost of a.flags.writeable = False)
     return a
 
 
