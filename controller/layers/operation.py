@@ -193,6 +193,9 @@ class OperationLayer(Layer):
         self._version = 0
         self._status = SharedStatus()
         self._limits_of: tuple = (None, None)  # (params, speed limits per IK point)
+        self._view_kin = RobotKinematics()  # view(): the output reference's FK (joints only, 4 frames)
+        self._view_frames = {point: self._view_kin.model.getFrameId(frame) for point, frame in _FRAMES.items()}
+        self._view_cache: tuple | None = None  # ((ref, gait, time, walking, stopped), the view of that tick)
 
     # ---- commands (at a tick boundary) ---------------------------------------------------------------
     def set_params(self, params: OperationParams) -> None:
@@ -521,23 +524,36 @@ class OperationLayer(Layer):
     # ---- reading ------------------------------------------------------------------------------------
     def view(self) -> OperationView:
         """The points as the layer's last output reference puts them (FK of the controller's reference,
-        placed in the world by the gait's feet frame), the gaze and waist height in F."""
+        placed in the world by the gait's feet frame), the gaze and waist height in F. Computed once per
+        tick: the callers of one tick (the behaviours) share it (read-only arrays; do not modify)."""
         ref = self._last_out or self._last_in
         if ref is None:
             raise InvalidCommand("the operation layer has not ticked yet; no view before the first tick")
+        key = (ref, self._gait, self._time_s, self._walking, self._stopped)
+        cached = self._view_cache
+        if cached is not None and cached[0][0] is ref and cached[0][1] is self._gait and cached[0][2:] == key[2:]:
+            return cached[1]
         F_world, p_body, R_body = self._body_in_feet(ref, self._gait)
-        self.kin.update(p_body, R_body, ref.q_rad)  # in F, BODY where the AutoBalancer has it
+        kin = self._view_kin
+        kin.update_joints(p_body, R_body, ref.q_rad)  # in F, BODY where the AutoBalancer has it
         points = {}
-        for point, frame in _FRAMES.items():
-            p_f, R_f = self.kin.frame_pose(frame)
-            p_w, R_w = F_world.to_world(p_f, R_f)
-            points[point] = PointPose(p_world_m=_ro(p_w), R_world_point=_ro(R_w), p_feet_m=_ro(p_f),
-                                      R_feet_point=_ro(R_f))
+        c, s = F_world._cs
+        fx, fy, fz = F_world.p.tolist()
+        for point, fid in self._view_frames.items():
+            (a0, a1, a2, x), (a3, a4, a5, y), (a6, a7, a8, z), _ = kin.frame_homogeneous(fid).tolist()
+            # to the world on floats: p_w = F.p + Rz p, R_w = Rz R
+            p_w = (fx + c * x - s * y, fy + s * x + c * y, fz + z)
+            R_w = ((c * a0 - s * a3, c * a1 - s * a4, c * a2 - s * a5),
+                   (s * a0 + c * a3, s * a1 + c * a4, s * a2 + c * a5), (a6, a7, a8))
+            points[point] = PointPose(p_world_m=_ro(p_w), R_world_point=_ro(R_w), p_feet_m=_ro((x, y, z)),
+                                      R_feet_point=_ro(((a0, a1, a2), (a3, a4, a5), (a6, a7, a8))))
         gaze = GazeAngles.of_direction(points["head"].R_feet_point[:, 0])
-        return OperationView(time_s=self._time_s, feet_p_world_m=_ro(F_world.p.copy()), feet_yaw_rad=F_world.yaw,
+        view = OperationView(time_s=self._time_s, feet_p_world_m=_ro(F_world.p.copy()), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
                              waist_height_m=float(points["waist"].p_feet_m[2]), walking=self._walking,
                              motion_stopped=self._stopped)
+        self._view_cache = (key, view)
+        return view
 
     def status(self) -> OperationStatus:
         return self._status.get((self._version, self.enabled), self._build_status)
