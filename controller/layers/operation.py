@@ -173,6 +173,7 @@ class OperationLayer(Layer):
         self._last_behavior: dict[str, Twist] = {}
         self._walk_active = False  # a non-zero walk command went out: one zero follows when it ends
         self._last_walk: WalkCommand | None = None
+        self._walk_key: tuple | None = None  # (vx, vy, vtheta, step parameters, params) of _last_walk
         self._neck_feet: np.ndarray | None = None
         self._stopped = False
         self._revert_to_s: float | None = None
@@ -299,13 +300,18 @@ class OperationLayer(Layer):
             return
         p = self.params
         vx, vy, _ = twist.linear_m_s.tolist()
-        vtheta = float(twist.angular_rad_s[2])
-        k = min(speed_scale(math.hypot(vx, vy), p.walk_speed_m_s), speed_scale(abs(vtheta), p.walk_turn_rad_s))
+        vtheta = twist.angular_rad_s.tolist()[2]
         steps = self._motion_walk or self._behavior_walk
+        key = (vx, vy, vtheta, steps, p)
+        if key == self._walk_key and self._walk_active:  # the same command as last tick (a held stick)
+            ctx.ports.walk_command = self._last_walk
+            return
+        k = min(speed_scale(math.hypot(vx, vy), p.walk_speed_m_s), speed_scale(abs(vtheta), p.walk_turn_rad_s))
         cmd = WalkCommand(vx * k, vy * k, vtheta * k,
                           max_stride_m=steps.max_stride_m if steps else None,
                           foot_distance_m=steps.foot_distance_m if steps else None)
         self._walk_active = True
+        self._walk_key = key
         ctx.ports.walk_command = self._last_walk = cmd
 
     # ---- the operated tick -------------------------------------------------------------------------
