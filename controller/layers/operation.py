@@ -49,6 +49,7 @@ _NECK = "HEAD_LINK0"  # the gaze ray's origin
 _LOOK_AT_DISTANCE_M = 100.0  # a gaze direction becomes a point this far along it (neck drift: < 0.03 deg)
 _LEGS = np.array(JOINT_GROUPS["rleg"] + JOINT_GROUPS["lleg"])
 _UPPER = np.array([i for i in range(len(JOINT_NAMES)) if i not in set(_LEGS.tolist())])  # torso, head, arms
+_IS_UPPER = np.isin(np.arange(len(JOINT_NAMES)), _UPPER)
 _ZERO3 = np.zeros(3)
 _ZERO3.setflags(write=False)
 
@@ -349,8 +350,7 @@ class OperationLayer(Layer):
         ik_targets = self._ik_targets(p_rel, R_rows)
         if ik_targets.active:
             res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, ik_targets)
-            q_out = np.array(ref.q_rad, dtype=float)
-            q_out[_UPPER] = res.q_rad[_UPPER]
+            q_out = np.where(_IS_UPPER, res.q_rad, ref.q_rad)  # the legs stay the reference's
             for point, r in res.points.items():
                 achieved = self._achieved[point] = self._achieved_pose(point, r.T_world, p_rel, R_rows)
                 if stopped:
