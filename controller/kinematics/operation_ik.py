@@ -1054,7 +1054,8 @@ class OperationIK:
         if base_pos_world is last[0] and base_rpy_rad is last[1]:
             return last[2]
         key = (*np.asarray(base_pos_world, dtype=float).tolist(), *np.asarray(base_rpy_rad, dtype=float).tolist())
-        frozen = all(isinstance(a, np.ndarray) and not a.flags.writeable for a in (base_pos_world, base_rpy_rad))
+        frozen = all(isinstance(a, np.ndarray) and not a.flags.writeable and a.base is None  # (no writeable base)
+                     for a in (base_pos_world, base_rpy_rad))
         self._base_arg = (base_pos_world, base_rpy_rad, key) if frozen else (None, None, None)
         return key
 
