@@ -286,7 +286,7 @@ class OperationLayer(Layer):
         p = self.params
         out = {}
         for point, (twist, t0) in list(self._motion.items()):
-            if 0.0 <= p.deadman_timeout_s >= t - t0 and p.deadman_ramp_s >= 0.0:  # fresh: in full (most ticks)
+            if t - t0 <= p.deadman_timeout_s and p.deadman_timeout_s >= 0.0 and p.deadman_ramp_s >= 0.0:  # fresh
                 out[point] = twist
                 continue
             k = deadman_factor(t - t0, p.deadman_timeout_s, p.deadman_ramp_s)
