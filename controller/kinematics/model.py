@@ -67,6 +67,12 @@ class RobotKinematics:
         # from the placements just computed (same result as passing q, without a second forward pass)
         pin.centerOfMass(self.model, self.data, pin.KinematicLevel.POSITION, True)  # True: subtree COMs too
 
+    def update_joints(self, base_pos_world, base_R_world, q_rad) -> None:
+        """update without the frame placements and the COM: joint placements only; read frames with
+        `frame_homogeneous` (for a few frames, a fraction of the full update)."""
+        self.q = self.configuration(base_pos_world, base_R_world, q_rad)
+        pin.forwardKinematics(self.model, self.data, self.q)
+
     def update_rpy(self, base_pos_world, base_rpy_rad, q_rad) -> None:
         self.update(base_pos_world, rpy_to_matrix(base_rpy_rad), q_rad)
 

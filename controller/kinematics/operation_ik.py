@@ -18,6 +18,9 @@ import placo
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, convex_hull_2d, shrink_polygon
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Params
+from controller.kinematics.rotations import rows_mul as _mul
+from controller.kinematics.rotations import rows_tmul as _tmul
+from controller.kinematics.rotations import rows_tmulv as _tmulv
 from controller.kinematics.rotations import rpy_to_rows
 from robot.names import END_EFFECTORS, JOINT_GROUPS, JOINT_NAMES, PARAMETERS_JSON, URDF
 
@@ -124,7 +127,7 @@ def _vector(value, n: int, what: str) -> np.ndarray:
     a = np.array(value, dtype=float)
     if a.shape != (n,) or not np.isfinite(a).all():
         raise InvalidCommand(f"{what} must be {n} finite numbers, got {value!r}")
-    a.flags.writeable = False
+    a.setflags(write=False)
     return a
 
 
@@ -134,7 +137,7 @@ def _rotation(value, what: str) -> np.ndarray:
         raise InvalidCommand(f"{what} must be a (3, 3) rotation matrix, got shape {R.shape}")
     if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0.0:
         raise InvalidCommand(f"{what} is not a rotation (R R^T != I or det < 0); e.g. rpy_to_matrix(rpy)")
-    R.flags.writeable = False
+    R.setflags(write=False)
     return R
 
 
@@ -150,6 +153,15 @@ class HandTarget:
         object.__setattr__(self, "p_world", p)
         object.__setattr__(self, "R_world", R)
         object.__setattr__(self, "_floats", (tuple(p.tolist()), tuple(map(tuple, R.tolist()))))
+
+    @classmethod
+    def from_rows(cls, p_world: tuple[float, float, float], R_world: tuple) -> HandTarget:
+        """trusted() from floats: a position 3-tuple and the rotation's 3 row tuples (kept as `_floats`)."""
+        t = object.__new__(cls)
+        object.__setattr__(t, "p_world", _frozen(np.array(p_world)))
+        object.__setattr__(t, "R_world", _frozen(np.array(R_world)))
+        object.__setattr__(t, "_floats", (p_world, R_world))
+        return t
 
     @classmethod
     def trusted(cls, p_world: np.ndarray, R_world: np.ndarray) -> HandTarget:
@@ -179,6 +191,17 @@ class GazeTarget:
             raise InvalidCommand(f"GazeTarget yaw/pitch must be finite [rad], got {self.yaw_rad}, {self.pitch_rad}")
         if self.look_at_world is not None:
             object.__setattr__(self, "look_at_world", _vector(self.look_at_world, 3, "GazeTarget.look_at_world"))
+
+    @classmethod
+    def trusted_look_at(cls, look_at_world: np.ndarray) -> GazeTarget:
+        """A look-at target the caller computed from finite data (a (3,) float64 array it hands over),
+        unchecked: the checks of __init__ are most of its cost, every tick."""
+        t = object.__new__(cls)
+        object.__setattr__(t, "yaw_rad", 0.0)
+        object.__setattr__(t, "pitch_rad", 0.0)
+        look_at_world.setflags(write=False)
+        object.__setattr__(t, "look_at_world", look_at_world)
+        return t
 
 
 @dataclass(frozen=True)
@@ -283,31 +306,6 @@ _NO_POINTS: Mapping[str, PointResult] = MappingProxyType({})
 # numpy's per-call overhead, and this runs a few times per point per 5 ms tick.
 
 
-def _mul(A, B):
-    """A B."""
-    (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = A
-    (b0, b1, b2), (b3, b4, b5), (b6, b7, b8) = B
-    return ((a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8),
-            (a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8),
-            (a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8))
-
-
-def _tmul(A, B):
-    """A^T B."""
-    (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = A
-    (b0, b1, b2), (b3, b4, b5), (b6, b7, b8) = B
-    return ((a0 * b0 + a3 * b3 + a6 * b6, a0 * b1 + a3 * b4 + a6 * b7, a0 * b2 + a3 * b5 + a6 * b8),
-            (a1 * b0 + a4 * b3 + a7 * b6, a1 * b1 + a4 * b4 + a7 * b7, a1 * b2 + a4 * b5 + a7 * b8),
-            (a2 * b0 + a5 * b3 + a8 * b6, a2 * b1 + a5 * b4 + a8 * b7, a2 * b2 + a5 * b5 + a8 * b8))
-
-
-def _tmulv(A, v):
-    """A^T v."""
-    (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = A
-    x, y, z = v
-    return (a0 * x + a3 * y + a6 * z, a1 * x + a4 * y + a7 * z, a2 * x + a5 * y + a8 * z)
-
-
 def _log3(R) -> tuple[float, float, float]:
     """Rotation vector (axis * angle [rad], angle in [0, pi]) of R."""
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
@@ -407,7 +405,7 @@ def _split(T_rows):
 
 
 def _frozen(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
+    a.setflags(write=False)  # (half the cost of a.flags.writeable = False)
     return a
 
 
@@ -476,9 +474,13 @@ class _GuardBox:
         ccw = [(x - half_m, y - half_m), (x + half_m, y - half_m), (x + half_m, y + half_m), (x - half_m, y + half_m)]
         self.clockwise = [np.array(v) for v in ccw[::-1]]
         self.edges = _edges(ccw)
+        self._box = (x - half_m, x + half_m, y - half_m, y + half_m)
 
     def margin(self, x: float, y: float) -> float:
-        return min(nx * x + ny * y - off for nx, ny, off in self.edges)
+        """min over the edges of n . p - offset, which for this axis-aligned box is exactly the distances to
+        its four sides (asked twice a tick: no generator)."""
+        x0, x1, y0, y1 = self._box
+        return min(y - y0, x1 - x, y1 - y, x - x0)
 
 
 def _edges(ccw) -> list[tuple[float, float, float]]:
@@ -503,6 +505,7 @@ class _Point:
         self.requested: tuple = ()
         self.chain_list = CHAINS[self.name]
         self.limb_set = frozenset(LIMBS[self.name])
+        self.bound_rows: tuple | None = None  # the chain's joint limits, as OperationIK._limit_reason reads them
 
     def add(self, solver) -> None:  # noqa: B027 - the waist has no task of its own
         """Create the placo tasks (the point became active)."""
@@ -611,7 +614,10 @@ class _Head(_Point):
                                         ik.params.head_angular_speed_rad_s * ik.params.dt_s)
         goal = (q_yaw + d_yaw, q_pitch + d_pitch)
         if goal != self.goal:
-            self.tasks[0].set_joints(dict(zip(self._JOINTS, goal, strict=True)))
+            task = self.tasks[0]
+            for joint, value, last in zip(self._JOINTS, goal, self.goal or (None, None), strict=True):
+                if value != last:  # one joint at a time: no dict to convert
+                    task.set_joint(joint, value)
             self.goal = goal
         self.requested = (q_yaw, q_pitch, d_yaw, d_pitch, yaw, pitch)
 
@@ -702,6 +708,9 @@ class OperationIK:
             self._com.mask.set_axises("xy")
         self._base_key: tuple | None = None  # upper-body mode: the base pose last written
         self._base_rows: tuple = (None, None)  # (base key, its rotation rows)
+        self._base_arg: tuple = (None, None, None)  # (base position, rpy arrays, their key): last read
+        self._base_arrays: tuple = (None, None, None)  # (base key, position, rpy): the result's arrays
+        self._masked_settled: list | None = None  # the reference the masked chains have reached
         self._com_polygon = None  # the constraint, while the COM is near the edge
         self._com_tracking = False  # the caller gives the COM target (com_track_weight)
         self._com_polygon_hard = True
@@ -798,6 +807,9 @@ class OperationIK:
         self._bound_K = k * np.concatenate((self.q_upper[self._free], -self.q_lower[self._free]))
         if self._bounds is not None:
             solver.remove_constraint(self._bounds)
+        self._bound_sign_k = (1.0 - k) * self._bound_sign
+        self._bound_step = (None, None)
+        self._masked_settled = None
         A = np.zeros((2 * n, self.nq))
         A[np.arange(2 * n), self._bound_q] = self._bound_sign
         self._bounds = solver.add_joint_space_half_spaces_constraint(A, np.zeros(2 * n))
@@ -861,6 +873,7 @@ class OperationIK:
         self.robot.state.q = self.q
         self._forward_kinematics()
         self._seeded = True
+        self._masked_settled = None
 
     def solve(self, q_rad: np.ndarray, base_pos_world: np.ndarray, base_rpy_rad: np.ndarray,
               targets: OperationTargets, feet: FeetPoses | None = None,
@@ -889,7 +902,7 @@ class OperationIK:
             self.q = self.to_placo(q_clip, base_pos_world, rpy_to_rows(*np.asarray(base_rpy_rad).tolist()))
             self._hold = None
         elif self.upper_body:  # the base where the caller has it now (the AutoBalancer moves it)
-            key = (*np.asarray(base_pos_world, dtype=float).tolist(), *np.asarray(base_rpy_rad, dtype=float).tolist())
+            key = self._base_key_of(base_pos_world, base_rpy_rad)
             if key != self._base_key:
                 self.q[:3] = key[:3]
                 self.q[3:7] = pin.Quaternion(np.array(rpy_to_rows(*key[3:]))).coeffs()
@@ -906,11 +919,15 @@ class OperationIK:
         step = p.joint_velocity_limit_rad_s * p.dt_s
         # the chains nobody operates, and the grippers: toward the reference, no faster than the limit
         moved = seeding or seeding_base
-        for i, j in self._masked:
-            d = min(upper[i], max(lower[i], q_ref[i])) - q[j]
-            if d:
-                q[j] += d if -step <= d <= step else (step if d > 0.0 else -step)
-                moved = True
+        if seeding or q_ref != self._masked_settled:  # (settled on this reference: nothing left to move)
+            settled = True
+            for i, j in self._masked:
+                d = min(upper[i], max(lower[i], q_ref[i])) - q[j]
+                if d:
+                    q[j] += d if -step <= d <= step else (step if d > 0.0 else -step)
+                    moved = True
+                    settled = False
+            self._masked_settled = q_ref if settled else None
         if moved:
             robot.state.q = q
             self._forward_kinematics()
@@ -951,8 +968,7 @@ class OperationIK:
             self._hold = None
         self._update_com_polygon()
         # step bounds on the free joints: velocity limit, and braking toward the position limits
-        Q = q[self._bound_q] * self._bound_sign
-        self._bounds.b = np.minimum((1.0 - self._bound_k) * Q + self._bound_K, Q + step)
+        self._update_bounds(q, step)
         ok = True
         try:
             for it in range(p.iterations):
@@ -977,8 +993,7 @@ class OperationIK:
         p, robot = self.params, self.robot
         lower, upper = self._lower, self._upper
         step = p.joint_velocity_limit_rad_s * p.dt_s
-        self._base_key = (*np.asarray(base_pos_world, dtype=float).tolist(),
-                          *np.asarray(base_rpy_rad, dtype=float).tolist())
+        self._base_key = self._base_key_of(base_pos_world, base_rpy_rad)
         if seeding:  # the guard around the COM as it is at activation, in the BODY frame
             x, y, _ = self._com_in_base()
             self._polygon = _GuardBox(x, y, p.com_guard_m)
@@ -1008,8 +1023,7 @@ class OperationIK:
                 [np.array((base[0] + R[0][0] * v[0] + R[0][1] * v[1], base[1] + R[1][0] * v[0] + R[1][1] * v[1]))
                  for v in self._polygon.clockwise], 0.0)
             self._configure_com_polygon(True)
-        Q = q[self._bound_q] * self._bound_sign
-        self._bounds.b = np.minimum((1.0 - self._bound_k) * Q + self._bound_K, Q + step)
+        self._update_bounds(q, step)
         ok = True
         try:
             for it in range(p.iterations):
@@ -1024,10 +1038,39 @@ class OperationIK:
         points = self._results(targets, q_prev, step, ok)
         com = self._com_now()
         cx, cy, _ = self._com_in_base()
+        base = self._base_arrays
+        if base[0] != self._base_key:  # the base arrays of the result, rebuilt when the base moves
+            base = self._base_arrays = (self._base_key, _frozen(np.array(self._base_key[:3])),
+                                        _frozen(np.array(self._base_key[3:])))
         return OperationIKResult(
-            q_rad=_frozen(self.q[self.idx_q]), base_pos_world=_frozen(np.array(self._base_key[:3])),
-            base_rpy_rad=_frozen(np.array(self._base_key[3:])), points=MappingProxyType(points),
-            active=True, ok=ok, com_world=_frozen(np.array(com)), com_margin_m=self._polygon.margin(cx, cy))
+            q_rad=_frozen(self.q[self.idx_q]), base_pos_world=base[1], base_rpy_rad=base[2],
+            points=MappingProxyType(points), active=True, ok=ok, com_world=_frozen(np.array(com)),
+            com_margin_m=self._polygon.margin(cx, cy))
+
+    def _base_key_of(self, base_pos_world, base_rpy_rad) -> tuple[float, ...]:
+        """The base pose as 6 floats; the last one again for the same two read-only arrays (the caller's
+        constants, e.g. the upper-body caller's BODY frame origin)."""
+        last = self._base_arg
+        if base_pos_world is last[0] and base_rpy_rad is last[1]:
+            return last[2]
+        key = (*np.asarray(base_pos_world, dtype=float).tolist(), *np.asarray(base_rpy_rad, dtype=float).tolist())
+        frozen = all(isinstance(a, np.ndarray) and not a.flags.writeable and a.base is None  # (no writeable base)
+                     for a in (base_pos_world, base_rpy_rad))
+        self._base_arg = (base_pos_world, base_rpy_rad, key) if frozen else (None, None, None)
+        return key
+
+    def _update_bounds(self, q: np.ndarray, step: float) -> None:
+        """The step bounds' b for this tick: b = min((1 - k) Q + K, Q + step), Q = [q; -q] on the free joints
+        ((1 - k) and step as arrays: a float scalar costs a numpy operation as much as the operation)."""
+        if self._bound_step[0] != step:
+            self._bound_step = (step, np.full(len(self._bound_q), step))
+        qi = q[self._bound_q]
+        b = qi * self._bound_sign_k  # (1 - k) Q
+        b += self._bound_K
+        Q = qi * self._bound_sign
+        Q += self._bound_step[1]
+        np.minimum(b, Q, out=b)
+        self._bounds.b = b
 
     def _com_in_base(self) -> tuple[float, float, float]:
         """The COM in the BODY frame [m] (upper-body mode: the frame of the COM guard)."""
@@ -1101,19 +1144,30 @@ class OperationIK:
         VELOCITY if a joint of its chain runs at the velocity limit, else REACH. A joint is at a bound when
         its step came within 2 % (1e-7 rad at least) of it; which term of the bound was the smaller says
         which limit it is."""
-        k, lower, upper, idx = self._bound_k, self._lower, self._upper, self._idx_q_list
+        k = self._bound_k
+        rows = point.bound_rows
+        if rows is None:  # (placo index, upper, lower, in the limb) per chain joint, once
+            rows = point.bound_rows = tuple((self._idx_q_list[i], self._upper[i], self._lower[i], i in point.limb_set)
+                                            for i in point.chain_list)
         velocity = False
-        for i in point.chain_list:
-            j = idx[i]
-            q0, dq = q_prev[j], q_new[j] - q_prev[j]
-            up, down = min(k * (upper[i] - q0), step), min(k * (q0 - lower[i]), step)  # allowed steps
-            if dq >= up - max(0.02 * abs(up), 1e-7):
+        for j, hi, lo, in_limb in rows:  # (conditionals, not min/max calls: this runs per joint)
+            q0 = q_prev[j]
+            dq = q_new[j] - q0
+            up, down = k * (hi - q0), k * (q0 - lo)  # allowed steps
+            if up > step:
+                up = step
+            if down > step:
+                down = step
+            tol = 0.02 * (up if up >= 0.0 else -up)
+            if dq >= up - (tol if tol > 1e-7 else 1e-7):
                 braking = up < step
-            elif -dq >= down - max(0.02 * abs(down), 1e-7):
-                braking = down < step
             else:
-                continue
-            if braking and i in point.limb_set:
+                tol = 0.02 * (down if down >= 0.0 else -down)
+                if -dq >= down - (tol if tol > 1e-7 else 1e-7):
+                    braking = down < step
+                else:
+                    continue
+            if braking and in_limb:
                 return JOINT_LIMIT
             velocity = velocity or not braking
         return VELOCITY if velocity else REACH

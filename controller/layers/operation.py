@@ -18,7 +18,16 @@ from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
-from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
+from controller.kinematics.rotations import (
+    matrix_to_rpy,
+    matrix_to_rpy_floats,
+    rows_mul,
+    rows_mulv,
+    rows_tmul,
+    rows_tmulv,
+    rpy_to_matrix,
+    rpy_to_rows,
+)
 from controller.operation.deadman import deadman_factor
 from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist, speed_scale
 from controller.operation.points import (
@@ -40,6 +49,7 @@ _NECK = "HEAD_LINK0"  # the gaze ray's origin
 _LOOK_AT_DISTANCE_M = 100.0  # a gaze direction becomes a point this far along it (neck drift: < 0.03 deg)
 _LEGS = np.array(JOINT_GROUPS["rleg"] + JOINT_GROUPS["lleg"])
 _UPPER = np.array([i for i in range(len(JOINT_NAMES)) if i not in set(_LEGS.tolist())])  # torso, head, arms
+_IS_UPPER = np.isin(np.arange(len(JOINT_NAMES)), _UPPER)
 _ZERO3 = np.zeros(3)
 _ZERO3.setflags(write=False)
 
@@ -93,13 +103,34 @@ def _six(t: Twist) -> tuple[float, ...]:
     return (*t.linear_m_s.tolist(), *t.angular_rad_s.tolist())
 
 
+_ZERO_SIX = _six(ZERO_TWIST)
+
+
 class _Frame:
     """A planar frame (origin, yaw) with the world <-> frame maps for points and rotations."""
 
-    __slots__ = ("p", "yaw", "R")
+    __slots__ = ("p", "yaw", "_R", "_cs")
 
     def __init__(self, p: np.ndarray, yaw: float) -> None:
-        self.p, self.yaw, self.R = np.asarray(p, dtype=float), float(yaw), yaw_rotation(yaw)
+        self.p, self.yaw, self._R = np.asarray(p, dtype=float), float(yaw), None
+        self._cs = (math.cos(self.yaw), math.sin(self.yaw))
+
+    @property
+    def R(self) -> np.ndarray:
+        """Rz(yaw) (3, 3), built on first use (most ticks need only to_local_rpy)."""
+        if self._R is None:
+            self._R = yaw_rotation(self.yaw)
+        return self._R
+
+    def to_local_rpy(self, p_world: np.ndarray, rpy_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """to_local(p_world, rpy_to_matrix(rpy_world)) on floats (Rz^T: a planar turn), once per tick."""
+        c, s = self._cs
+        x, y, z = (np.asarray(p_world, dtype=float) - self.p).tolist()
+        r0, r1, r2 = rpy_to_rows(*np.asarray(rpy_world, dtype=float).tolist())
+        return (np.array((c * x + s * y, c * y - s * x, z)),
+                np.array(((c * r0[0] + s * r1[0], c * r0[1] + s * r1[1], c * r0[2] + s * r1[2]),
+                          (c * r1[0] - s * r0[0], c * r1[1] - s * r0[1], c * r1[2] - s * r0[2]),
+                          r2)))
 
     def to_local(self, p_world, R_world=None):
         p = self.R.T @ (np.asarray(p_world, dtype=float) - self.p)
@@ -143,6 +174,7 @@ class OperationLayer(Layer):
         self._last_behavior: dict[str, Twist] = {}
         self._walk_active = False  # a non-zero walk command went out: one zero follows when it ends
         self._last_walk: WalkCommand | None = None
+        self._walk_key: tuple | None = None  # (vx, vy, vtheta, step parameters, params) of _last_walk
         self._neck_feet: np.ndarray | None = None
         self._stopped = False
         self._revert_to_s: float | None = None
@@ -162,6 +194,10 @@ class OperationLayer(Layer):
         self._time_s = 0.0
         self._version = 0
         self._status = SharedStatus()
+        self._limits_of: tuple = (None, None)  # (params, speed limits per IK point)
+        self._view_kin = RobotKinematics()  # view(): the output reference's FK (joints only, 4 frames)
+        self._view_frames = {point: self._view_kin.model.getFrameId(frame) for point, frame in _FRAMES.items()}
+        self._view_cache: tuple | None = None  # ((ref, gait, time, walking, stopped), the view of that tick)
 
     # ---- commands (at a tick boundary) ---------------------------------------------------------------
     def set_params(self, params: OperationParams) -> None:
@@ -250,6 +286,9 @@ class OperationLayer(Layer):
         p = self.params
         out = {}
         for point, (twist, t0) in list(self._motion.items()):
+            if t - t0 <= p.deadman_timeout_s and p.deadman_timeout_s >= 0.0 and p.deadman_ramp_s >= 0.0:  # fresh
+                out[point] = twist
+                continue
             k = deadman_factor(t - t0, p.deadman_timeout_s, p.deadman_ramp_s)
             if k <= 0.0:
                 del self._motion[point]
@@ -265,13 +304,18 @@ class OperationLayer(Layer):
             return
         p = self.params
         vx, vy, _ = twist.linear_m_s.tolist()
-        vtheta = float(twist.angular_rad_s[2])
-        k = min(speed_scale(math.hypot(vx, vy), p.walk_speed_m_s), speed_scale(abs(vtheta), p.walk_turn_rad_s))
+        vtheta = twist.angular_rad_s.tolist()[2]
         steps = self._motion_walk or self._behavior_walk
+        key = (vx, vy, vtheta, steps, p)
+        if key == self._walk_key and self._walk_active:  # the same command as last tick (a held stick)
+            ctx.ports.walk_command = self._last_walk
+            return
+        k = min(speed_scale(math.hypot(vx, vy), p.walk_speed_m_s), speed_scale(abs(vtheta), p.walk_turn_rad_s))
         cmd = WalkCommand(vx * k, vy * k, vtheta * k,
                           max_stride_m=steps.max_stride_m if steps else None,
                           foot_distance_m=steps.foot_distance_m if steps else None)
         self._walk_active = True
+        self._walk_key = key
         ctx.ports.walk_command = self._last_walk = cmd
 
     # ---- the operated tick -------------------------------------------------------------------------
@@ -297,11 +341,7 @@ class OperationLayer(Layer):
                         self.kin.update(p_body, R_body, ref.q_rad)  # FK in F of the posture as balanced
                         seeded = True
                     self._targets[point] = self._seed(point, anchor, float(F.p[2]) - self._ground_z(gait, F))
-                limits = {"rhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
-                          "lhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
-                          "head": (1.0, p.head_angular_speed_rad_s),
-                          "waist": (p.waist_speed_m_s, p.waist_angular_speed_rad_s)}[point]
-                limited = limit_twist(twist, *limits)
+                limited = limit_twist(twist, *self._speed_limits(point))
                 self._targets[point] = self._targets[point].integrated(limited.twist, dt)
                 self._limited[point] = VELOCITY if limited.scale < 1.0 else None
             if self._reset_blend is not None:  # a new motion during a reset: from where the blend is
@@ -309,15 +349,13 @@ class OperationLayer(Layer):
         q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
         if "waist" in self._targets:
             base_out, rpy_out = self._waist(ref, gait, F, stopped)
-        ik_targets = self._ik_targets(p_body - anchor, R_body)
+        p_rel, R_rows = _sub(p_body.tolist(), anchor.tolist()), R_body.tolist()  # BODY in F, from the anchor
+        ik_targets = self._ik_targets(p_rel, R_rows)
         if ik_targets.active:
             res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, ik_targets)
-            q_out = np.array(ref.q_rad, dtype=float)
-            q_out[_UPPER] = res.q_rad[_UPPER]
+            q_out = np.where(_IS_UPPER, res.q_rad, ref.q_rad)  # the legs stay the reference's
             for point, r in res.points.items():
-                T = r.T_world
-                achieved = self._achieved_of(point, p_body - anchor + R_body @ T[:3, 3], R_body @ T[:3, :3])
-                self._achieved[point] = achieved
+                achieved = self._achieved[point] = self._achieved_pose(point, r.T_world, p_rel, R_rows)
                 if stopped:
                     self._limited[point] = MOTION_STOP
                 elif r.limited is not None:
@@ -333,9 +371,22 @@ class OperationLayer(Layer):
             h.append((ctx.time_s, dict(self._targets), self.ik.q.copy()))
             while len(h) > 1 and h[0][0] < ctx.time_s - p.history_s:
                 h.popleft()
-        out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
+        if base_out is ref.base_pos_world:  # no waist target: only the joints change
+            out = ref.with_owned(q_rad=q_out) if q_out is not ref.q_rad else ref
+        else:
+            out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
         self._last_out = out
         return out
+
+    def _speed_limits(self, point: str) -> tuple[float, float]:
+        """(linear [m/s], angular [rad/s]) speed limit of an IK point, from the parameters (kept per params)."""
+        p = self.params
+        if self._limits_of[0] is not p:
+            self._limits_of = (p, {"rhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
+                                   "lhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
+                                   "head": (1.0, p.head_angular_speed_rad_s),
+                                   "waist": (p.waist_speed_m_s, p.waist_angular_speed_rad_s)})
+        return self._limits_of[1][point]
 
     def _re_anchor(self, shift: np.ndarray) -> None:
         """Walking started (shift = BODY in F) or stopped (shift = -BODY in F): the hand targets and the
@@ -356,10 +407,10 @@ class OperationLayer(Layer):
         the COG balances, legs on the soles); without a gait, F and BODY of the reference itself."""
         if gait is not None and gait.base_pos_world is not None:
             F = _Frame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
-            p_body, R_body = F.to_local(gait.base_pos_world, rpy_to_matrix(gait.base_rpy_rad))
+            p_body, R_body = F.to_local_rpy(gait.base_pos_world, gait.base_rpy_rad)
             return F, p_body, R_body
         F = self._reference_frame(ref)
-        p_body, R_body = F.to_local(ref.base_pos_world, rpy_to_matrix(ref.base_rpy_rad))
+        p_body, R_body = F.to_local_rpy(ref.base_pos_world, ref.base_rpy_rad)
         return F, p_body, R_body
 
     def _reference_frame(self, ref: Reference) -> _Frame:
@@ -420,24 +471,32 @@ class OperationLayer(Layer):
             return GazeAngles.of_direction(R[:, 0])
         return WaistPose(float(p[2]) + ground_in_feet_m, tuple(matrix_to_rpy(R).tolist()))
 
-    def _ik_targets(self, p_body: np.ndarray, R_body: np.ndarray) -> OperationTargets:
-        """The hand and gaze targets in the BODY frame (where the upper-body IK works)."""
+    def _ik_targets(self, p_body: list, R_body: list) -> OperationTargets:
+        """The hand and gaze targets in the BODY frame (where the upper-body IK works); BODY's pose in F
+        (relative to the anchor) as floats: position (3,) and rotation rows."""
         t = self._targets
         kw = {}
         for point in ("rhand", "lhand"):
             if point in t:
-                kw[point] = HandTarget.trusted(R_body.T @ (t[point].p_feet_m - p_body), R_body.T @ t[point].R_feet_hand)
+                pose = t[point]
+                kw[point] = HandTarget.from_rows(rows_tmulv(R_body, _sub(pose.p_feet_m.tolist(), p_body)),
+                                                 rows_tmul(R_body, pose.R_feet_hand.tolist()))
         if "head" in t:
-            neck = self._neck_feet if self._neck_feet is not None else np.zeros(3)
-            look = neck + _LOOK_AT_DISTANCE_M * t["head"].direction_feet()
-            kw["head"] = GazeTarget(look_at_world=R_body.T @ (look - p_body))
+            nx, ny, nz = self._neck_feet.tolist() if self._neck_feet is not None else (0.0, 0.0, 0.0)
+            dx, dy, dz = t["head"].direction_feet().tolist()
+            look = (nx + _LOOK_AT_DISTANCE_M * dx, ny + _LOOK_AT_DISTANCE_M * dy, nz + _LOOK_AT_DISTANCE_M * dz)
+            kw["head"] = GazeTarget.trusted_look_at(np.array(rows_tmulv(R_body, _sub(look, p_body))))
         return OperationTargets(**kw)
 
     @staticmethod
-    def _achieved_of(point: str, p_feet: np.ndarray, R_feet: np.ndarray):
-        if point in ("rhand", "lhand"):
-            return HandPose.of(p_feet, R_feet)
-        return GazeAngles.of_direction(R_feet[:, 0])
+    def _achieved_pose(point: str, T_body_point: np.ndarray, p_body: list, R_body: list):
+        """A point's achieved pose in F from the IK's (in BODY), BODY's pose in F as in _ik_targets."""
+        (a0, a1, a2, x), (a3, a4, a5, y), (a6, a7, a8, z), _ = T_body_point.tolist()
+        if point == "head":  # the gaze: the x axis
+            return GazeAngles.of_direction(rows_mulv(R_body, (a0, a3, a6)))
+        px, py, pz = rows_mulv(R_body, (x, y, z))
+        return HandPose.owned(np.array((p_body[0] + px, p_body[1] + py, p_body[2] + pz)),
+                              np.array(rows_mul(R_body, ((a0, a1, a2), (a3, a4, a5), (a6, a7, a8)))))
 
     def _on_release(self) -> None:
         """The EmergencyStopper released the motion: restart from the targets its revert went back to."""
@@ -474,23 +533,36 @@ class OperationLayer(Layer):
     # ---- reading ------------------------------------------------------------------------------------
     def view(self) -> OperationView:
         """The points as the layer's last output reference puts them (FK of the controller's reference,
-        placed in the world by the gait's feet frame), the gaze and waist height in F."""
+        placed in the world by the gait's feet frame), the gaze and waist height in F. Computed once per
+        tick: the callers of one tick (the behaviours) share it (read-only arrays; do not modify)."""
         ref = self._last_out or self._last_in
         if ref is None:
             raise InvalidCommand("the operation layer has not ticked yet; no view before the first tick")
+        key = (ref, self._gait, self._time_s, self._walking, self._stopped)
+        cached = self._view_cache
+        if cached is not None and cached[0][0] is ref and cached[0][1] is self._gait and cached[0][2:] == key[2:]:
+            return cached[1]
         F_world, p_body, R_body = self._body_in_feet(ref, self._gait)
-        self.kin.update(p_body, R_body, ref.q_rad)  # in F, BODY where the AutoBalancer has it
+        kin = self._view_kin
+        kin.update_joints(p_body, R_body, ref.q_rad)  # in F, BODY where the AutoBalancer has it
         points = {}
-        for point, frame in _FRAMES.items():
-            p_f, R_f = self.kin.frame_pose(frame)
-            p_w, R_w = F_world.to_world(p_f, R_f)
-            points[point] = PointPose(p_world_m=_ro(p_w), R_world_point=_ro(R_w), p_feet_m=_ro(p_f),
-                                      R_feet_point=_ro(R_f))
+        c, s = F_world._cs
+        fx, fy, fz = F_world.p.tolist()
+        for point, fid in self._view_frames.items():
+            (a0, a1, a2, x), (a3, a4, a5, y), (a6, a7, a8, z), _ = kin.frame_homogeneous(fid).tolist()
+            # to the world on floats: p_w = F.p + Rz p, R_w = Rz R
+            p_w = (fx + c * x - s * y, fy + s * x + c * y, fz + z)
+            R_w = ((c * a0 - s * a3, c * a1 - s * a4, c * a2 - s * a5),
+                   (s * a0 + c * a3, s * a1 + c * a4, s * a2 + c * a5), (a6, a7, a8))
+            points[point] = PointPose(p_world_m=_ro(p_w), R_world_point=_ro(R_w), p_feet_m=_ro((x, y, z)),
+                                      R_feet_point=_ro(((a0, a1, a2), (a3, a4, a5), (a6, a7, a8))))
         gaze = GazeAngles.of_direction(points["head"].R_feet_point[:, 0])
-        return OperationView(time_s=self._time_s, feet_p_world_m=_ro(F_world.p.copy()), feet_yaw_rad=F_world.yaw,
+        view = OperationView(time_s=self._time_s, feet_p_world_m=_ro(F_world.p.copy()), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
                              waist_height_m=float(points["waist"].p_feet_m[2]), walking=self._walking,
                              motion_stopped=self._stopped)
+        self._view_cache = (key, view)
+        return view
 
     def status(self) -> OperationStatus:
         return self._status.get((self._version, self.enabled), self._build_status)
@@ -509,7 +581,8 @@ class OperationLayer(Layer):
                 achieved = _layout(self._achieved.get(point), self._anchor)
                 limited = self._limited.get(point) if point in self._targets else None
             pts[point] = PointStatus(target=target, achieved=achieved, limited=limited,
-                                     motion=_six(motion), behavior=_six(behavior))
+                                     motion=_ZERO_SIX if motion is ZERO_TWIST else _six(motion),
+                                     behavior=_ZERO_SIX if behavior is ZERO_TWIST else _six(behavior))
         return OperationStatus(enabled=self.enabled, active=bool(self._targets), motion_stopped=self._stopped,
                                points=pts)
 
@@ -519,10 +592,14 @@ def _layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
     if pose is None:
         return None
     if isinstance(pose, HandPose):
-        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy(pose.R_feet_hand).tolist())
+        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy_floats(pose.R_feet_hand))
     if isinstance(pose, GazeAngles):
         return (pose.pitch_rad, pose.yaw_rad)
     return (pose.height_m, *pose.rpy_rad)
+
+
+def _sub(a, b) -> tuple[float, float, float]:
+    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
 
 
 def _ro(a: np.ndarray) -> np.ndarray:

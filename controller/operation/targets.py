@@ -16,14 +16,23 @@ def feet_frame(p_rsole_world: np.ndarray, R_rsole_world: np.ndarray, p_lsole_wor
                R_lsole_world: np.ndarray) -> tuple[np.ndarray, float]:
     """The feet frame F (points.py): origin (3,) [m] midway between the soles, yaw [rad] their mean yaw
     (of the summed x axes, as the AutoBalancer turns BODY)."""
-    yaw = math.atan2(float(R_rsole_world[1, 0] + R_lsole_world[1, 0]), float(R_rsole_world[0, 0] + R_lsole_world[0, 0]))
-    return 0.5 * (np.asarray(p_rsole_world, dtype=float) + np.asarray(p_lsole_world, dtype=float)), yaw
+    (r00, _, _), (r10, _, _), _ = np.asarray(R_rsole_world, dtype=float).tolist()
+    (l00, _, _), (l10, _, _), _ = np.asarray(R_lsole_world, dtype=float).tolist()
+    xr, yr, zr = np.asarray(p_rsole_world, dtype=float).tolist()
+    xl, yl, zl = np.asarray(p_lsole_world, dtype=float).tolist()
+    return np.array((0.5 * (xr + xl), 0.5 * (yr + yl), 0.5 * (zr + zl))), math.atan2(r10 + l10, r00 + l00)
 
 
 def yaw_rotation(yaw_rad: float) -> np.ndarray:
     """Rz(yaw) (3, 3)."""
     c, s = math.cos(yaw_rad), math.sin(yaw_rad)
     return np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
+
+
+def _owned(a: np.ndarray) -> np.ndarray:
+    """A float64 array just computed (owning its data), made read-only in place instead of copied."""
+    a.setflags(write=False)  # (half the cost of a.flags.writeable = False)
+    return a
 
 
 @dataclass(frozen=True, slots=True)
@@ -37,12 +46,23 @@ class HandPose:
     def of(p_feet_m, R_feet_hand) -> HandPose:
         return HandPose(frozen_array(p_feet_m, (3,)), frozen_array(R_feet_hand, (3, 3)))
 
+    @staticmethod
+    def owned(p_feet_m: np.ndarray, R_feet_hand: np.ndarray) -> HandPose:
+        """of() for float64 arrays (3,) and (3, 3) the caller has just computed and hands over: frozen in
+        place, not copied."""
+        return HandPose(_owned(p_feet_m), _owned(R_feet_hand))
+
     def integrated(self, twist: Twist, dt_s: float) -> HandPose:
         """One tick of `twist` (F axes): p += v dt, R = exp([w] dt) R."""
-        if twist.is_zero:
-            return self
-        R = pin.exp3(np.asarray(twist.angular_rad_s, dtype=float) * dt_s) @ self.R_feet_hand
-        return HandPose.of(self.p_feet_m + twist.linear_m_s * dt_s, R)
+        v, w = twist.linear_m_s.tolist(), twist.angular_rad_s.tolist()
+        if not any(w):  # a pure translation keeps the rotation (exp(0) R = R)
+            if not any(v):
+                return self
+            R = self.R_feet_hand
+        else:
+            R = _owned(pin.exp3(twist.angular_rad_s * dt_s) @ self.R_feet_hand)
+        p = self.p_feet_m if not any(v) else _owned(self.p_feet_m + twist.linear_m_s * dt_s)
+        return HandPose(p, R)  # both read-only float64 arrays of their own (what HandPose.of makes)
 
 
 @dataclass(frozen=True, slots=True)

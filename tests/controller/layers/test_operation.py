@@ -203,3 +203,21 @@ def test_hand_targets_go_with_body_while_walking_and_do_not_jump_when_the_walk_s
     ticks(False, 0.04, 0.04, 1)  # the walk stops: held in F from where it is
     ticks(False, 0.04, 0.0)
     assert np.allclose(target(), standing + (0.0, 0.02, 0.0), atol=1e-9)
+
+
+def test_the_view_is_the_full_forward_kinematics_of_the_output_and_computed_once_per_tick(shared_ik):
+    op = layer(shared_ik)
+    out = run(op, 30, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0.05)), t))
+    view = op.view()
+    assert op.view() is view  # the same tick: shared
+    kin = RobotKinematics()  # F is the reference's own soles (no gait): the world frame's here, up to F
+    kin.update_rpy(out.base_pos_world, out.base_rpy_rad, out.q_rad)
+    for point, frame in (("rhand", "rarm_end"), ("lhand", "larm_end"), ("head", "HEAD_LINK1"), ("waist", "BODY")):
+        p_world, R_world = kin.frame_pose(frame)
+        assert np.allclose(view.points[point].p_world_m, p_world, atol=1e-12)
+        assert np.allclose(view.points[point].R_world_point, R_world, atol=1e-12)
+    assert not view.points["rhand"].p_world_m.flags.writeable
+    run(op, 1, t0=30 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0.05)), t))
+    later = op.view()
+    assert later is not view and later.time_s == pytest.approx(30 * DT)
+    assert later.points["rhand"].p_world_m[0] > view.points["rhand"].p_world_m[0]  # it moved on
