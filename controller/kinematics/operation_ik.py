@@ -103,6 +103,11 @@ class OperationIKParams(Params):
     # upper-body mode: the COM may move at most this far (x and y) from where it was at activation, in the
     # BODY frame, so the AutoBalancer's BODY correction for what the arms and torso did stays this small
     com_guard_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.005, "max": 0.2})
+    # ... and approaches it as a capture point would: the guard holds c + dc/dt * T (placo's DCM mode, omega =
+    # 1/T), so the COM's speed toward an edge is at most (distance left) / T and it comes to rest at the edge
+    # smoothly. A plain position bound stopped it within a tick: the torso reversed at ~20 deg/s, the COM
+    # estimate moved 9 mm in 50 ms and the capture-point flag stopped the motion (rhand forward, then up)
+    com_guard_braking_time_s: float = field(default=0.25, metadata={"unit": "s", "min": 0.01, "max": 5.0})
     # the torso (the redundancy left once points, feet, BODY and COM are set) pulled to the reference
     posture_weight: float = field(default=1e-3, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e3})
     # ... in the upper-body mode, where no COM task holds the torso back: the arms reach first, the torso
@@ -711,7 +716,8 @@ class OperationIK:
         self._base_arg: tuple = (None, None, None)  # (base position, rpy arrays, their key): last read
         self._base_arrays: tuple = (None, None, None)  # (base key, position, rpy): the result's arrays
         self._masked_settled: list | None = None  # the reference the masked chains have reached
-        self._com_polygon = None  # the constraint, while the COM is near the edge
+        self._com_polygon = None  # the constraint (whole-body: while the COM is near the edge; upper body: the guard)
+        self._guard_base: tuple | None = None  # upper-body mode: the base pose the guard's world box is for
         self._com_tracking = False  # the caller gives the COM target (com_track_weight)
         self._com_polygon_hard = True
         self._polygon: _Polygon | None = None
@@ -752,6 +758,9 @@ class OperationIK:
                 self._points[name].configure(p)
             if self._posture is not None:
                 self._posture.configure("posture", "soft", p.upper_body_posture_weight)
+            if self._com_polygon is not None:
+                self.solver.dt = p.dt_s
+                self._com_polygon.omega = 1.0 / p.com_guard_braking_time_s
             if self._com_polygon is not None:
                 self._com_polygon.margin = 0.0
                 self._configure_com_polygon(True)
@@ -1009,20 +1018,22 @@ class OperationIK:
                 self._posture_ref = torso
         for name in self._active:
             self._points[name].servo(self, getattr(targets, name))
-        # the guard: a hard constraint, there only while the COM is within 1 cm of its edge
-        x, y, _ = self._com_in_base()
-        margin = self._polygon.margin(x, y)
-        if margin > 0.01:
-            if self._com_polygon is not None:
-                self.solver.remove_constraint(self._com_polygon)
-                self._com_polygon = None
-        elif self._com_polygon is None:
-            base = self._base_key
-            R = rpy_to_rows(*base[3:])  # the box in the world: the guard is in the BODY frame
-            self._com_polygon = self.solver.add_com_polygon_constraint(
-                [np.array((base[0] + R[0][0] * v[0] + R[0][1] * v[1], base[1] + R[1][0] * v[0] + R[1][1] * v[1]))
-                 for v in self._polygon.clockwise], 0.0)
-            self._configure_com_polygon(True)
+        # the guard: a hard constraint on c + dc/dt * T (com_guard_braking_time_s), the box in the world (the
+        # guard is in the BODY frame), rebuilt when the base moves
+        base = self._base_key
+        if self._com_polygon is None or self._guard_base != base:
+            R = rpy_to_rows(*base[3:])
+            world = [np.array((base[0] + R[0][0] * v[0] + R[0][1] * v[1], base[1] + R[1][0] * v[0] + R[1][1] * v[1]))
+                     for v in self._polygon.clockwise]
+            if self._com_polygon is None:
+                self.solver.dt = p.dt_s
+                self._com_polygon = self.solver.add_com_polygon_constraint(world, 0.0)
+                self._com_polygon.dcm = True
+                self._com_polygon.omega = 1.0 / p.com_guard_braking_time_s
+                self._configure_com_polygon(True)
+            else:
+                self._com_polygon.polygon = world
+            self._guard_base = base
         self._update_bounds(q, step)
         ok = True
         try:

@@ -29,7 +29,15 @@ from controller.kinematics.rotations import (
     rpy_to_rows,
 )
 from controller.operation.deadman import deadman_factor
-from controller.operation.limits import MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist, speed_scale
+from controller.operation.limits import (
+    MOTION_STOP,
+    REACH,
+    VELOCITY,
+    clamp_to_achieved,
+    limit_twist,
+    ramp_twist,
+    speed_scale,
+)
 from controller.operation.points import (
     POINTS,
     ZERO_TWIST,
@@ -65,6 +73,15 @@ class OperationParams(Params):
     waist_angular_speed_rad_s: float = field(default=0.5, metadata={"unit": "rad/s", "min": 0.001, "max": 5.0})
     walk_speed_m_s: float = field(default=0.3, metadata={"unit": "m/s", "min": 0.001, "max": 1.0})
     walk_turn_rad_s: float = field(default=0.5, metadata={"unit": "rad/s", "min": 0.001, "max": 3.0})
+    # acceleration limits of the summed twist (Eq. 5) per point: a stick flicked from one direction to another
+    # turns the point in ~0.2 s instead of one tick. A step of the hand's velocity (0.1 m/s forward to 0.05 m/s
+    # up) reversed the chest at ~20 deg/s within a tick; the COM estimate moved 9 mm in 50 ms and the
+    # capture-point flag stopped the motion
+    hand_accel_m_s2: float = field(default=0.5, metadata={"unit": "m/s^2", "min": 0.01, "max": 100.0})
+    hand_angular_accel_rad_s2: float = field(default=4.0, metadata={"unit": "rad/s^2", "min": 0.01, "max": 1000.0})
+    head_angular_accel_rad_s2: float = field(default=8.0, metadata={"unit": "rad/s^2", "min": 0.01, "max": 1000.0})
+    waist_accel_m_s2: float = field(default=0.5, metadata={"unit": "m/s^2", "min": 0.01, "max": 100.0})
+    waist_angular_accel_rad_s2: float = field(default=2.0, metadata={"unit": "rad/s^2", "min": 0.01, "max": 1000.0})
     deadman_timeout_s: float = field(default=0.2, metadata={"unit": "s", "min": 0.0, "max": 5.0})
     deadman_ramp_s: float = field(default=0.1, metadata={"unit": "s", "min": 0.0, "max": 5.0})
     # reset_targets(): the output blends back onto the upstream reference over this time
@@ -195,6 +212,8 @@ class OperationLayer(Layer):
         self._version = 0
         self._status = SharedStatus()
         self._limits_of: tuple = (None, None)  # (params, speed limits per IK point)
+        self._accel_of: tuple = (None, None)  # ((params, dt), twist change per tick per IK point)
+        self._rates: dict[str, Twist] = {}  # the twist each IK point integrated last tick (none: at rest)
         self._view_kin = RobotKinematics()  # view(): the output reference's FK (joints only, 4 frames)
         self._view_frames = {point: self._view_kin.model.getFrameId(frame) for point, frame in _FRAMES.items()}
         self._view_cache: tuple | None = None  # ((ref, gait, time, walking, stopped), the view of that tick)
@@ -217,6 +236,7 @@ class OperationLayer(Layer):
 
     def drop_motion(self) -> None:
         """Forget the operator's setpoints (the hard e-stop: nothing streamed before it runs after it)."""
+        self._rates.clear()  # and nothing coasts on after it: the points start again from rest
         if self._motion:
             self._motion.clear()
             self._version += 1
@@ -239,6 +259,7 @@ class OperationLayer(Layer):
 
     def _deactivate(self) -> None:
         self._targets.clear()
+        self._rates.clear()
         self._achieved.clear()
         self._limited.clear()
         self._history.clear()
@@ -331,18 +352,30 @@ class OperationLayer(Layer):
         if self._active_since_s is None:
             self._active_since_s = ctx.time_s
         seeded = False
-        if not stopped:
+        rates = self._rates
+        if stopped:
+            rates.clear()  # held: a release starts from rest
+        else:
             for point in IK_POINTS:
                 twist = total.get(point)
+                previous = rates.get(point)
                 if twist is None or twist.is_zero:
-                    continue
+                    if previous is None:
+                        continue
+                    twist = ZERO_TWIST  # slowing down to rest
                 if point not in self._targets:
                     if not seeded:
                         self.kin.update(p_body, R_body, ref.q_rad)  # FK in F of the posture as balanced
                         seeded = True
                     self._targets[point] = self._seed(point, anchor, float(F.p[2]) - self._ground_z(gait, F))
                 limited = limit_twist(twist, *self._speed_limits(point))
-                self._targets[point] = self._targets[point].integrated(limited.twist, dt)
+                lin_step, ang_step = self._accel_steps(point, dt)
+                ramped = ramp_twist(previous or ZERO_TWIST, limited.twist, lin_step, ang_step)
+                if ramped.is_zero:
+                    rates.pop(point, None)
+                else:
+                    rates[point] = ramped
+                self._targets[point] = self._targets[point].integrated(ramped, dt)
                 self._limited[point] = VELOCITY if limited.scale < 1.0 else None
             if self._reset_blend is not None:  # a new motion during a reset: from where the blend is
                 self._reset_blend = None
@@ -387,6 +420,17 @@ class OperationLayer(Layer):
                                    "head": (1.0, p.head_angular_speed_rad_s),
                                    "waist": (p.waist_speed_m_s, p.waist_angular_speed_rad_s)})
         return self._limits_of[1][point]
+
+    def _accel_steps(self, point: str, dt_s: float) -> tuple[float, float]:
+        """(linear [m/s], angular [rad/s]) change of an IK point's twist allowed in one tick of dt_s."""
+        p = self.params
+        key = (p, dt_s)
+        if self._accel_of[0] != key:
+            self._accel_of = (key, {"rhand": (p.hand_accel_m_s2 * dt_s, p.hand_angular_accel_rad_s2 * dt_s),
+                                    "lhand": (p.hand_accel_m_s2 * dt_s, p.hand_angular_accel_rad_s2 * dt_s),
+                                    "head": (1.0, p.head_angular_accel_rad_s2 * dt_s),  # (no linear part)
+                                    "waist": (p.waist_accel_m_s2 * dt_s, p.waist_angular_accel_rad_s2 * dt_s)})
+        return self._accel_of[1][point]
 
     def _re_anchor(self, shift: np.ndarray) -> None:
         """Walking started (shift = BODY in F) or stopped (shift = -BODY in F): the hand targets and the

@@ -48,3 +48,19 @@ def clamp_to_achieved(target, achieved, limited: str | None):
     if limited not in LIMIT_REASONS:
         raise InvalidCommand(f"limit reason {limited!r}; valid: {list(LIMIT_REASONS)} or None")
     return achieved if limited in (REACH, JOINT_LIMIT, VELOCITY) else target
+
+
+def ramp_twist(previous: Twist, goal: Twist, max_linear_step_m_s: float, max_angular_step_rad_s: float) -> Twist:
+    """One tick of an acceleration limit: `previous` moved toward `goal` by at most `max_linear_step_m_s`
+    (linear norm) and `max_angular_step_rad_s` (angular norm), one factor for the whole change so the twist
+    turns along the straight line between the two (the goal itself once it is within reach)."""
+    if not (max_linear_step_m_s > 0.0 and max_angular_step_rad_s > 0.0):
+        raise InvalidCommand(f"ramp steps {max_linear_step_m_s!r}, {max_angular_step_rad_s!r}: must be > 0")
+    (a, b, c), (d, e, f) = previous.linear_m_s.tolist(), previous.angular_rad_s.tolist()
+    (g, h, i), (j, k, m) = goal.linear_m_s.tolist(), goal.angular_rad_s.tolist()
+    dl, da = (g - a, h - b, i - c), (j - d, k - e, m - f)
+    scale = min(speed_scale(math.hypot(*dl), max_linear_step_m_s), speed_scale(math.hypot(*da), max_angular_step_rad_s))
+    if scale == 1.0:
+        return goal
+    return Twist.of((a + scale * dl[0], b + scale * dl[1], c + scale * dl[2]),
+                    (d + scale * da[0], e + scale * da[1], f + scale * da[2]))

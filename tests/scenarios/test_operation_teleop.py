@@ -126,3 +126,26 @@ def test_waist_down_0_10_m_and_back():
     p2, _ = robot.measured("BODY")
     assert p2[2] - p0[2] == pytest.approx(0.0, abs=0.01)
     assert robot.min_margin_m >= 0.03
+
+
+#: [mm] largest CP error after a stick flicked from rhand forward 0.1 m/s to up 0.05 m/s: measured 15.9 mm with the
+#: 0.5 m/s^2 hand acceleration limit (51 mm and a motion stop by the CP flag without one); allowed 25 mm
+FLICK_CP_ERROR_MM = 25.0
+
+
+def test_a_stick_flicked_from_forward_to_up_turns_the_hand_without_raising_the_cp_flag():
+    robot = Teleop()
+    robot.run(2.0, "rhand", Twist.of((0.1, 0.0, 0.0)))
+    before = robot.measured("rarm_end")[0]
+    worst = 0.0
+    for _ in range(round(1.0 / DT)):
+        robot.run(DT, "rhand", Twist.of((0.0, 0.0, 0.05)))
+        worst = max(worst, robot.snap.layers["st"].cp_error_norm)
+        assert robot.snap.layers["op"].points["rhand"].limited != "motion_stop"
+    robot.run(DT, "rhand", Twist.of())
+    robot.run(1.0)
+    assert not robot.snap.layers["es"].stopped
+    assert 1e3 * worst < FLICK_CP_ERROR_MM, f"CP error {1e3 * worst:.1f} mm"
+    moved = robot.measured("rarm_end")[0] - before
+    # it went on forward while it turned (0.5 * 0.1 m/s * 0.2 s = 10 mm) and then up by about 1 s x 0.05 m/s
+    assert 0.035 < moved[2] < 0.06 and 0.0 < moved[0] < 0.02, moved

@@ -99,14 +99,26 @@ def test_the_dead_man_zeroes_a_stale_setpoint_after_a_ramp(shared_ik):
 
 def test_the_hand_target_moves_at_the_commanded_speed_in_F_and_a_too_fast_one_is_scaled(shared_ik):
     op = layer(shared_ik)
+    accel = op.params.hand_accel_m_s2  # the twist ramps at this acceleration: 0.1 m/s after 0.2 s
     run(op, 1, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
     x0 = op.status().to_dict()["points"]["rhand"]["target"][0]
-    run(op, 100, t0=DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    run(op, 1, t0=DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
     x1 = op.status().to_dict()["points"]["rhand"]["target"][0]
-    assert x1 - x0 == pytest.approx(0.1 * 100 * DT, abs=1e-9)
-    run(op, 1, t0=101 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
+    assert x1 - x0 == pytest.approx(2 * accel * DT * DT, abs=1e-9)  # the second tick of the ramp from rest
+    run(op, 60, t0=2 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    x2 = op.status().to_dict()["points"]["rhand"]["target"][0]
+    run(op, 100, t0=62 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
+    x3 = op.status().to_dict()["points"]["rhand"]["target"][0]
+    assert x3 - x2 == pytest.approx(0.1 * 100 * DT, abs=1e-9)  # at the commanded speed once ramped up
+    run(op, 1, t0=162 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
     assert op.status().to_dict()["points"]["rhand"]["limited"] == "velocity"
-    assert op.status().to_dict()["points"]["rhand"]["target"][0] - x1 == pytest.approx(0.3 * DT, abs=1e-9)
+    x4 = op.status().to_dict()["points"]["rhand"]["target"][0]
+    assert x4 - x3 == pytest.approx((0.1 + accel * DT) * DT, abs=1e-9)  # toward the 0.3 m/s limit, ramping
+    run(op, 100, t0=163 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
+    x5 = op.status().to_dict()["points"]["rhand"]["target"][0]
+    run(op, 1, t0=263 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
+    x6 = op.status().to_dict()["points"]["rhand"]["target"][0]
+    assert x6 - x5 == pytest.approx(0.3 * DT, abs=1e-9)  # at the limit (1 m/s asked, 0.3 m/s allowed)
 
 
 def test_the_walk_point_is_published_and_stops_with_one_zero_command(shared_ik):

@@ -5,6 +5,7 @@ import pytest
 
 from controller.core.errors import InvalidCommand
 from controller.operation.limits import JOINT_LIMIT, MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist
+from controller.operation.points import ZERO_TWIST as ZERO
 from controller.operation.points import Twist
 
 
@@ -42,3 +43,23 @@ def test_a_target_the_ik_cannot_reach_is_clamped_to_the_achieved_pose():
     assert clamp_to_achieved(target, achieved, MOTION_STOP) is target  # frozen, not clamped
     with pytest.raises(InvalidCommand, match="valid"):
         clamp_to_achieved(target, achieved, "tired")
+
+
+def test_a_ramp_moves_the_twist_toward_the_goal_by_at_most_the_step_along_the_straight_line():
+    from controller.operation.limits import ramp_twist
+
+    forward, up = Twist.of((0.1, 0.0, 0.0)), Twist.of((0.0, 0.0, 0.05))
+    step = ramp_twist(forward, up, 0.0025, 1.0)  # 0.5 m/s^2 over 5 ms
+    change = np.asarray(step.linear_m_s) - np.asarray(forward.linear_m_s)
+    assert np.linalg.norm(change) == pytest.approx(0.0025)
+    direction = np.asarray(up.linear_m_s) - np.asarray(forward.linear_m_s)
+    assert np.allclose(np.cross(change, direction), 0.0)  # along the line from one to the other
+    t = forward
+    for _ in range(45):  # |up - forward| = 0.1118 m/s: 44.7 steps of 2.5 mm/s
+        t = ramp_twist(t, up, 0.0025, 1.0)
+    assert t is up  # reached: the goal itself
+    # the angular step limits too, one factor for both parts
+    turn = ramp_twist(ZERO, Twist.of((0.01, 0.0, 0.0), (0.0, 0.0, 1.0)), 1.0, 0.02)
+    assert np.allclose(turn.angular_rad_s, (0.0, 0.0, 0.02)) and np.allclose(turn.linear_m_s, (0.0002, 0.0, 0.0))
+    with pytest.raises(InvalidCommand):
+        ramp_twist(ZERO, up, 0.0, 1.0)
