@@ -253,7 +253,8 @@ def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: 
     except Exception as err:  # noqa: BLE001 - reported to the parent, which raises it in the requests
         conn.send(("error", f"{type(err).__name__}: {err}"))
         return
-    conn.send(("ready", None))
+    m = rig._model
+    conn.send(("ready", (m.nq, m.nmocap, rig.intrinsics)))
     with rig:
         while True:
             try:
@@ -278,24 +279,32 @@ class CameraProcess:
     pipe without the lock. The child is spawned at construction and makes its renderer meanwhile: requests
     queue behind it (the first one waits the ~1-2 s the child needs to start).
 
-    `model` is the scene's model in the parent (the plant's): its sizes check the requests and give the
-    intrinsics; the child loads `scene` itself. Bad requests raise ValueError at once, as CameraRig's do; a
-    failure in the child (no renderer, a crash) fails the requests' futures with RuntimeError.
+    `model`, the scene's model in the parent (the plant's) if it has one: its sizes check the requests at once
+    and give the intrinsics; the child loads `scene` itself. Without it (None: loading a model takes the lock
+    for ~0.1 s) the child's ready message gives them, and a request made before that is checked on the pipe
+    thread. Bad requests raise ValueError (in the future when checked there); a failure in the child (no
+    renderer, a crash) fails the requests' futures with RuntimeError.
     """
 
-    def __init__(self, scene: str | Path, model: mujoco.MjModel, cameras: Sequence[str] = HEAD_CAMERAS,
+    def __init__(self, scene: str | Path, model: mujoco.MjModel | None, cameras: Sequence[str] = HEAD_CAMERAS,
                  width: int = 640, height: int = 480, depth_cameras: Sequence[str] | None = None,
                  disparity_noise_px: float = 0.0, seed: int | None = None) -> None:
         import multiprocessing
 
-        known = [model.camera(i).name for i in range(model.ncam)]
         cameras = tuple(cameras)
-        unknown = [c for c in (*cameras, *(depth_cameras or ())) if c not in known]
-        if unknown or not cameras:
-            raise ValueError(f"unknown camera(s) {unknown or cameras}; valid cameras: {', '.join(known)}")
+        if not cameras:
+            raise ValueError("cameras must name at least one camera")
         self._cameras = cameras
-        self._nq, self._nmocap = model.nq, model.nmocap
-        self._intrinsics = {name: camera_intrinsics(model, name, width, height) for name in cameras}
+        self._nq: int | None = None
+        self._nmocap: int | None = None
+        self._intrinsics: dict[str, CameraIntrinsics] | None = None
+        if model is not None:
+            known = [model.camera(i).name for i in range(model.ncam)]
+            unknown = [c for c in (*cameras, *(depth_cameras or ())) if c not in known]
+            if unknown:
+                raise ValueError(f"unknown camera(s) {unknown}; valid cameras: {', '.join(known)}")
+            self._nq, self._nmocap = model.nq, model.nmocap
+            self._intrinsics = {name: camera_intrinsics(model, name, width, height) for name in cameras}
         ctx = multiprocessing.get_context("spawn")  # no fork of a process with threads and a GL context
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_serve, name="camera-render", daemon=True, args=(
@@ -321,6 +330,8 @@ class CameraProcess:
 
     @property
     def intrinsics(self) -> dict[str, CameraIntrinsics]:
+        if self._intrinsics is None:
+            self.wait_ready()
         return dict(self._intrinsics)
 
     @property
@@ -338,7 +349,10 @@ class CameraProcess:
 
     def _ensure_ready(self) -> None:
         if not self._ready:
-            self._receive()  # "ready": the child's renderer exists
+            nq, nmocap, intrinsics = self._receive()  # "ready": the child's renderer exists
+            if self._nq is None:
+                self._nq, self._nmocap = nq, nmocap
+                self._intrinsics = {name: intrinsics[name] for name in self._cameras}
             self._ready = True
 
     def wait_ready(self, timeout_s: float = 60.0) -> None:
@@ -347,6 +361,7 @@ class CameraProcess:
 
     def _roundtrip(self, msg: tuple) -> Frames:
         self._ensure_ready()
+        self._check(*msg)
         try:
             self._conn.send(msg)
         except OSError:  # a broken pipe: the child is gone
@@ -363,21 +378,26 @@ class CameraProcess:
                 cameras: Sequence[str] | None = None) -> Future[Frames]:
         """As CameraRig.request: the arrays are copied now; the future's result is a Frames."""
         q = np.array(qpos, dtype=float, copy=True)
-        if q.shape != (self._nq,) or not np.all(np.isfinite(q)):
-            raise ValueError(f"qpos must be {self._nq} finite numbers, got shape {q.shape}")
         pos = None if mocap_pos is None else np.array(mocap_pos, dtype=float, copy=True).reshape(-1, 3)
         quat = None if mocap_quat is None else np.array(mocap_quat, dtype=float, copy=True).reshape(-1, 4)
-        for name, a in (("mocap_pos", pos), ("mocap_quat", quat)):
-            if a is not None and a.shape[0] != self._nmocap:
-                raise ValueError(f"{name} must have {self._nmocap} rows (one per mocap body), got {a.shape}")
         chosen = self._cameras if cameras is None else tuple(cameras)
-        unknown = [c for c in chosen if c not in self._cameras]
-        if unknown or not chosen:
-            raise ValueError(f"cameras {unknown or chosen} not rendered by this rig; valid: {', '.join(self._cameras)}")
+        msg = (q, float(time_s), pos, quat, chosen)
+        if self._nq is not None:
+            self._check(*msg)
         with self._lock:
             if self._closed:
                 raise RuntimeError("CameraProcess is closed")
-            return self._executor.submit(self._roundtrip, (q, float(time_s), pos, quat, chosen))
+            return self._executor.submit(self._roundtrip, msg)
+
+    def _check(self, q, time_s, pos, quat, chosen) -> None:
+        if q.shape != (self._nq,) or not np.all(np.isfinite(q)):
+            raise ValueError(f"qpos must be {self._nq} finite numbers, got shape {q.shape}")
+        for name, a in (("mocap_pos", pos), ("mocap_quat", quat)):
+            if a is not None and a.shape[0] != self._nmocap:
+                raise ValueError(f"{name} must have {self._nmocap} rows (one per mocap body), got {a.shape}")
+        unknown = [c for c in chosen if c not in self._cameras]
+        if unknown or not chosen:
+            raise ValueError(f"cameras {unknown or chosen} not rendered by this rig; valid: {', '.join(self._cameras)}")
 
     def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None) -> Future[Frames]:
         return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras)

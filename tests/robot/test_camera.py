@@ -253,3 +253,19 @@ def test_the_camera_process_refuses_bad_requests_at_once_and_fails_them_once_it_
     proc.close()
     with pytest.raises(RuntimeError, match="closed"):
         proc.request_state_of(plant.data)
+
+
+def test_a_camera_process_without_a_model_takes_the_sizes_from_its_child_and_checks_requests_there(plant):
+    from robot.camera import CameraProcess
+
+    with CameraProcess("expo", None, cameras=("wide",), width=64, height=48) as proc:
+        bad = proc.request(np.zeros(3), 0.0)  # queued before the child is up: checked on the pipe thread
+        with pytest.raises(ValueError, match="qpos must be"):
+            bad.result(timeout=60)
+        frames = proc.request_state_of(plant.data).result(timeout=60)
+        assert frames["wide"].rgb.shape == (48, 64, 3)
+        assert proc.intrinsics["wide"].width == 64
+        with pytest.raises(ValueError, match="qpos must be"):  # known now: at once
+            proc.request(np.zeros(3), 0.0)
+    with CameraProcess("expo", None, cameras=("eye",)) as proc, pytest.raises(RuntimeError, match="unknown camera"):
+        proc.request_state_of(plant.data).result(timeout=60)
