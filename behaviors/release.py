@@ -34,12 +34,11 @@ class Release(Behavior):
         self.joint = gripper_joint(self.params.hand)
         r = ctx.commands.joint(self.joint)
         self.open_rad = r.lower_rad
-        # the command opens from where it is, not from the jaw: a grasp at the hand's limit commands the jaw shut
-        # (the servo's torque cap holds the force), and timed from the jaw the command was still on its way
-        # down to it when the jaw was checked (a release failed "36 deg short of open", the jaw not yet moving)
-        from_rad = max(r.q_meas_rad, r.q_cmd_rad)
-        self.open_s = max(ctx.dt_s, self.params.time_s * max(0.0, from_rad - r.lower_rad)
-                          / (r.upper_rad - r.lower_rad))
+        # timed for the whole span, closed to open: the joint reading gives the limited command, not the
+        # reference the opening starts from, and a grasp at the hand's limit leaves that reference shut (the
+        # servo's torque cap holds the force). Timed from the jaw, the reference was still coming down to it
+        # when the jaw was checked: "33 deg short of open", the jaw not moving yet (seed 1, two trials).
+        self.open_s = max(ctx.dt_s, self.params.time_s)
         self.rate = JawRate(ctx.dt_s)
         self.rate.update(r.q_meas_rad)
         ctx.commands.set_joint_angles({self.joint: self.open_rad}, self.open_s)
