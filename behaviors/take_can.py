@@ -163,7 +163,8 @@ class TakeCan(Composite):
         yaw = view.feet_yaw_rad
         can_f = can_in_feet(view, can_world)
         self.result["can_feet_m"] = [round(float(v), 4) for v in can_f]
-        in_from_edge_m = float(can_world[0]) - p.table_edge_x_m
+        edge_x_m = p.table_edge_x_m
+        in_from_edge_m = float(can_world[0]) - edge_x_m
         x_grasp = grasp_can_x_feet(in_from_edge_m)
         self.result["grasp_can_x_feet_m"] = round(x_grasp, 4)
         if not within_reach(can_f, in_from_edge_m):
@@ -173,8 +174,13 @@ class TakeCan(Composite):
                 self.require((yield WalkTo(WalkToParams(x_m=x, y_m=y, theta_deg=math.degrees(yaw)))))
                 self.set_phase("relocate")
                 self.require((yield self._locate_near(can_world)))
-                can_world = np.array(commands.recalled("can")["position_m"])
-                in_from_edge_m = float(can_world[0]) - p.table_edge_x_m
+                relocated = np.array(commands.recalled("can")["position_m"])
+                # the can has not moved: where it is seen now against where it was seen from the start is the
+                # walk's odometry drift, and the table's known edge drifts with it in the odometry frame (55 mm
+                # after a 1.8 m walk: the feet ended 0.17 m from the edge, not 0.22, and the hand met it)
+                edge_x_m += float(relocated[0] - can_world[0])
+                can_world = relocated
+                in_from_edge_m = float(can_world[0]) - edge_x_m
                 x_grasp = grasp_can_x_feet(in_from_edge_m)
             self.set_phase("walk")
             x, y = stance_for(can_world, yaw, x_grasp)
