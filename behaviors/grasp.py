@@ -69,7 +69,14 @@ class Grasp(Behavior):
                 if self.params.require_object:
                     return self.fail("the jaw closed on nothing", holding=False)
                 return self.succeed("gripper closed (nothing between the jaws)", holding=False)
-            target = min(self.closed_rad, r.q_meas_rad + squeeze_offset_rad(self.params.force_n))
+            if self.params.force_n >= FINGERTIP_LIMIT_N:
+                # at the hand's limit the servo's torque cap holds the force: commanded shut, it keeps pressing
+                # 14 N as the pads creep into the can (commanded 14 N past the jaw instead, the jaw crept 1.3 deg
+                # shut in 75 s of holding and walking, the force fell to 1.4 N and the can slid out on the way
+                # down to the hole)
+                target = self.closed_rad
+            else:
+                target = min(self.closed_rad, r.q_meas_rad + squeeze_offset_rad(self.params.force_n))
             ctx.commands.set_joint_angles({self.joint: target}, SQUEEZE_TIME_S)
             self.phase, self.phase_s = "squeezing", ctx.elapsed_s
             return NOTHING

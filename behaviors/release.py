@@ -9,6 +9,7 @@ from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
 from behaviors.gripper import SETTLED_RAD_S, JawRate, gripper_joint
 
 OPEN_TOLERANCE_RAD = math.radians(2.0)
+OPEN_LAG_S = 0.1  # [s] the jaw is checked no sooner than this after its command has arrived (the servo's lag)
 
 
 @dataclass(frozen=True)
@@ -27,14 +28,17 @@ class Release(Behavior):
         return (f"{self.params.hand}.gripper",)
 
     def nominal_duration_s(self) -> float:
-        return self.params.time_s + 1.0
+        return self.params.time_s + OPEN_LAG_S + 1.0
 
     def start(self, ctx: Context) -> None:
         self.joint = gripper_joint(self.params.hand)
         r = ctx.commands.joint(self.joint)
         self.open_rad = r.lower_rad
-        self.open_s = max(ctx.dt_s, self.params.time_s * max(0.0, r.q_meas_rad - r.lower_rad)
-                          / (r.upper_rad - r.lower_rad))
+        # timed for the whole span, closed to open: the joint reading gives the limited command, not the
+        # reference the opening starts from, and a grasp at the hand's limit leaves that reference shut (the
+        # servo's torque cap holds the force). Timed from the jaw, the reference was still coming down to it
+        # when the jaw was checked: "33 deg short of open", the jaw not moving yet (seed 1, two trials).
+        self.open_s = max(ctx.dt_s, self.params.time_s)
         self.rate = JawRate(ctx.dt_s)
         self.rate.update(r.q_meas_rad)
         ctx.commands.set_joint_angles({self.joint: self.open_rad}, self.open_s)
@@ -42,7 +46,7 @@ class Release(Behavior):
     def step(self, ctx: Context) -> Output:
         r = ctx.commands.joint(self.joint)
         dq = self.rate.update(r.q_meas_rad)
-        if ctx.elapsed_s < self.open_s or abs(dq) > SETTLED_RAD_S:
+        if ctx.elapsed_s < self.open_s + OPEN_LAG_S or abs(dq) > SETTLED_RAD_S:
             return NOTHING
         gap = r.q_meas_rad - self.open_rad
         if gap <= OPEN_TOLERANCE_RAD:

@@ -1,7 +1,12 @@
 """`take_can` ([OP] VI): locate the can if it is not located, judge from the support polygon whether it is
 within the right hand's reach ([OP] IV) and walk if not (to where the head can see it, locate it again, then
 to the grasping stance), open, pre-grasp, grasp, lift; the grasp is checked from the gripper's angle and the
-wrist force sensor, and the run fails saying so when the can was missed or slipped."""
+wrist force sensor, and the run fails saying so when the can was missed or slipped.
+
+The stance is chosen from the located can and the table's known near edge ([OP] VI: the table's place is
+known): the can as near the body as the arm likes it, but the feet no nearer the edge than the hands and the
+hips allow; a can far in from the edge is taken farther out in front. The free (left) arm is tucked back
+before the walk, so that it hangs behind the table's edge whatever the stance and the heading."""
 
 from __future__ import annotations
 
@@ -10,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from behaviors.approach_table import TABLE_NEAR_EDGE_X_M
 from behaviors.base import BehaviorParams, Context
 from behaviors.composite import Composite, Plan, StepFailed, Wait
 from behaviors.grasp import Grasp, GraspParams
@@ -28,15 +34,33 @@ CAN_MASS_KG = 0.33  # a full 300 ml can (robot/hrp2/README.md)
 #: The can where the right hand takes it best, relative to the support polygon's centre (the feet frame F) [m]:
 #: forward of the toes, on the right shoulder's line, at the height of the 0.70 m table (the grasp check).
 GRASP_CAN_FEET_M = (0.43, -0.22)
+#: The feet centre stays this far from the table's near edge [m]: nearer, the open right hand rising from
+#: where it hangs (0.11 m ahead of the feet) met the edge from below (measured: feet 0.157 m from the edge,
+#: the can 0.29 m in, the reach stopped 148 mm short), and the hips (0.70 m high, the table top's height)
+#: come close to it. Measured clear: 0.28 m (the can 0.15 m in).
+FEET_TO_EDGE_MIN_M = 0.22
+#: The farthest forward the right hand takes the can (F x) [m], for a can far in from the edge.
+GRASP_CAN_X_MAX_M = 0.52
 #: The reachable box around it [m]: closer or farther, the 30 deg hand would meet the table or its limits.
-REACH_BOX_M = ((0.38, 0.50), (-0.28, -0.16))
+REACH_BOX_M = ((0.38, GRASP_CAN_X_MAX_M + 0.03), (-0.28, -0.16))
 #: Located from farther than this [m], the can is located again from LOOK_BACK_M behind the grasping stance
 #: (the head cannot pitch down 57 deg to see it from the stance, and a long walk adds odometry error).
 RELOCATE_FROM_M = 1.3
 LOOK_BACK_M = 0.5
-#: The open hand first comes up here (F) [m], keeping its orientation: straight from where it hangs (0.54 m
-#: high, below the table top) to the pre-grasp, its jaw caught the table's edge.
+#: At the stance the open right hand first rises where it hangs (0.54 m high, below the table top, 0.11 m
+#: ahead of the feet) to READY, keeping its orientation, then goes forward over the table to VIA: straight
+#: from where it hangs to the pre-grasp its jaw caught the table's edge. (Raised before the walk instead,
+#: the wrist met the chest swaying with the gait: the hand is held in the feet frame.)
+READY_FEET_M = (0.12, -0.33, 0.78)
 VIA_FEET_M = (0.30, -0.30, 0.80)
+#: The free left hand is tucked back beside the hip (F) [m] before any walk: hanging 0.11 m ahead of the
+#: feet at the table top's height, 0.36 m out to the side, it met the table's edge reaching from a close
+#: stance, and on the walk to the box along the table (facing along the edge, the left hand on the table's
+#: side) it caught the edge and the robot fell (two trials of seed 1, t = 99 s and 104 s).
+LHAND_TUCK_FEET_M = (-0.02, 0.35, 0.60)
+#: The wrist force is read this long after the hand stops [s], averaged over WRIST_MEAN_S [s].
+WRIST_SETTLE_S = 0.3
+WRIST_MEAN_S = 0.2
 #: After the check the robot steps back this far [m] with the can held: at the grasping stance the feet
 #: centre is 0.28 m from the table's edge, and turning there the left palm met the table top (the robot fell).
 #: 0.3 m cleared the turn, but walking on to the box along the table (the left wrist 0.33 m beside BODY, at
@@ -55,6 +79,9 @@ class TakeCanParams(BehaviorParams):
     slip_deg: float = field(default=3.0, metadata={"unit": "deg", "min": 0.5, "max": 20.0,
                                                    "doc": "the jaw closing further than this after the grasp "
                                                           "means the can slipped"})
+    table_edge_x_m: float = field(default=TABLE_NEAR_EDGE_X_M, metadata={
+        "unit": "m", "min": -20.0, "max": 20.0,
+        "doc": "the table's near edge, world x (its known place; the near side faces -x)"})
 
 
 def can_in_feet(view, can_world) -> np.ndarray:
@@ -62,39 +89,60 @@ def can_in_feet(view, can_world) -> np.ndarray:
     return rot_z(view.feet_yaw_rad).T @ d
 
 
-def stance_for(can_world, yaw_rad: float, back_m: float = 0.0) -> tuple[float, float]:
-    """The feet frame's place (world x, y) that puts the can at GRASP_CAN_FEET_M (+ back_m further ahead)."""
-    offset = rot_z(yaw_rad) @ np.array([GRASP_CAN_FEET_M[0] + back_m, GRASP_CAN_FEET_M[1], 0.0])
+def grasp_can_x_feet(can_from_edge_m: float) -> float:
+    """How far ahead of the feet centre (F x) [m] to take a can `can_from_edge_m` in from the table's edge:
+    GRASP_CAN_FEET_M's x, or farther out so the feet stay FEET_TO_EDGE_MIN_M from the edge, at most
+    GRASP_CAN_X_MAX_M."""
+    return float(min(max(GRASP_CAN_FEET_M[0], can_from_edge_m + FEET_TO_EDGE_MIN_M), GRASP_CAN_X_MAX_M))
+
+
+def stance_for(can_world, yaw_rad: float, x_feet_m: float = GRASP_CAN_FEET_M[0],
+               back_m: float = 0.0) -> tuple[float, float]:
+    """The feet frame's place (world x, y) that puts the can at (x_feet_m + back_m, GRASP_CAN_FEET_M's y) in F."""
+    offset = rot_z(yaw_rad) @ np.array([x_feet_m + back_m, GRASP_CAN_FEET_M[1], 0.0])
     return float(can_world[0] - offset[0]), float(can_world[1] - offset[1])
 
 
-def within_reach(can_feet) -> bool:
+def within_reach(can_feet, can_from_edge_m: float | None = None) -> bool:
+    """The can inside the reach box, and (given how far in from the table's edge it is) the feet no nearer the
+    edge than FEET_TO_EDGE_MIN_M (2 cm of walking tolerance)."""
     (x0, x1), (y0, y1) = REACH_BOX_M
-    return x0 <= can_feet[0] <= x1 and y0 <= can_feet[1] <= y1
+    in_box = x0 <= can_feet[0] <= x1 and y0 <= can_feet[1] <= y1
+    return in_box and (can_from_edge_m is None or can_feet[0] - can_from_edge_m >= FEET_TO_EDGE_MIN_M - 0.02)
 
 
 class TakeCan(Composite):
     name = "take_can"
     Params = TakeCanParams
     summary = "Locate the can if needed, walk within reach, grasp it with the right hand and lift it"
-    phases = ("locate", "walk", "relocate", "walk", "open", "pre-grasp", "grasp", "close", "lift", "check",
-              "step back")
+    phases = ("locate", "tuck", "walk", "relocate", "walk", "open", "pre-grasp", "grasp", "close", "lift",
+              "check", "step back")
     remaining_estimate_s = 40.0
 
     def points(self) -> tuple[str, ...]:
-        return ("head", "walk", "rhand")
+        return ("head", "walk", "rhand", "lhand")
 
     def resources(self) -> tuple[str, ...]:
         return (*self.points(), "rhand.gripper")
 
-    def _reach(self, p_feet, R_feet=None) -> Reach:
+    def _reach(self, p_feet, R_feet=None, hand: str = "rhand") -> Reach:
         kw = {}
         if R_feet is not None:
             roll, pitch, yaw = np.degrees(matrix_to_rpy(R_feet))
             kw = {"keep_orientation": False, "roll_deg": float(roll), "pitch_deg": float(pitch),
                   "yaw_deg": float(yaw)}
-        return Reach(ReachParams(hand="rhand", x_m=float(p_feet[0]), y_m=float(p_feet[1]), z_m=float(p_feet[2]),
+        return Reach(ReachParams(hand=hand, x_m=float(p_feet[0]), y_m=float(p_feet[1]), z_m=float(p_feet[2]),
                                  speed_m_s=self.params.speed_m_s, tolerance_m=0.01, tolerance_deg=3.0, **kw))
+
+    def _mean_wrist_force(self, commands):
+        """(3,) the right wrist's force [N, sensor frame] averaged over WRIST_MEAN_S after WRIST_SETTLE_S (a plan
+        step: `f = yield from ...`): one tick's reading swings by newtons with the arm's servo vibration."""
+        yield Wait(WRIST_SETTLE_S)
+        samples = []
+        for _ in range(max(1, round(WRIST_MEAN_S / self.ctx.dt_s))):
+            yield Wait(self.ctx.dt_s)
+            samples.append(np.asarray(commands.wrench("rhsensor")[:3], dtype=float))
+        return np.mean(samples, axis=0)
 
     def _locate_near(self, can_world) -> LocateCan:
         return LocateCan(LocateCan.Params(x_m=float(can_world[0]), y_m=float(can_world[1]),
@@ -109,27 +157,40 @@ class TakeCan(Composite):
             self.require((yield LocateCan()))
             can = commands.recalled("can")
         can_world = np.array(can["position_m"])
+        self.set_phase("tuck")
+        self.require((yield self._reach(np.array(LHAND_TUCK_FEET_M), hand="lhand")))
         view = self.view
         yaw = view.feet_yaw_rad
         can_f = can_in_feet(view, can_world)
         self.result["can_feet_m"] = [round(float(v), 4) for v in can_f]
-        if not within_reach(can_f):
+        edge_x_m = p.table_edge_x_m
+        in_from_edge_m = float(can_world[0]) - edge_x_m
+        x_grasp = grasp_can_x_feet(in_from_edge_m)
+        self.result["grasp_can_x_feet_m"] = round(x_grasp, 4)
+        if not within_reach(can_f, in_from_edge_m):
             if can.get("from_m", 0.0) > RELOCATE_FROM_M:
                 self.set_phase("walk")
-                x, y = stance_for(can_world, yaw, LOOK_BACK_M)
+                x, y = stance_for(can_world, yaw, x_grasp, LOOK_BACK_M)
                 self.require((yield WalkTo(WalkToParams(x_m=x, y_m=y, theta_deg=math.degrees(yaw)))))
                 self.set_phase("relocate")
                 self.require((yield self._locate_near(can_world)))
-                can_world = np.array(commands.recalled("can")["position_m"])
+                relocated = np.array(commands.recalled("can")["position_m"])
+                # the can has not moved: where it is seen now against where it was seen from the start is the
+                # walk's odometry drift, and the table's known edge drifts with it in the odometry frame (55 mm
+                # after a 1.8 m walk: the feet ended 0.17 m from the edge, not 0.22, and the hand met it)
+                edge_x_m += float(relocated[0] - can_world[0])
+                can_world = relocated
+                in_from_edge_m = float(can_world[0]) - edge_x_m
+                x_grasp = grasp_can_x_feet(in_from_edge_m)
             self.set_phase("walk")
-            x, y = stance_for(can_world, yaw)
+            x, y = stance_for(can_world, yaw, x_grasp)
             self.require((yield WalkTo(WalkToParams(x_m=x, y_m=y, theta_deg=math.degrees(yaw),
                                                     tolerance_m=0.02))))
             yield Wait(0.5)
         view = self.view
         can_f = can_in_feet(view, can_world)
         self.result["can_feet_m"] = [round(float(v), 4) for v in can_f]
-        if not within_reach(can_f):
+        if not within_reach(can_f, in_from_edge_m):
             raise StepFailed(f"the can is at ({can_f[0]:.3f}, {can_f[1]:.3f}) m of the feet after the walk, "
                              f"outside the reach box {REACH_BOX_M}")
         R = grasp_rotation_feet()
@@ -138,11 +199,15 @@ class TakeCan(Composite):
         self.set_phase("open")
         self.require((yield Release(ReleaseParams(hand="rhand", time_s=0.5))))
         self.set_phase("pre-grasp")
+        self.require((yield self._reach(np.array(READY_FEET_M))))
         self.require((yield self._reach(np.array(VIA_FEET_M))))
         self.require((yield self._reach(pre_f, R)))
+        # the wrist's reference while the open hand is still, in the grasp orientation, touching nothing (on the
+        # can, the closing approach pushes it: 13 mm and up to 15 N measured, a reference taken there read a
+        # held can as 0.40 N once)
+        unloaded_f = yield from self._mean_wrist_force(commands)
         self.set_phase("grasp")
         self.require((yield self._reach(grasp_f, R)))
-        unloaded_n = float(np.linalg.norm(commands.wrench("rhsensor")[:3]))
         self.set_phase("close")
         grasp = yield Grasp(GraspParams(hand="rhand", force_n=p.force_n))
         if not grasp.outcome[0]:
@@ -150,9 +215,8 @@ class TakeCan(Composite):
         jaw_grasped = commands.joint(gripper_joint("rhand")).q_meas_rad
         self.set_phase("lift")
         self.require((yield self._reach(grasp_f + np.array([0.0, 0.0, p.lift_m]))))
-        yield Wait(0.3)
         self.set_phase("check")
-        load_n = float(np.linalg.norm(commands.wrench("rhsensor")[:3])) - unloaded_n
+        load_n = float(np.linalg.norm((yield from self._mean_wrist_force(commands)) - unloaded_f))
         jaw = commands.joint(gripper_joint("rhand"))
         closed_more_deg = math.degrees(jaw.q_meas_rad - jaw_grasped)
         weight_n = CAN_MASS_KG * GRAVITY_M_S2

@@ -82,7 +82,9 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
     hole = _hole_true_m(box_xy)
     look_table = {"x_m": edge_x + 0.15, "y_m": 0.0, "z_m": gen.EXPO_TABLE_SIZE_M[2] + 0.05}
     look_box = {"x_m": box_xy[0], "y_m": box_xy[1], "z_m": gen.TRASH_BOX_OUTER_M[2]}
-    steps = [("locate_can", look_table), ("take_can", {}), ("locate_trash_box", look_box), ("throw_can", {})]
+    # the table's place is known ([OP] VI): take_can keeps the feet clear of its near edge
+    steps = [("locate_can", look_table), ("take_can", {"table_edge_x_m": edge_x}), ("locate_trash_box", look_box),
+             ("throw_can", {})]
     errors: dict[str, float | None] = {"locate": None, "relocate": None, "release": None, "estimate": None}
     message, fallen = "", False
     seen_relocate = False

@@ -158,6 +158,15 @@ def test_grasp_on_an_object_squeezes_with_the_set_force_below_the_14_newton_limi
     assert status.result["force_n"] == pytest.approx(8.0, abs=1e-6)
 
 
+def test_grasp_at_the_14_newton_limit_commands_the_jaw_shut_so_the_torque_cap_keeps_the_force():
+    h = harness()
+    _gripper(h, blocked_deg=-20.0)
+    status = h.run_until_done(h.runner.run(make("grasp", {"force_n": 14.0})))
+    assert status.state == "succeeded" and status.result["holding"] is True
+    assert h.commands.q_cmd[GRIP] == pytest.approx(h.commands.joint(GRIP).upper_rad)
+    assert status.result["force_n"] == pytest.approx(14.0, abs=1e-6)
+
+
 def test_grasp_on_nothing_fails_unless_no_object_is_required():
     h = harness()
     _gripper(h)

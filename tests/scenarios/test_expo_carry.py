@@ -55,7 +55,7 @@ def test_a_grasped_can_slips_less_than_5_mm_through_a_1_4_m_walk():
     look = {"x_m": CAN_XY_M[0], "y_m": CAN_XY_M[1], "z_m": 0.75}
     status = run_to_end(robot, service, service.run_behavior("locate_can", look))
     assert status.state == "succeeded", status.message
-    status = run_to_end(robot, service, service.run_behavior("take_can", {}))
+    status = run_to_end(robot, service, service.run_behavior("take_can", {"table_edge_x_m": EDGE_X_M}))
     assert status.state == "succeeded", status.message
     ref = can_in_hand(plant)
     slips = []
