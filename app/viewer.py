@@ -221,6 +221,7 @@ class Viewer:
         self._model_key: tuple[str, ...] = ()
         self._model: mujoco.MjModel | None = None
         self._cp_history = CpErrorHistory()
+        self._recognition_markers: dict[str, tuple] = {}  # object -> (sphere, label, position shown)
         self._plot_updates = 0
         self._build_markers()
         self._build_scene()
@@ -403,6 +404,33 @@ class Viewer:
             origin, yaw = frame
             self._place(handle, origin + yaw_rotation(yaw) @ np.asarray(target[:3], dtype=float))
 
+    def _update_recognitions(self, recognitions) -> None:
+        """A marker and a label at each located object's position (the operator's correction once given)."""
+        scene = self.server.scene
+        for name in list(self._recognition_markers):
+            if name not in recognitions:  # a reset forgot it
+                for handle in reversed(self._recognition_markers.pop(name)[:2]):
+                    handle.remove()
+        for name, rec in recognitions.items():
+            pos = tuple(float(v) for v in rec.get("position_m", ()))
+            if len(pos) != 3 or not all(math.isfinite(v) for v in pos):
+                continue
+            status = rec.get("status", "estimated")
+            shown = self._recognition_markers.get(name)
+            if shown is not None and shown[2] == (pos, status):
+                continue
+            if shown is not None:
+                for handle in reversed(shown[:2]):
+                    handle.remove()
+            color = (40, 170, 60) if status != "estimated" else (255, 200, 0)
+            sphere = scene.add_icosphere(f"/recognitions/{name}", radius=0.04, color=color, subdivisions=2,
+                                         opacity=0.7, position=pos, cast_shadow=False, receive_shadow=False)
+            sigma = rec.get("sigma_m") or [0.0, 0.0]
+            label = scene.add_label(f"/recognitions/{name}/label",
+                                    f"{name} ({status}, sigma {1e3 * math.hypot(*sigma[:2]):.0f} mm)",
+                                    position=(0.0, 0.0, 0.1))
+            self._recognition_markers[name] = (sphere, label, (pos, status))
+
     # ---- GUI ----------------------------------------------------------------------------------
     def _build_gui(self) -> None:
         gui = self.server.gui
@@ -502,6 +530,7 @@ class Viewer:
                 n += 1
                 if n % max(1, int(self.rate_hz / 5)) == 0:
                     self._update_gui(snap)
+                    self._update_recognitions(self.service.recognitions())
                 if n % max(1, round(self.rate_hz / PLOT_RATE_HZ)) == 0:
                     self._update_plot(snap)
             except ServiceError:  # the robot process is gone or restarting: try again shortly

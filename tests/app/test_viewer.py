@@ -170,3 +170,22 @@ def test_the_websocket_accepts_only_the_viewers_own_origins(viewer, origin, acce
         assert exc.response.status_code == 403
         ok = False
     assert ok is accepted
+
+
+def test_a_located_object_gets_a_marker_at_its_position_and_a_correction_moves_it(viewer, robot):
+    service = viewer.service
+    robot.host.recognitions["can"] = {"object": "can", "position_m": [1.2, 0.1, 0.75], "sigma_m": [0.003, 0.004, 0.0]}
+    robot.step()
+    viewer._update_recognitions(service.recognitions())
+    sphere, label, _ = viewer._recognition_markers["can"]
+    np.testing.assert_allclose(sphere.position, [1.2, 0.1, 0.75])
+    assert sphere.color == (255, 200, 0)  # the robot's estimate, not confirmed yet
+    service.confirm_recognition("can", [1.25, 0.1, 0.75])
+    robot.step()
+    viewer._update_recognitions(service.recognitions())
+    sphere, label, _ = viewer._recognition_markers["can"]
+    np.testing.assert_allclose(sphere.position, [1.25, 0.1, 0.75])
+    assert sphere.color == (40, 170, 60)
+    robot.reset()
+    viewer._update_recognitions(service.recognitions())
+    assert "can" not in viewer._recognition_markers
