@@ -18,7 +18,12 @@ import trimesh
 import viser
 
 from app.service import OperatorService, ServiceError
-from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
+from controller.balance.capture_point import (
+    HRP2_LEFT_SOLE,
+    HRP2_RIGHT_SOLE,
+    distance_to_polygon_edge,
+    support_polygon,
+)
 from controller.operation.targets import feet_frame, yaw_rotation
 from robot.plant import scene_path
 
@@ -92,8 +97,25 @@ def footstep_rectangles(steps, z: float) -> np.ndarray:
     return np.concatenate(segs) if segs else np.zeros((0, 2, 3))
 
 
+def support_edge_mm(snap) -> float | None:
+    """Distance [mm] from the reference capture point to the edge of the support polygon of the soles in contact
+    (the planned ones): the error at which the actual capture point would leave the support, in the worst
+    direction. None without a gait reference or a Stabilizer."""
+    gait = getattr(getattr(snap, "reference", None), "gait", None)
+    st = snap.layers.get("st")
+    if gait is None or st is None or getattr(st, "cp_ref", None) is None:
+        return None
+    feet = [((p[0], p[1], _yaw(R)), rect) for p, R, rect, on in (
+        (gait.p_rsole_world, gait.R_rsole_world, HRP2_RIGHT_SOLE, gait.contact[0]),
+        (gait.p_lsole_world, gait.R_lsole_world, HRP2_LEFT_SOLE, gait.contact[1])) if on]
+    if not feet:
+        return None
+    return 1e3 * max(0.0, distance_to_polygon_edge(st.cp_ref, support_polygon(feet)))
+
+
 class CpErrorHistory:
-    """Ring buffer of (sim time [s], CP error x, y [mm], threshold [mm], flag) over the last `window_s`."""
+    """Ring buffer of (sim time [s], CP error x, y [mm], threshold [mm], flag, support edge [mm]) over the last
+    `window_s`."""
 
     def __init__(self, window_s: float = PLOT_WINDOW_S, maxlen: int = 2000) -> None:
         self.window_s = float(window_s)
@@ -113,8 +135,11 @@ class CpErrorHistory:
         if self._rows and t == self._rows[-1][0]:
             return False
         ex, ey = st.cp_error
+        edge = support_edge_mm(snap)
+        if edge is None:  # no gait reference: the last known edge, else the plot's range
+            edge = self._rows[-1][5] if self._rows else PLOT_RANGE_MM
         self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m),
-                           1.0 if st.emergency else 0.0))
+                           1.0 if st.emergency else 0.0, min(float(edge), PLOT_RANGE_MM)))
         while self._rows and self._rows[0][0] < t - self.window_s:
             self._rows.popleft()
         return True
@@ -123,18 +148,20 @@ class CpErrorHistory:
         """The newest row: (time [s], err x, err y, threshold [mm], flag), or None."""
         if not self._rows:
             return None
-        t, ex, ey, thr, flag = self._rows[-1]
+        t, ex, ey, thr, flag, _ = self._rows[-1]
         return t, ex, ey, thr, bool(flag)
 
     def data(self) -> tuple[np.ndarray, ...]:
-        """(time, err x, err y, +threshold, -threshold, flag band) arrays for the uPlot; the flag band is at the
-        top of the fixed range while the CP flag is raised and at its bottom otherwise (filled down: shaded)."""
+        """(time, err x, err y, +threshold, -threshold, +support edge, -support edge, flag band) arrays for the
+        uPlot; the flag band is at the top of the fixed range while the CP flag is raised and at its bottom
+        otherwise (filled down: shaded)."""
         if not self._rows:
             z = np.zeros(1)
-            return z, z, z, z, z, np.full(1, -PLOT_RANGE_MM)
+            return z, z, z, z, z, z, z, np.full(1, -PLOT_RANGE_MM)
         a = np.asarray(self._rows, dtype=float)
         band = np.where(a[:, 4] > 0.5, PLOT_RANGE_MM, -PLOT_RANGE_MM)
-        return a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3], band
+        return (a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3], a[:, 5].copy(), -a[:, 5],
+                band)
 
 
 def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
@@ -453,10 +480,12 @@ class Viewer:
              {"label": "CP err y [mm]", "stroke": "#3c78d8", "width": 1.5},
              {"label": "+threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
              {"label": "-threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
+             {"label": "+support edge", "stroke": "#b8860b", "width": 1, "dash": (2.0, 3.0)},
+             {"label": "-support edge", "stroke": "#b8860b", "width": 1, "dash": (2.0, 3.0)},
              {"label": "CP flag", "stroke": "rgba(200,16,46,0)", "width": 0, "fill": "rgba(200,16,46,0.18)",
               "fillTo": -PLOT_RANGE_MM,
               "points": {"show": False}}),
-            title="capture-point error [mm] (shaded: CP flag raised)",
+            title="capture-point error [mm] (dashed grey: threshold; dotted: support edge; shaded: CP flag raised)",
             scales={"x": {"time": False}, "y": {"auto": False, "range": (-PLOT_RANGE_MM, PLOT_RANGE_MM)}},
             legend={"show": True, "live": True},
             aspect=1.6,
