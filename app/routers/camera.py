@@ -26,9 +26,10 @@ from app.service.verbs import MAX_POSITION_M
 log = logging.getLogger(__name__)
 router = APIRouter(tags=["camera"])
 
-STREAM_RATE_HZ = (1.0, VIEW_RATE_HZ)  # [Hz] the robot renders at most VIEW_RATE_HZ
+STREAM_RATE_HZ = (1.0, VIEW_RATE_HZ)  # [Hz] the feed renders at most VIEW_RATE_HZ
 DEFAULT_STREAM_RATE_HZ = 10.0
 UNAVAILABLE_RETRY_S = 0.5
+POLL_S = 0.01  # [s] how often a stream looks for a new frame
 Coordinate = Annotated[float, Field(ge=-MAX_POSITION_M, le=MAX_POSITION_M)]
 ObjectName = Annotated[str, Path(max_length=64, pattern=r"^[a-z_]+$",
                                  description="the recognised object, e.g. can, trash_box")]
@@ -85,8 +86,9 @@ async def camera_stream(ws: WebSocket) -> None:
     """`?rate_hz=N` (1-15, default 10): each new frame of the wide head camera as two messages, a JSON text
     {"ok": true, "camera", "seq", "time_s", "width", "height", "recognitions": [...]} (each recognition with its
     image box "box_px" [u0, v0, u1, v1] in this view, null when out of view) and then the JPEG as a binary
-    message. The robot renders while at least one client watches. `?client=<id>` keeps its operator lock.
-    Client messages: {"rate_hz": N}; an invalid one is answered with an error naming the field."""
+    message. The console renders while at least one client watches, at the highest rate asked. `?client=<id>`
+    keeps its operator lock. Client messages: {"rate_hz": N}; an invalid one is answered with an error naming
+    the field."""
     lock = get_lock(ws)
     client, bad_client = ws_client(ws)
     await ws.accept()
@@ -126,26 +128,25 @@ async def camera_stream(ws: WebSocket) -> None:
     reading = asyncio.create_task(reader())
     try:
         last = None
-        due = time.monotonic()
+        sent_at = -math.inf
         while not reading.done():
             try:
                 service = get_service(ws)
                 service.published()
-                frame = service.latest_camera_frame()
+                frame = service.latest_camera_frame(1.0 / period[0])
             except ServiceError as exc:
                 await send_text(_error(str(exc)))
                 await asyncio.wait({reading}, timeout=UNAVAILABLE_RETRY_S)
                 continue
-            if frame is not None and frame is not last:
-                last = frame
+            now = time.monotonic()
+            # a new frame once the period is (nearly) over: looked for every POLL_S, so that a stream at the feed's
+            # own rate does not alias with it and skip frames
+            if frame is not None and frame is not last and now - sent_at >= 0.9 * period[0]:
+                last, sent_at = frame, now
                 async with send_lock:
                     await ws.send_text(json.dumps({"ok": True, **frame.meta()}))
                     await ws.send_bytes(frame.jpeg)
-            due += period[0]
-            now = time.monotonic()
-            if due < now - period[0]:
-                due = now
-            await asyncio.wait({reading}, timeout=max(0.0, due - now))
+            await asyncio.wait({reading}, timeout=POLL_S)
     except Exception as exc:  # noqa: BLE001 - the client left while we were sending
         log.debug("camera stream ended: %s", exc)
     finally:

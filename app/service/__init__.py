@@ -301,10 +301,10 @@ class OperatorService:
                                   + (f": {feed.error}" if feed.error else ""))
             time.sleep(0.01)
 
-    def latest_camera_frame(self):
-        """The newest frame, however old, or None (renews the watch; never waits)."""
+    def latest_camera_frame(self, rate_hz: float = 10.0):
+        """The newest frame, however old, or None (renews the watch at `rate_hz`; never waits)."""
         feed = self.camera
-        feed.watch()
+        feed.watch(rate_hz=rate_hz)
         return feed.latest
 
     def recognitions(self) -> dict[str, dict]:

@@ -29,6 +29,7 @@ log = logging.getLogger(__name__)
 VIEW_CAMERA = "wide"  # 93.6 x 70.8 deg (robot/generate.py CAMERAS)
 VIEW_SIZE_PX = (320, 240)  # small: one rendering and encoding costs a few ms of the machine's time
 VIEW_RATE_HZ = 15.0  # [Hz] of wall time, at most, while watched
+DEFAULT_RATE_HZ = 10.0  # [Hz] unless a watcher asks for more
 LEASE_S = 2.0  # [s] of wall time a watch lasts unless renewed
 JPEG_QUALITY = 70
 #: Half extents [m] of the box drawn around a recognised object (its model, centred on the estimate).
@@ -119,7 +120,8 @@ class CameraFeed:
         """`source()`: the robot's latest app.service.host.Published (raises ServiceError while it has none)."""
         self.camera = camera
         self.size_px = (int(size_px[0]), int(size_px[1]))
-        self.period_s = 1.0 / float(rate_hz)
+        self.max_rate_hz = float(rate_hz)
+        self._rates: dict[float, float] = {}  # rate a watcher asked for [Hz] -> until when (monotonic) [s]
         self._source = source
         self._until = 0.0
         self._rig = None
@@ -137,9 +139,17 @@ class CameraFeed:
     def __repr__(self) -> str:
         return f"CameraFeed({self.camera!r}, {self.size_px[0]}x{self.size_px[1]} px, frames={self.frames})"
 
-    def watch(self, seconds: float = LEASE_S) -> None:
-        """Someone watches for `seconds` more (wall time)."""
-        self._until = max(self._until, time.monotonic() + float(seconds))
+    def watch(self, seconds: float = LEASE_S, rate_hz: float = DEFAULT_RATE_HZ) -> None:
+        """Someone watches for `seconds` more (wall time), `rate_hz` frames a second (at most max_rate_hz): the
+        feed renders at the highest rate asked for by a watcher whose lease runs."""
+        now = time.monotonic()
+        until = now + float(seconds)
+        self._until = max(self._until, until)
+        rate = min(float(rate_hz), self.max_rate_hz)
+        with self._lock:
+            self._rates[rate] = max(self._rates.get(rate, 0.0), until)
+            for r in [r for r, u in self._rates.items() if u <= now]:
+                del self._rates[r]
         with self._lock:
             if self._closed:
                 return
@@ -151,6 +161,13 @@ class CameraFeed:
     @property
     def watched(self) -> bool:
         return time.monotonic() < self._until
+
+    @property
+    def period_s(self) -> float:
+        """[s] between two frames: the highest rate a watcher asked for."""
+        now = time.monotonic()
+        rates = [r for r, u in list(self._rates.items()) if u > now]
+        return 1.0 / (max(rates) if rates else DEFAULT_RATE_HZ)
 
     def _run(self) -> None:
         due = time.monotonic()

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import io
 import json
+import time
 
 import numpy as np
 import pytest
@@ -78,13 +79,12 @@ def test_the_view_follows_the_robot_and_only_renders_while_watched(expo, expo_se
     first = expo_client.get("/api/camera/wide.jpg")
     t0 = float(first.headers["x-frame-time"])
     expo.run_for(0.2)
+    time.sleep(0.6)  # the first frame is older than the 0.5 s a GET may answer with
     second = expo_client.get("/api/camera/wide.jpg")
     assert float(second.headers["x-frame-time"]) >= t0 + 0.2 - 1e-9
     assert int(second.headers["x-frame-seq"]) > int(first.headers["x-frame-seq"])
     feed = expo_service.camera
     feed._until = 0.0  # the lease ran out (nobody asked for 2 s)
-    import time
-
     time.sleep(0.2)
     n = feed.frames
     expo.run_for(0.2)  # new publications, nobody watching
