@@ -146,7 +146,8 @@ async def camera_stream(ws: WebSocket) -> None:
                 async with send_lock:
                     await ws.send_text(json.dumps({"ok": True, **frame.meta()}))
                     await ws.send_bytes(frame.jpeg)
-            await asyncio.wait({reading}, timeout=POLL_S)
+            # nothing may be sent before 0.9 period after the last frame: sleep until then, then look every POLL_S
+            await asyncio.wait({reading}, timeout=max(POLL_S, sent_at + 0.9 * period[0] - time.monotonic()))
     except Exception as exc:  # noqa: BLE001 - the client left while we were sending
         log.debug("camera stream ended: %s", exc)
     finally:
