@@ -74,12 +74,12 @@ def run_viewers_bench(duration_s: float = 300.0, viewers: int = VIEWERS, scene: 
 
     console = Console("--speed", "1.0", "--scene", scene)
     stop = threading.Event()
+    threads: list[threading.Thread] = []
     try:
         time.sleep(WARMUP_S)
         baseline = _summary(_windows(console, BASELINE_S))
         counts = [{"camera": {"frames": 0, "bytes": 0, "texts": 0, "errors": []},
                    "telemetry": {"frames": 0, "bytes": 0, "texts": 0, "errors": []}} for _ in range(viewers)]
-        threads = []
         for k in range(viewers):
             client = f"bench-viewer-{k}"
             for kind, path in (("camera", f"/ws/camera?rate_hz={CAMERA_HZ:g}&client={client}"),
@@ -96,9 +96,9 @@ def run_viewers_bench(duration_s: float = 300.0, viewers: int = VIEWERS, scene: 
                for k, c in enumerate(counts)]
     finally:
         stop.set()
+        for th in threads:  # the clients close their sockets before the console goes
+            th.join(timeout=5.0)
         console.stop()
-    for th in threads:
-        th.join(timeout=5.0)
     camera_hz = [round(f / elapsed, 2) for f, _ in got]
     telemetry_hz = [round(t / elapsed, 2) for _, t in got]
     errors = [e for c in counts for kind in c.values() for e in kind["errors"]][:10]
