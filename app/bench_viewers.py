@@ -68,8 +68,10 @@ def _summary(windows: list[dict]) -> dict[str, Any]:
             "speed_min": min((w["speed_min"] for w in windows if w.get("speed_min") is not None), default=None)}
 
 
-def run_viewers_bench(duration_s: float = 300.0, viewers: int = VIEWERS, scene: str = "expo") -> dict[str, Any]:
-    """`viewers` clients watch for `duration_s` of wall time (= simulated time at real-time speed)."""
+def run_viewers_bench(duration_s: float = 300.0, viewers: int = VIEWERS, scene: str = "expo",
+                      baseline_s: float = BASELINE_S) -> dict[str, Any]:
+    """`viewers` clients watch for `duration_s` of wall time (= simulated time at real-time speed), after
+    `baseline_s` unwatched."""
     from app.console_process import Console
 
     console = Console("--speed", "1.0", "--scene", scene)
@@ -77,7 +79,7 @@ def run_viewers_bench(duration_s: float = 300.0, viewers: int = VIEWERS, scene: 
     threads: list[threading.Thread] = []
     try:
         time.sleep(WARMUP_S)
-        baseline = _summary(_windows(console, BASELINE_S))
+        baseline = _summary(_windows(console, baseline_s))
         counts = [{"camera": {"frames": 0, "bytes": 0, "texts": 0, "errors": []},
                    "telemetry": {"frames": 0, "bytes": 0, "texts": 0, "errors": []}} for _ in range(viewers)]
         for k in range(viewers):
