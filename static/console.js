@@ -814,6 +814,10 @@ function drawRecognitions(meta) {
     p.pop.className = `rec-pop ${status}`;
     const key = JSON.stringify([r.position_m, status, r.time_s]);
     if (key !== p.key && !p.editing) {
+      if (p.key === null || JSON.parse(p.key)[2] !== r.time_s) {  // a new recognition: into the history too
+        log(`recognition: ${r.name} at ${xyz(r.position_m)} m (${status}); confirm or correct it over the camera view`,
+            "other");
+      }
       p.key = key;
       renderPopup(p, r, status);
     }
