@@ -760,9 +760,12 @@ $("lock-btn").addEventListener("click", async () => {
 const CAMERA_HZ = 12;  // asked of the stream: a little over the 10 Hz the view must keep
 window.hrp2Camera = {frames: 0, seq: null, meta: null};
 const cameraTimes = [];
+let cameraWs = null;
 function startCamera() {
+  if (cameraWs || document.hidden) return;  // a hidden page watches nothing: the console renders for no one
   let ws;
   try { ws = new WebSocket(wsUrl(`/ws/camera?rate_hz=${CAMERA_HZ}`)); } catch (e) { return; }
+  cameraWs = ws;
   ws.binaryType = "blob";
   let meta = null;
   ws.onmessage = (m) => {
@@ -789,8 +792,12 @@ function startCamera() {
       (meta ? `, t ${fmt(meta.time_s, 2)} s` : "");
     if (meta) drawRecognitions(meta);
   };
-  ws.onclose = () => setTimeout(startCamera, 1000);
+  ws.onclose = () => { if (cameraWs === ws) cameraWs = null; setTimeout(startCamera, 1000); };
 }
+document.addEventListener("visibilitychange", () => {
+  if (document.hidden && cameraWs) { const ws = cameraWs; cameraWs = null; ws.close(); }
+  else if (!document.hidden) startCamera();
+});
 
 const popups = new Map();  // object name -> {box, pop, key, editing}
 const xyz = (p) => `(${p.map((v) => fmt(v, 3)).join(", ")})`;
