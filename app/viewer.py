@@ -97,6 +97,17 @@ def footstep_rectangles(steps, z: float) -> np.ndarray:
     return np.concatenate(segs) if segs else np.zeros((0, 2, 3))
 
 
+def ray_at_height(origin, direction, z_m: float) -> np.ndarray | None:
+    """Where the ray origin + t direction (t > 0) crosses the horizontal plane z = z_m (world [m]); None when it
+    runs parallel to it or away from it."""
+    o = np.asarray(origin, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    if abs(d[2]) < 1e-9:
+        return None
+    t = (float(z_m) - o[2]) / d[2]
+    return None if t <= 0 else o + t * d
+
+
 def support_edge_mm(snap) -> float | None:
     """Distance [mm] from the reference capture point to the edge of the support polygon of the soles in contact
     (the planned ones): the error at which the actual capture point would leave the support, in the worst
@@ -491,6 +502,21 @@ class Viewer:
             aspect=1.6,
         )
         self._cp_values = gui.add_markdown(self._cp_legend())
+        # [OP] II: the operator corrects a recognition by clicking where the object is (at its estimated height)
+        self._correct_object = gui.add_dropdown("object", ("can", "trash_box"), initial_value="can")
+        self._correct_click = gui.add_button("Correct it: click where it is", hint="then click the object in the "
+                                             "3D view: its position becomes what later behaviours use")
+
+        @self._correct_click.on_click
+        def _(_event) -> None:
+            name = self._correct_object.value
+
+            @self.server.scene.on_pointer_event("click")
+            def _(event) -> None:
+                self.server.scene.remove_pointer_callback()
+                self._message.value = self.correct_by_ray(name, event.ray_origin, event.ray_direction)
+
+            self._message.value = f"click where the {name} is"
 
         @self._estop.on_click
         def _(_event) -> None:
@@ -499,6 +525,20 @@ class Viewer:
         @self._release.on_click
         def _(_event) -> None:
             self._command("e-stop released", self.service.release_estop)
+
+    def correct_by_ray(self, name: str, origin, direction) -> str:
+        """The recognition of `name` moved to where the clicked ray meets its estimated height; what it says."""
+        try:
+            rec = self.service.recognitions().get(name)
+            if rec is None:
+                return f"no recognition of {name} to correct (locate it first)"
+            p = ray_at_height(origin, direction, float(rec["position_m"][2]))
+            if p is None:
+                return f"that click does not reach the {name}'s height ({rec['position_m'][2]:.3f} m)"
+            self.service.confirm_recognition(name, [float(v) for v in p])
+            return f"{name} corrected to ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) m"
+        except ServiceError as exc:
+            return str(exc)
 
     def _command(self, done: str, fn) -> None:
         """Runs in viser's thread pool: a verb of the operator service, like an HTTP request."""

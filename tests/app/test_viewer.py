@@ -193,3 +193,18 @@ def test_a_located_object_gets_a_marker_at_its_position_and_a_correction_moves_i
     robot.reset()
     viewer._update_recognitions(service.recognitions())
     assert "can" not in viewer._recognition_markers
+
+
+def test_a_click_in_3d_corrects_a_recognition_at_its_estimated_height(viewer, robot):
+    from app.viewer import ray_at_height
+
+    assert ray_at_height((0, 0, 2.0), (0, 0, 1.0), 0.75) is None  # away from the plane
+    assert ray_at_height((0, 0, 2.0), (1.0, 0, 0), 0.75) is None  # parallel to it
+    np.testing.assert_allclose(ray_at_height((0, 0, 2.0), (1.0, 0.0, -1.0), 0.75), [1.25, 0.0, 0.75])
+    assert "no recognition of can" in viewer.correct_by_ray("can", (0, 0, 2), (0, 0, -1))
+    robot.host.recognitions["can"] = {"object": "can", "position_m": [2.15, 0.0, 0.75], "sigma_m": [0.002] * 3}
+    robot.step()
+    message = viewer.correct_by_ray("can", (1.0, 0.5, 2.0), (1.0, -0.5, -1.25))  # meets z 0.75 at (2.0, 0.0)
+    assert message == "can corrected to (2.000, 0.000, 0.750) m"
+    assert robot.host.recognitions["can"]["position_m"] == [2.0, 0.0, 0.75]
+    assert robot.host.recognitions["can"]["status"] == "corrected"
