@@ -873,6 +873,7 @@ class TimePlot {
   constructor(canvas, legend, series, unit, digits) {
     this.canvas = canvas; this.legend = legend; this.series = series; this.unit = unit; this.digits = digits;
     this.t = []; this.v = series.map(() => []);
+    this.draws = 0;  // redraws (the browser test reads it)
   }
   push(t, values) {
     if (this.t.length && t < this.t[this.t.length - 1]) { this.t = []; this.v = this.series.map(() => []); }  // a reset
@@ -885,6 +886,7 @@ class TimePlot {
   draw() {
     if (!this.dirty) return;
     this.dirty = false;
+    this.draws += 1;
     const c = this.canvas, g = c.getContext("2d"), W = c.width, H = c.height, pad = 4;
     g.clearRect(0, 0, W, H);
     if (this.t.length < 2) return;
