@@ -130,7 +130,8 @@ class CpErrorHistory:
 
     def __init__(self, window_s: float = PLOT_WINDOW_S, maxlen: int = 2000) -> None:
         self.window_s = float(window_s)
-        self._rows: deque[tuple[float, float, float, float, float]] = deque(maxlen=maxlen)
+        self._rows: deque[tuple[float, ...]] = deque(maxlen=maxlen)
+        self._lock = threading.Lock()  # the viewer's thread and a caller may add the same snapshot at once
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -141,18 +142,20 @@ class CpErrorHistory:
         if st is None:
             return False
         t = float(snap.time_s)
-        if self._rows and t < self._rows[-1][0]:
-            self._rows.clear()  # the simulation was reset
-        if self._rows and t == self._rows[-1][0]:
-            return False
         ex, ey = st.cp_error
         edge = support_edge_mm(snap)
-        if edge is None:  # no gait reference: the last known edge, else the plot's range
-            edge = self._rows[-1][5] if self._rows else PLOT_RANGE_MM
-        self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m),
-                           1.0 if st.emergency else 0.0, min(float(edge), PLOT_RANGE_MM)))
-        while self._rows and self._rows[0][0] < t - self.window_s:
-            self._rows.popleft()
+        with self._lock:
+            rows = self._rows
+            if rows and t < rows[-1][0]:
+                rows.clear()  # the simulation was reset
+            if rows and t == rows[-1][0]:
+                return False
+            if edge is None:  # no gait reference: the last known edge, else the plot's range
+                edge = rows[-1][5] if rows else PLOT_RANGE_MM
+            rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m),
+                         1.0 if st.emergency else 0.0, min(float(edge), PLOT_RANGE_MM)))
+            while rows and rows[0][0] < t - self.window_s:
+                rows.popleft()
         return True
 
     def latest(self) -> tuple[float, float, float, float, bool] | None:
@@ -166,10 +169,11 @@ class CpErrorHistory:
         """(time, err x, err y, +threshold, -threshold, +support edge, -support edge, flag band) arrays for the
         uPlot; the flag band is at the top of the fixed range while the CP flag is raised and at its bottom
         otherwise (filled down: shaded)."""
-        if not self._rows:
-            z = np.zeros(1)
-            return z, z, z, z, z, z, z, np.full(1, -PLOT_RANGE_MM)
-        a = np.asarray(self._rows, dtype=float)
+        with self._lock:
+            if not self._rows:
+                z = np.zeros(1)
+                return z, z, z, z, z, z, z, np.full(1, -PLOT_RANGE_MM)
+            a = np.asarray(self._rows, dtype=float)
         band = np.where(a[:, 4] > 0.5, PLOT_RANGE_MM, -PLOT_RANGE_MM)
         return (a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3], a[:, 5].copy(), -a[:, 5],
                 band)
