@@ -15,6 +15,7 @@ from app.hot_paths import HotPaths
 from app.operator_lock import OperatorLock
 from app.routers import (
     behaviors,
+    camera,
     chain,
     emergency,
     experiments,
@@ -63,6 +64,7 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
         api.include_router(module.router)
     api.include_router(operator.ws_router)
     api.include_router(telemetry.router)
+    api.include_router(camera.router)
     api.include_router(emergency.motion_router)
     api.include_router(emergency.params_router)
     _publish_error_schema(api)

@@ -78,7 +78,12 @@ class PlaceObjectRequest(_Body):
     position: list[Annotated[float, Field(ge=-MAX_OBJECT_XY_M, le=MAX_OBJECT_XY_M)]] = Field(
         description=f"[x, y]: standing on what is below (table, box, floor); [x, y, z]: the body origin, z in "
                     f"[0, {MAX_OBJECT_Z_M:g}] [m], world frame; |x|, |y| <= {MAX_OBJECT_XY_M:g} m",
-        min_length=2, max_length=3, examples=[[2.2, 0.3]])
+        min_length=2, max_length=3, examples=[[2.2, 0.3]],
+        # each item's own range in the schema (JSON Schema 2020-12 prefixItems): z is [0, 3], not [-10, 10]
+        json_schema_extra={"prefixItems": [
+            {"type": "number", "minimum": -MAX_OBJECT_XY_M, "maximum": MAX_OBJECT_XY_M, "description": "x [m]"},
+            {"type": "number", "minimum": -MAX_OBJECT_XY_M, "maximum": MAX_OBJECT_XY_M, "description": "y [m]"},
+            {"type": "number", "minimum": 0.0, "maximum": MAX_OBJECT_Z_M, "description": "z [m]"}]})
     yaw_deg: float = Field(default=0.0, ge=-360.0, le=360.0, description="turn about the world z axis [deg]")
 
 

@@ -124,6 +124,14 @@ class ConsoleGuard:
             given = values[-1].encode("latin-1", "replace") if values else None
         return given is not None and hmac.compare_digest(given, self._token)
 
+    def _documented(self, scope) -> bool:
+        """Whether the API has this method at this path (True when the app cannot tell)."""
+        allowed = getattr(self.app, "allowed_methods", None)
+        if allowed is None:
+            return True
+        methods = allowed(scope)
+        return methods is None or scope["method"] in methods
+
     def _host_ok(self, headers: dict[bytes, bytes]) -> bool:
         if self.allowed_hosts is None:
             return True
@@ -175,7 +183,8 @@ class ConsoleGuard:
             if not self._origin_ok(headers):
                 await _send_json(send, 403, "cross-origin control requests are refused; use the console's own page")
                 return
-            if self.lock is not None and path.startswith("/api/") and (method, path) not in LOCK_EXEMPT:
+            if (self.lock is not None and path.startswith("/api/") and (method, path) not in LOCK_EXEMPT
+                    and self._documented(scope)):  # a method the path lacks is answered 405, locked or not
                 client = headers.get(CLIENT_HEADER)
                 try:
                     self.lock.check(None if client is None else client.decode("latin-1"), f"{method} {path}")

@@ -17,8 +17,10 @@ from app.schemas import OperatorLockState
 from app.service.host import Published
 from controller.core.layer import Status, plain
 from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
-from robot.names import JOINT_NAMES
+from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
 from robot.sensors import is_fallen
+
+_RFOOT, _LFOOT = FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor")
 
 
 def jsonable(value: Any) -> Any:
@@ -84,6 +86,8 @@ def state_document(pub: Published) -> dict[str, Any]:
         "joints": joints,
         "cog": _rounded(snap.cog_world, 5),
         "zmp": _rounded(snap.zmp_world, 5),
+        "foot_forces_n": {"rleg": round(float(snap.wrenches_ext[_RFOOT][2]), 3),
+                          "lleg": round(float(snap.wrenches_ext[_LFOOT][2]), 3)},
         "walking": bool(getattr(abc, "walking", False)),
         "support": str(getattr(abc, "support", "both")),
         "capture_point": {"ref": _xy(getattr(st, "cp_ref", None)), "act": _xy(getattr(st, "cp_act", None)),
@@ -256,6 +260,9 @@ def state_model() -> type[BaseModel]:
         joints=(dict[str, joint], Field(description="per joint, JOINT_NAMES order")),
         cog=(list[float], Field(description="estimated COG, world [m]")),
         zmp=(list[float], Field(description="ZMP from the foot F/T sensors, world [m]")),
+        foot_forces_n=(dict[Literal["rleg", "lleg"], float], Field(
+            description="vertical force of each foot's F/T sensor (rfsensor, lfsensor: sensor frame z, after the "
+                        "offset removal) [N]")),
         walking=(bool, Field(description="a walk is in progress")),
         support=(str, Field(description="'both', 'rleg' or 'lleg'")),
         capture_point=(cp, Field(description="the Stabilizer's capture points")),

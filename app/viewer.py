@@ -18,7 +18,12 @@ import trimesh
 import viser
 
 from app.service import OperatorService, ServiceError
-from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
+from controller.balance.capture_point import (
+    HRP2_LEFT_SOLE,
+    HRP2_RIGHT_SOLE,
+    distance_to_polygon_edge,
+    support_polygon,
+)
 from controller.operation.targets import feet_frame, yaw_rotation
 from robot.plant import scene_path
 
@@ -92,12 +97,41 @@ def footstep_rectangles(steps, z: float) -> np.ndarray:
     return np.concatenate(segs) if segs else np.zeros((0, 2, 3))
 
 
+def ray_at_height(origin, direction, z_m: float) -> np.ndarray | None:
+    """Where the ray origin + t direction (t > 0) crosses the horizontal plane z = z_m (world [m]); None when it
+    runs parallel to it or away from it."""
+    o = np.asarray(origin, dtype=float)
+    d = np.asarray(direction, dtype=float)
+    if abs(d[2]) < 1e-9:
+        return None
+    t = (float(z_m) - o[2]) / d[2]
+    return None if t <= 0 else o + t * d
+
+
+def support_edge_mm(snap) -> float | None:
+    """Distance [mm] from the reference capture point to the edge of the support polygon of the soles in contact
+    (the planned ones): the error at which the actual capture point would leave the support, in the worst
+    direction. None without a gait reference or a Stabilizer."""
+    gait = getattr(getattr(snap, "reference", None), "gait", None)
+    st = snap.layers.get("st")
+    if gait is None or st is None or getattr(st, "cp_ref", None) is None:
+        return None
+    feet = [((p[0], p[1], _yaw(R)), rect) for p, R, rect, on in (
+        (gait.p_rsole_world, gait.R_rsole_world, HRP2_RIGHT_SOLE, gait.contact[0]),
+        (gait.p_lsole_world, gait.R_lsole_world, HRP2_LEFT_SOLE, gait.contact[1])) if on]
+    if not feet:
+        return None
+    return 1e3 * max(0.0, distance_to_polygon_edge(st.cp_ref, support_polygon(feet)))
+
+
 class CpErrorHistory:
-    """Ring buffer of (sim time [s], CP error x, y [mm], threshold [mm], flag) over the last `window_s`."""
+    """Ring buffer of (sim time [s], CP error x, y [mm], threshold [mm], flag, support edge [mm]) over the last
+    `window_s`."""
 
     def __init__(self, window_s: float = PLOT_WINDOW_S, maxlen: int = 2000) -> None:
         self.window_s = float(window_s)
-        self._rows: deque[tuple[float, float, float, float, float]] = deque(maxlen=maxlen)
+        self._rows: deque[tuple[float, ...]] = deque(maxlen=maxlen)
+        self._lock = threading.Lock()  # the viewer's thread and a caller may add the same snapshot at once
 
     def __len__(self) -> int:
         return len(self._rows)
@@ -108,33 +142,41 @@ class CpErrorHistory:
         if st is None:
             return False
         t = float(snap.time_s)
-        if self._rows and t < self._rows[-1][0]:
-            self._rows.clear()  # the simulation was reset
-        if self._rows and t == self._rows[-1][0]:
-            return False
         ex, ey = st.cp_error
-        self._rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m),
-                           1.0 if st.emergency else 0.0))
-        while self._rows and self._rows[0][0] < t - self.window_s:
-            self._rows.popleft()
+        edge = support_edge_mm(snap)
+        with self._lock:
+            rows = self._rows
+            if rows and t < rows[-1][0]:
+                rows.clear()  # the simulation was reset
+            if rows and t == rows[-1][0]:
+                return False
+            if edge is None:  # no gait reference: the last known edge, else the plot's range
+                edge = rows[-1][5] if rows else PLOT_RANGE_MM
+            rows.append((t, 1e3 * float(ex), 1e3 * float(ey), 1e3 * float(st.cp_threshold_m),
+                         1.0 if st.emergency else 0.0, min(float(edge), PLOT_RANGE_MM)))
+            while rows and rows[0][0] < t - self.window_s:
+                rows.popleft()
         return True
 
     def latest(self) -> tuple[float, float, float, float, bool] | None:
         """The newest row: (time [s], err x, err y, threshold [mm], flag), or None."""
         if not self._rows:
             return None
-        t, ex, ey, thr, flag = self._rows[-1]
+        t, ex, ey, thr, flag, _ = self._rows[-1]
         return t, ex, ey, thr, bool(flag)
 
     def data(self) -> tuple[np.ndarray, ...]:
-        """(time, err x, err y, +threshold, -threshold, flag band) arrays for the uPlot; the flag band is at the
-        top of the fixed range while the CP flag is raised and at its bottom otherwise (filled down: shaded)."""
-        if not self._rows:
-            z = np.zeros(1)
-            return z, z, z, z, z, np.full(1, -PLOT_RANGE_MM)
-        a = np.asarray(self._rows, dtype=float)
+        """(time, err x, err y, +threshold, -threshold, +support edge, -support edge, flag band) arrays for the
+        uPlot; the flag band is at the top of the fixed range while the CP flag is raised and at its bottom
+        otherwise (filled down: shaded)."""
+        with self._lock:
+            if not self._rows:
+                z = np.zeros(1)
+                return z, z, z, z, z, z, z, np.full(1, -PLOT_RANGE_MM)
+            a = np.asarray(self._rows, dtype=float)
         band = np.where(a[:, 4] > 0.5, PLOT_RANGE_MM, -PLOT_RANGE_MM)
-        return a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3], band
+        return (a[:, 0].copy(), a[:, 1].copy(), a[:, 2].copy(), a[:, 3].copy(), -a[:, 3], a[:, 5].copy(), -a[:, 5],
+                band)
 
 
 def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
@@ -221,6 +263,7 @@ class Viewer:
         self._model_key: tuple[str, ...] = ()
         self._model: mujoco.MjModel | None = None
         self._cp_history = CpErrorHistory()
+        self._recognition_markers: dict[str, tuple] = {}  # object -> (sphere, label, position shown)
         self._plot_updates = 0
         self._build_markers()
         self._build_scene()
@@ -403,6 +446,33 @@ class Viewer:
             origin, yaw = frame
             self._place(handle, origin + yaw_rotation(yaw) @ np.asarray(target[:3], dtype=float))
 
+    def _update_recognitions(self, recognitions) -> None:
+        """A marker and a label at each located object's position (the operator's correction once given)."""
+        scene = self.server.scene
+        for name in list(self._recognition_markers):
+            if name not in recognitions:  # a reset forgot it
+                for handle in reversed(self._recognition_markers.pop(name)[:2]):
+                    handle.remove()
+        for name, rec in recognitions.items():
+            pos = tuple(float(v) for v in rec.get("position_m", ()))
+            if len(pos) != 3 or not all(math.isfinite(v) for v in pos):
+                continue
+            status = rec.get("status", "estimated")
+            shown = self._recognition_markers.get(name)
+            if shown is not None and shown[2] == (pos, status):
+                continue
+            if shown is not None:
+                for handle in reversed(shown[:2]):
+                    handle.remove()
+            color = (40, 170, 60) if status != "estimated" else (255, 200, 0)
+            sphere = scene.add_icosphere(f"/recognitions/{name}", radius=0.04, color=color, subdivisions=2,
+                                         opacity=0.7, position=pos, cast_shadow=False, receive_shadow=False)
+            sigma = rec.get("sigma_m") or [0.0, 0.0]
+            label = scene.add_label(f"/recognitions/{name}/label",
+                                    f"{name} ({status}, sigma {1e3 * math.hypot(*sigma[:2]):.0f} mm)",
+                                    position=(0.0, 0.0, 0.1))
+            self._recognition_markers[name] = (sphere, label, (pos, status))
+
     # ---- GUI ----------------------------------------------------------------------------------
     def _build_gui(self) -> None:
         gui = self.server.gui
@@ -425,15 +495,32 @@ class Viewer:
              {"label": "CP err y [mm]", "stroke": "#3c78d8", "width": 1.5},
              {"label": "+threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
              {"label": "-threshold", "stroke": "#888888", "width": 1, "dash": (6.0, 4.0)},
+             {"label": "+support edge", "stroke": "#b8860b", "width": 1, "dash": (2.0, 3.0)},
+             {"label": "-support edge", "stroke": "#b8860b", "width": 1, "dash": (2.0, 3.0)},
              {"label": "CP flag", "stroke": "rgba(200,16,46,0)", "width": 0, "fill": "rgba(200,16,46,0.18)",
               "fillTo": -PLOT_RANGE_MM,
               "points": {"show": False}}),
-            title="capture-point error [mm] (shaded: CP flag raised)",
+            title="capture-point error [mm] (dashed grey: threshold; dotted: support edge; shaded: CP flag raised)",
             scales={"x": {"time": False}, "y": {"auto": False, "range": (-PLOT_RANGE_MM, PLOT_RANGE_MM)}},
             legend={"show": True, "live": True},
             aspect=1.6,
         )
         self._cp_values = gui.add_markdown(self._cp_legend())
+        # [OP] II: the operator corrects a recognition by clicking where the object is (at its estimated height)
+        self._correct_object = gui.add_dropdown("object", ("can", "trash_box"), initial_value="can")
+        self._correct_click = gui.add_button("Correct it: click where it is", hint="then click the object in the "
+                                             "3D view: its position becomes what later behaviours use")
+
+        @self._correct_click.on_click
+        def _(_event) -> None:
+            name = self._correct_object.value
+
+            @self.server.scene.on_pointer_event("click")
+            def _(event) -> None:
+                self.server.scene.remove_pointer_callback()
+                self._message.value = self.correct_by_ray(name, event.ray_origin, event.ray_direction)
+
+            self._message.value = f"click where the {name} is"
 
         @self._estop.on_click
         def _(_event) -> None:
@@ -442,6 +529,20 @@ class Viewer:
         @self._release.on_click
         def _(_event) -> None:
             self._command("e-stop released", self.service.release_estop)
+
+    def correct_by_ray(self, name: str, origin, direction) -> str:
+        """The recognition of `name` moved to where the clicked ray meets its estimated height; what it says."""
+        try:
+            rec = self.service.recognitions().get(name)
+            if rec is None:
+                return f"no recognition of {name} to correct (locate it first)"
+            p = ray_at_height(origin, direction, float(rec["position_m"][2]))
+            if p is None:
+                return f"that click does not reach the {name}'s height ({rec['position_m'][2]:.3f} m)"
+            self.service.confirm_recognition(name, [float(v) for v in p])
+            return f"{name} corrected to ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) m"
+        except ServiceError as exc:
+            return str(exc)
 
     def _command(self, done: str, fn) -> None:
         """Runs in viser's thread pool: a verb of the operator service, like an HTTP request."""
@@ -502,6 +603,7 @@ class Viewer:
                 n += 1
                 if n % max(1, int(self.rate_hz / 5)) == 0:
                     self._update_gui(snap)
+                    self._update_recognitions(self.service.recognitions())
                 if n % max(1, round(self.rate_hz / PLOT_RATE_HZ)) == 0:
                     self._update_plot(snap)
             except ServiceError:  # the robot process is gone or restarting: try again shortly

@@ -156,6 +156,9 @@ class MujocoPlant:
             com_world=frozen_array(d.subtree_com[self._base_id]),
             body_pos_world=frozen_array(d.xpos),
             body_quat_wxyz=frozen_array(d.xquat),
+            qpos=frozen_array(d.qpos),
+            mocap_pos=frozen_array(d.mocap_pos),
+            mocap_quat=frozen_array(d.mocap_quat),
         )
 
     def write(self, q_ref_rad) -> None:

@@ -61,3 +61,7 @@ class GroundTruth:
     com_world: np.ndarray  # (3,) whole-robot centre of mass [m]
     body_pos_world: np.ndarray  # (nbody, 3) every MuJoCo body, for rendering
     body_quat_wxyz: np.ndarray  # (nbody, 4)
+    # the whole simulation state a renderer needs (the operator's camera view, drawn from the published state)
+    qpos: np.ndarray | None = None  # (nq,) every joint of the scene, free objects included
+    mocap_pos: np.ndarray | None = None  # (nmocap, 3) fixed objects placed by the simulator [m]
+    mocap_quat: np.ndarray | None = None  # (nmocap, 4)

@@ -270,6 +270,8 @@ function onState(s) {
     if (s.scene !== prev.scene) log(`scene is now ${s.scene}`, "other");
   }
   updateRuns(s.runs || []);
+  updateLock(s.operator_lock);
+  plotSample(s);
 }
 $("latched-ack").addEventListener("click", () => { acknowledged = $("latched").dataset.key; $("latched").hidden = true; });
 
@@ -721,6 +723,220 @@ $("joint-form").addEventListener("submit", (e) => {
   post("/api/sequence/joint-angles", {angles_deg: angles, time: Number($("duration").value)});
 });
 
+// ---- the operator lock: who holds it, shown to all; a watcher's controls greyed out (E-STOP never) -----------
+let lockHolder = null;
+function updateLock(lock) {
+  const holder = lock ? lock.holder : null;
+  const mine = holder === CLIENT_ID;
+  const watching = holder !== null && !mine;
+  const st = $("lock-state");
+  st.textContent = holder === null ? "control: free (anyone)" : mine ? "control: YOU" : `control: ${holder} (watching)`;
+  st.className = holder === null ? "" : mine ? "mine" : "other";
+  $("lock-btn").textContent = mine ? "Release control" : "Take control";
+  $("lock-btn").title = mine ? "Give the operator lock back: any client may control again"
+    : watching ? `${holder} holds control; taking it is refused until they release it or leave`
+    : "Take the operator lock: the others can only watch (and press E-STOP)";
+  if (watching !== document.body.classList.contains("watching")) {
+    document.body.classList.toggle("watching", watching);
+    for (const sec of document.querySelectorAll("#controls > section")) sec.inert = watching;
+    for (const b of document.querySelectorAll(".stop .rel, #walk-estop, #st-stop")) b.disabled = watching;
+    $("camera-popups").inert = watching;
+    if (watching) log(`${holder} took control: this page watches (E-STOP stays available)`, "other");
+    else if (lockHolder !== null && lockHolder !== CLIENT_ID) log("control is free again", "other");
+  }
+  lockHolder = holder;
+}
+$("lock-btn").addEventListener("click", async () => {
+  if (lockHolder === CLIENT_ID) {
+    const d = await api("DELETE", "/api/operator/lock");
+    if (d) log("control released", "ok");
+  } else {
+    const d = await post("/api/operator/lock", {client: CLIENT_ID});
+    if (d) log("you have control", "ok");
+  }
+});
+
+// ---- the wide head camera (WS /ws/camera: meta, then the JPEG) and the recognitions over it ----------------
+const CAMERA_HZ = 12;  // asked of the stream: a little over the 10 Hz the view must keep
+window.hrp2Camera = {frames: 0, seq: null, meta: null};
+const cameraTimes = [];
+let cameraWs = null;
+function startCamera() {
+  if (cameraWs || document.hidden) return;  // a hidden page watches nothing: the console renders for no one
+  let ws;
+  try { ws = new WebSocket(wsUrl(`/ws/camera?rate_hz=${CAMERA_HZ}`)); } catch (e) { return; }
+  cameraWs = ws;
+  ws.binaryType = "blob";
+  let meta = null;
+  ws.onmessage = (m) => {
+    if (typeof m.data === "string") {
+      let d = {};
+      try { d = JSON.parse(m.data); } catch (e) { return; }
+      if (d.ok && d.seq !== undefined) meta = d;
+      else if (d.ok === false) $("camera-info").textContent = `wide head camera: ${d.detail}`;
+      return;
+    }
+    const img = $("camera-img");
+    const old = img.src;
+    img.src = URL.createObjectURL(m.data);
+    if (old.startsWith("blob:")) URL.revokeObjectURL(old);
+    const cam = window.hrp2Camera;
+    cam.frames += 1;
+    cam.seq = meta ? meta.seq : null;
+    cam.meta = meta;
+    const now = performance.now();
+    cameraTimes.push(now);
+    while (cameraTimes.length && cameraTimes[0] < now - 2000) cameraTimes.shift();
+    const hz = cameraTimes.length > 1 ? 1000 * (cameraTimes.length - 1) / (now - cameraTimes[0]) : 0;
+    $("camera-info").textContent = `wide head camera 93.6 x 70.8 deg: ${hz.toFixed(1)} Hz` +
+      (meta ? `, t ${fmt(meta.time_s, 2)} s` : "");
+    if (meta) drawRecognitions(meta);
+  };
+  ws.onclose = () => { if (cameraWs === ws) cameraWs = null; setTimeout(startCamera, 1000); };
+}
+document.addEventListener("visibilitychange", () => {
+  if (document.hidden && cameraWs) { const ws = cameraWs; cameraWs = null; ws.close(); }
+  else if (!document.hidden) startCamera();
+});
+
+const popups = new Map();  // object name -> {box, pop, key, editing}
+const xyz = (p) => `(${p.map((v) => fmt(v, 3)).join(", ")})`;
+function drawRecognitions(meta) {
+  const layer = $("camera-popups");
+  const scale = $("camera-img").clientWidth / (meta.width || 320);
+  const seen = new Set();
+  let stacked = 0;
+  for (const r of meta.recognitions || []) {
+    seen.add(r.name);
+    let p = popups.get(r.name);
+    if (!p) {
+      p = {box: el("div", {class: "rec-box"}), pop: el("div", {class: "rec-pop", role: "dialog",
+                                                               "aria-label": `recognition of ${r.name}`}),
+           key: null, editing: false};
+      layer.append(p.box, p.pop);
+      popups.set(r.name, p);
+    }
+    const status = r.status || "estimated";
+    p.box.className = `rec-box ${status}`;
+    p.pop.className = `rec-pop ${status}`;
+    const key = JSON.stringify([r.position_m, status, r.time_s]);
+    if (key !== p.key && !p.editing) {
+      if (p.key === null || JSON.parse(p.key)[2] !== r.time_s) {  // a new recognition: into the history too
+        log(`recognition: ${r.name} at ${xyz(r.position_m)} m (${status}); confirm or correct it over the camera view`,
+            "other");
+      }
+      p.key = key;
+      renderPopup(p, r, status);
+    }
+    if (r.box_px) {
+      const [u0, v0, u1, v1] = r.box_px.map((v) => v * scale);
+      Object.assign(p.box.style, {left: `${u0}px`, top: `${v0}px`, width: `${u1 - u0}px`, height: `${v1 - v0}px`,
+                                  display: "block"});
+      Object.assign(p.pop.style, {left: `${Math.min(u1 + 4, 320 - 40)}px`, top: `${Math.max(0, v0 - 10)}px`});
+    } else {
+      p.box.style.display = "none";
+      Object.assign(p.pop.style, {left: "4px", top: `${4 + 44 * stacked++}px`});
+    }
+  }
+  for (const [name, p] of popups) {
+    if (!seen.has(name)) { p.box.remove(); p.pop.remove(); popups.delete(name); }
+  }
+}
+function renderPopup(p, r, status) {
+  const sigma = r.sigma_m ? Math.hypot(r.sigma_m[0], r.sigma_m[1]) * 1000 : null;
+  const text = `${r.name} at ${xyz(r.position_m)} m` + (sigma !== null ? `, sigma ${fmt(sigma, 1)} mm` : "") +
+    (r.box_px ? "" : " (out of view)") + ` - ${status}`;
+  const confirm = el("button", {type: "button", text: "Confirm", onclick: async () => {
+    const d = await post(`/api/recognitions/${r.name}/confirm`, {});
+    if (d) log(d.message, "ok");
+  }});
+  const form = el("form", {hidden: true, "aria-label": `corrected position of ${r.name}`});
+  const inputs = ["x", "y", "z"].map((axis, i) => el("input", {type: "number", step: "any", min: -20, max: 20,
+    value: r.position_m[i], "aria-label": `${r.name} ${axis} [m]`, required: true}));
+  form.append(...inputs, el("button", {type: "submit", text: "Send"}));
+  form.addEventListener("submit", async (e) => {
+    e.preventDefault();
+    const d = await post(`/api/recognitions/${r.name}/correct`, {position_m: inputs.map((x) => Number(x.value))});
+    if (d) { log(d.message, "ok"); p.editing = false; form.hidden = true; }
+  });
+  const correct = el("button", {type: "button", text: "Correct", onclick: () => {
+    p.editing = form.hidden;
+    form.hidden = !form.hidden;
+    if (!form.hidden) inputs[0].focus();
+  }});
+  p.pop.replaceChildren(el("div", {text}), confirm, correct, form);
+}
+
+// ---- plots from the telemetry: ZMP and COG x / y, the feet's vertical forces (>= 20 Hz, last 10 s) -----------
+const PLOT_WINDOW_S = 10;
+class TimePlot {
+  constructor(canvas, legend, series, unit, digits) {
+    this.canvas = canvas; this.legend = legend; this.series = series; this.unit = unit; this.digits = digits;
+    this.t = []; this.v = series.map(() => []);
+    this.draws = 0;  // redraws (the browser test reads it)
+  }
+  push(t, values) {
+    if (this.t.length && t < this.t[this.t.length - 1]) { this.t = []; this.v = this.series.map(() => []); }  // a reset
+    if (this.t.length && t === this.t[this.t.length - 1]) return;
+    this.t.push(t);
+    values.forEach((x, i) => this.v[i].push(x));
+    while (this.t.length && this.t[0] < t - PLOT_WINDOW_S) { this.t.shift(); this.v.forEach((a) => a.shift()); }
+    this.dirty = true;
+  }
+  draw() {
+    if (!this.dirty) return;
+    this.dirty = false;
+    this.draws += 1;
+    const c = this.canvas, g = c.getContext("2d"), W = c.width, H = c.height, pad = 4;
+    g.clearRect(0, 0, W, H);
+    if (this.t.length < 2) return;
+    let lo = Infinity, hi = -Infinity;
+    for (const a of this.v) for (const x of a) if (Number.isFinite(x)) { lo = Math.min(lo, x); hi = Math.max(hi, x); }
+    if (!Number.isFinite(lo)) return;
+    const span = Math.max(hi - lo, this.unit === "N" ? 20 : 0.02);
+    const mid = (hi + lo) / 2;
+    lo = mid - 0.55 * span; hi = mid + 0.55 * span;
+    const t1 = this.t[this.t.length - 1], t0 = t1 - PLOT_WINDOW_S;
+    const X = (t) => pad + (W - 2 * pad) * (t - t0) / PLOT_WINDOW_S, Y = (x) => H - pad - (H - 2 * pad) * (x - lo) / (hi - lo);
+    g.strokeStyle = "#d8dce2"; g.lineWidth = 1;
+    g.beginPath(); g.moveTo(pad, Y(mid)); g.lineTo(W - pad, Y(mid)); g.stroke();
+    g.fillStyle = "#666"; g.font = "10px sans-serif";
+    g.fillText(`${hi.toFixed(this.digits)} ${this.unit}`, pad + 2, 11);
+    g.fillText(`${lo.toFixed(this.digits)} ${this.unit}`, pad + 2, H - 6);
+    this.series.forEach((s, i) => {
+      g.strokeStyle = s.color; g.lineWidth = 1.5; g.beginPath();
+      let started = false;
+      this.t.forEach((t, k) => {
+        const x = this.v[i][k];
+        if (!Number.isFinite(x)) { started = false; return; }
+        if (started) g.lineTo(X(t), Y(x)); else { g.moveTo(X(t), Y(x)); started = true; }
+      });
+      g.stroke();
+    });
+    this.legend.replaceChildren(...this.series.map((s, i) => {
+      const x = this.v[i][this.v[i].length - 1];
+      return el("span", {style: `color:${s.color}; margin-right: 0.8em`, text: `${s.label} ${fmt(x, this.digits)} ${this.unit}`});
+    }), el("span", {text: `t ${fmt(t1, 2)} s`}));
+  }
+}
+const PLOTS = {
+  x: new TimePlot($("plot-x"), $("legend-x"), [{label: "ZMP x", color: "#1f9e3a"}, {label: "COG x", color: "#e07b00"}], "m", 3),
+  y: new TimePlot($("plot-y"), $("legend-y"), [{label: "ZMP y", color: "#1f9e3a"}, {label: "COG y", color: "#e07b00"}], "m", 3),
+  f: new TimePlot($("plot-f"), $("legend-f"), [{label: "right foot Fz", color: "#c8102e"}, {label: "left foot Fz", color: "#1c6fd1"}], "N", 0),
+};
+window.hrp2Plots = PLOTS;
+function plotSample(s) {
+  const zmp = s.zmp || [], cog = s.cog || [], f = s.foot_forces_n || {};
+  PLOTS.x.push(s.time, [zmp[0], cog[0]]);
+  PLOTS.y.push(s.time, [zmp[1], cog[1]]);
+  PLOTS.f.push(s.time, [f.rleg, f.lleg]);
+}
+function drawPlots() {
+  for (const p of Object.values(PLOTS)) p.draw();
+  requestAnimationFrame(drawPlots);
+}
+requestAnimationFrame(drawPlots);
+
 // ---- start-up ---------------------------------------------------------------------------------------------
 // The 3D view is viser's client served by this console at /viewer/ with one script added (static/viewer_keys.js)
 // that hands Esc / Space and the teleoperation keys to this page. It is loaded from the other loopback name when
@@ -772,4 +988,5 @@ async function start() {
 
 startTelemetry();
 connectOperator();
+startCamera();
 start().catch((e) => say(`start-up: ${e}`, true));

@@ -39,7 +39,7 @@ def joint_angles(req: JointAnglesRequest, service: ServiceDep) -> Ok:
     return Ok(message=service.set_joint_angles([math.radians(v) for v in req.angles_deg], req.time))
 
 
-@router.post("/target-pose", response_model=Ok, responses=errors(409, 422),
+@router.post("/target-pose", response_model=Ok, responses=errors(404, 409, 422, e404="no such frame"),
              summary="Move a limb's end effector to a pose (relative to `frame` if given) in `time` s")
 def target_pose(req: TargetPoseRequest, service: ServiceDep) -> Ok:
     return Ok(message=service.set_target_pose(req.limb, req.pos, [math.radians(v) for v in req.rpy_deg], req.time,

@@ -19,6 +19,7 @@ from app.service.verbs import (
     CancelRun,
     ChainTiming,
     ClearSequence,
+    ConfirmRecognition,
     EnableLayers,
     Footstep,
     GetFootsteps,
@@ -62,6 +63,7 @@ __all__ = ["InvalidArgument", "NotFound", "OperatorService", "Refused", "RobotBa
 
 VERB_TIMEOUT_S = 5.0  # [s] a verb not answered by then is reported (the loop may be stuck or gone)
 ACK_TIMEOUT_S = 0.5  # [s] a setpoint whose acknowledgement has not come back by then is reported
+CAMERA_WAIT_S = 5.0  # [s] a camera request waits this long for a frame (the first one opens the renderer)
 
 
 class RobotBackend(Protocol):
@@ -92,6 +94,7 @@ class OperatorService:
         self._info = robot.info()
         self._state_lock = threading.Lock()
         self._state_cache: tuple[tuple[int, int], dict, bytes] | None = None
+        self._camera = None  # the camera view, made when first watched
 
     def __repr__(self) -> str:
         return f"OperatorService({self.robot!r})"
@@ -266,6 +269,53 @@ class OperatorService:
 
         return list_behaviors()
 
+    # ---- the camera view and the recognitions --------------------------------------------------------------
+    @property
+    def camera(self):
+        """The wide head camera's view (app.service.camera_feed.CameraFeed), made on first use."""
+        if self._camera is None:
+            from app.service.camera_feed import CameraFeed
+
+            with self._state_lock:
+                if self._camera is None:
+                    self._camera = CameraFeed(self.published)
+        return self._camera
+
+    def camera_frame(self, newer_than_s: float = 0.5, timeout_s: float = CAMERA_WAIT_S):
+        """A frame of the camera view rendered at most `newer_than_s` before this call (wall time) or showing the
+        latest publication, waiting up to `timeout_s` for one (the first one opens the renderer); Unavailable
+        when none came."""
+        import time
+
+        start = time.monotonic()
+        feed = self.camera
+        while True:
+            pub = self.published()  # Unavailable if the robot process is gone
+            feed.watch()
+            frame = feed.latest
+            if frame is not None and (frame.requested_at_monotonic_s >= start - newer_than_s
+                                      or frame.source == (pub.generation, pub.seq)):  # nothing newer to show
+                return frame
+            if time.monotonic() - start > timeout_s:
+                raise Unavailable(f"no camera frame within {timeout_s:g} s"
+                                  + (f": {feed.error}" if feed.error else ""))
+            time.sleep(0.01)
+
+    def latest_camera_frame(self, rate_hz: float = 10.0):
+        """The newest frame, however old, or None (renews the watch at `rate_hz`; never waits)."""
+        feed = self.camera
+        feed.watch(rate_hz=rate_hz)
+        return feed.latest
+
+    def recognitions(self) -> dict[str, dict]:
+        """The latest recognition of each object, as the behaviours recall them (as last published)."""
+        return dict(self.published().recognitions)
+
+    def confirm_recognition(self, object_name: str, position_m: Sequence[float] | None = None) -> dict:
+        """Confirm the latest recognition of an object, or correct its position (world) [m]."""
+        pos = None if position_m is None else tuple(float(v) for v in position_m)
+        return self.run(ConfirmRecognition(object_name, pos))
+
     # ---- the simulation --------------------------------------------------------------------------------
     def push(self, body: str, force_n: Sequence[float], duration_s: float) -> str:
         return self.run(Push(body, tuple(map(float, force_n)), float(duration_s)))
@@ -343,6 +393,8 @@ class OperatorService:
         return self.robot.log_rows()
 
     def close(self) -> dict | None:
+        if self._camera is not None:
+            self._camera.close()
         return self.robot.close()
 
 

@@ -98,6 +98,7 @@ class Published:
     published_at_monotonic_s: float
     runs: tuple = ()  # behaviors.runner.RunStatus of the runs kept, oldest first
     setpoint_acks: dict = dataclasses.field(default_factory=dict)  # point -> SetpointAck of its newest setpoint
+    recognitions: dict = dataclasses.field(default_factory=dict)  # object -> its latest recognition (as remembered)
 
 
 #: Owners of parameters: a layer name, or "ic:<limb>" for one hand's impedance.
@@ -226,6 +227,25 @@ class RobotHost:
         if self._cameras is not None:
             self._cameras.close()
             self._cameras = None
+
+    # ---- the recognitions the behaviours remember ([OP] II: the human confirms the robot's perception) -------
+    def confirm_recognition(self, object_name: str, position_m=None) -> dict:
+        """The operator confirms the latest recognition of `object_name`, or corrects its position [m] (world):
+        what later behaviours recall. The robot's own estimate stays beside it (estimated_position_m)."""
+        rec = self.recognitions.get(object_name)
+        if rec is None:
+            known = ", ".join(sorted(self.recognitions)) or "none yet"
+            raise NotFound(f"no recognition of {object_name!r} to confirm; recognised: {known} (run locate_can or "
+                           "locate_trash_box first)")
+        new = dict(rec)
+        new.setdefault("estimated_position_m", list(rec["position_m"]))
+        if position_m is None:
+            new["status"] = "confirmed"
+        else:
+            new["status"] = "corrected"
+            new["position_m"] = [round(float(v), 5) for v in position_m]
+        self.recognitions[object_name] = new
+        return new
 
     # ---- verbs ---------------------------------------------------------------------------------------
     def apply(self, verb: Verb) -> Any:
@@ -394,7 +414,8 @@ class RobotHost:
                          timing=self.timing(),
                          scene=self.scene, speed=loop.speed, stats=self.stats.summary(),
                          chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic(),
-                         runs=self._runs(), setpoint_acks=dict(self.setpoint_acks))
+                         runs=self._runs(), setpoint_acks=dict(self.setpoint_acks),
+                         recognitions=dict(self.recognitions))
 
     def _runs(self) -> tuple:
         version = self.runner.version

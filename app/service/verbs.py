@@ -846,3 +846,26 @@ def list_behaviors() -> list[dict]:
     from behaviors.registry import BEHAVIORS
 
     return [describe(cls) for _, cls in sorted(BEHAVIORS.items())]
+
+
+# ---- the recognitions the operator confirms ([OP] II) -------------------------------------------
+MAX_POSITION_M = 20.0  # [m] |component| of an operator's corrected object position (world)
+
+
+@dataclass(frozen=True)
+class ConfirmRecognition(Verb):
+    """The operator confirms the latest recognition of an object, or corrects its position (world) [m]."""
+
+    name = "confirm_recognition"
+    object_name: str
+    position_m: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        if self.position_m is not None:
+            if len(self.position_m) != 3:
+                raise InvalidArgument("position_m", f"give x, y, z [m] (got {len(self.position_m)} values)")
+            for axis, v in zip("xyz", self.position_m, strict=True):
+                _bounded(f"position_m.{axis}", v, -MAX_POSITION_M, MAX_POSITION_M, "m")
+
+    def run(self, host: RobotHost) -> dict:
+        return host.confirm_recognition(self.object_name, self.position_m)

@@ -163,6 +163,14 @@ def test_control_requests_of_others_are_423_naming_the_holder_and_the_estop_alwa
     assert r.status_code == 200, r.text
 
 
+def test_a_method_a_path_lacks_is_405_even_while_another_client_holds_the_lock(locked_app):
+    locked_app.post("/api/operator/lock", json={"client": "alice"})
+    r = locked_app.put("/api/behaviors", headers={"x-client-id": "bob"})  # GET only (the fuzz run found a 423)
+    assert r.status_code == 405 and r.headers["allow"] == "GET", r.text
+    assert locked_app.post("/api/walk/stop", headers={"x-client-id": "bob"}).status_code == 423
+    locked_app.delete("/api/operator/lock", headers={"x-client-id": "alice"})
+
+
 def test_a_stick_stream_of_another_client_is_refused_naming_the_holder_and_the_socket_stays_usable(locked_app):
     locked_app.post("/api/operator/lock", json={"client": "alice"})
     with locked_app.websocket_connect("/ws/operator?client=bob") as ws:

@@ -9,7 +9,7 @@ import pytest
 
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from app.viewer import Viewer
+from app.viewer import PLOT_RANGE_MM, Viewer
 
 
 @pytest.fixture
@@ -43,7 +43,7 @@ def test_the_estop_and_release_buttons_are_verbs_of_the_service(viewer, robot):
 
 
 def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snapshots(viewer, robot):
-    assert viewer._cp_plot is not None and len(viewer._cp_plot.data) == 6
+    assert viewer._cp_plot is not None and len(viewer._cp_plot.data) == 8
     assert set(viewer._markers) == {"cog", "zmp", "cp_ref", "cp_act", "support", "soles", "footsteps",
                                      "target_rhand", "target_lhand"}
     for _ in range(5):
@@ -62,11 +62,14 @@ def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snap
     mid = 0.5 * (np.asarray(gait.p_rsole_world[:2]) + np.asarray(gait.p_lsole_world[:2]))
     pts = m["support"].points[:, 0, :2]
     assert pts[:, 0].min() < mid[0] < pts[:, 0].max() and pts[:, 1].min() < mid[1] < pts[:, 1].max()
-    t, ex, ey, hi, lo, _band = viewer._cp_plot.data
+    t, ex, ey, hi, lo, edge_hi, edge_lo, _band = viewer._cp_plot.data
     assert len(t) >= 5 and np.all(np.diff(t) > 0) and t[-1] == pytest.approx(snap.time_s)  # + thread samples
     assert ex[-1] == pytest.approx(1e3 * st.cp_error[0]) and ey[-1] == pytest.approx(1e3 * st.cp_error[1])
     np.testing.assert_allclose(hi, 1e3 * st.cp_threshold_m)
     np.testing.assert_allclose(lo, -hi)
+    # standing on both feet, the reference capture point is mid-support: 80-100 mm (the plot's range) from its
+    # nearest edge (measured 93.6 mm), the dotted lines well outside the 40 mm threshold
+    assert 80.0 <= edge_hi[-1] <= PLOT_RANGE_MM and edge_lo[-1] == -edge_hi[-1]
 
 
 def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewer, robot):
@@ -106,16 +109,17 @@ def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewe
 def test_the_cp_history_keeps_a_time_window_and_clears_on_reset():
     from types import SimpleNamespace
 
-    from app.viewer import PLOT_RANGE_MM, CpErrorHistory
+    from app.viewer import CpErrorHistory
 
     h = CpErrorHistory(window_s=1.0)
     st = SimpleNamespace(cp_error=(0.01, -0.02), cp_threshold_m=0.04, emergency=False)
     flagged = SimpleNamespace(cp_error=(0.05, 0.0), cp_threshold_m=0.04, emergency=True)
     for i in range(30):
         assert h.add(SimpleNamespace(time_s=0.1 * i, layers={"st": flagged if i == 29 else st}))
-    t, ex, ey, hi, lo, band = h.data()
+    t, ex, ey, hi, lo, edge_hi, edge_lo, band = h.data()
     assert t[-1] - t[0] <= 1.0 + 1e-9 and ex[0] == pytest.approx(10.0) and ey[0] == pytest.approx(-20.0)
     assert hi[0] == pytest.approx(40.0) and lo[0] == pytest.approx(-40.0)
+    assert edge_hi[0] == PLOT_RANGE_MM and edge_lo[0] == -PLOT_RANGE_MM  # no gait reference: the range
     # the flag band fills the fixed range while the flag is raised, and nothing (its bottom) otherwise
     assert band[-1] == PLOT_RANGE_MM and set(band[:-1]) == {-PLOT_RANGE_MM}
     assert h.latest() == pytest.approx((2.9, 50.0, 0.0, 40.0, True))
@@ -170,3 +174,37 @@ def test_the_websocket_accepts_only_the_viewers_own_origins(viewer, origin, acce
         assert exc.response.status_code == 403
         ok = False
     assert ok is accepted
+
+
+def test_a_located_object_gets_a_marker_at_its_position_and_a_correction_moves_it(viewer, robot):
+    service = viewer.service
+    robot.host.recognitions["can"] = {"object": "can", "position_m": [1.2, 0.1, 0.75], "sigma_m": [0.003, 0.004, 0.0]}
+    robot.step()
+    viewer._update_recognitions(service.recognitions())
+    sphere, label, _ = viewer._recognition_markers["can"]
+    np.testing.assert_allclose(sphere.position, [1.2, 0.1, 0.75])
+    assert sphere.color == (255, 200, 0)  # the robot's estimate, not confirmed yet
+    service.confirm_recognition("can", [1.25, 0.1, 0.75])
+    robot.step()
+    viewer._update_recognitions(service.recognitions())
+    sphere, label, _ = viewer._recognition_markers["can"]
+    np.testing.assert_allclose(sphere.position, [1.25, 0.1, 0.75])
+    assert sphere.color == (40, 170, 60)
+    robot.reset()
+    viewer._update_recognitions(service.recognitions())
+    assert "can" not in viewer._recognition_markers
+
+
+def test_a_click_in_3d_corrects_a_recognition_at_its_estimated_height(viewer, robot):
+    from app.viewer import ray_at_height
+
+    assert ray_at_height((0, 0, 2.0), (0, 0, 1.0), 0.75) is None  # away from the plane
+    assert ray_at_height((0, 0, 2.0), (1.0, 0, 0), 0.75) is None  # parallel to it
+    np.testing.assert_allclose(ray_at_height((0, 0, 2.0), (1.0, 0.0, -1.0), 0.75), [1.25, 0.0, 0.75])
+    assert "no recognition of can" in viewer.correct_by_ray("can", (0, 0, 2), (0, 0, -1))
+    robot.host.recognitions["can"] = {"object": "can", "position_m": [2.15, 0.0, 0.75], "sigma_m": [0.002] * 3}
+    robot.step()
+    message = viewer.correct_by_ray("can", (1.0, 0.5, 2.0), (1.0, -0.5, -1.25))  # meets z 0.75 at (2.0, 0.0)
+    assert message == "can corrected to (2.000, 0.000, 0.750) m"
+    assert robot.host.recognitions["can"]["position_m"] == [2.0, 0.0, 0.75]
+    assert robot.host.recognitions["can"]["status"] == "corrected"

@@ -409,6 +409,110 @@ def test_the_cp_error_plot_data_grows(page, artifacts):
     shot(page, artifacts, "cp_plot")
 
 
+def test_the_camera_view_updates(page, artifacts):
+    shown = "() => ({...window.hrp2Camera, src: document.getElementById('camera-img').src})"  # read together
+    first = wait_until(lambda: (c := page.evaluate(shown))["frames"] >= 1 and c, 30.0, "a first camera frame")
+    t0 = time.monotonic()
+    later = wait_until(lambda: (c := page.evaluate(shown))["seq"] > first["seq"] and c, 10.0,
+                       "a second, different frame")
+    assert later["src"] != first["src"]
+    assert time.monotonic() - t0 <= 2.0 + 0.5, "two different frames not within 2 s"  # (0.5 s: polling)
+    size = page.evaluate("[document.getElementById('camera-img').naturalWidth, "
+                         "document.getElementById('camera-img').naturalHeight]")
+    assert size == [320, 240] and later["meta"]["camera"] == "wide"
+    playwright_api.expect(page.locator("#camera-info")).to_contain_text("Hz")
+    estop = page.get_by_role("button", name="E-STOP", exact=True).bounding_box()
+    assert estop["height"] >= 0.10 * 800  # still, with the camera on the page
+    shot(page, artifacts, "camera_view")
+
+
+def test_the_plots_data_grows(page, artifacts):
+    spans = "Object.values(hrp2Plots).map((p) => p.t.length ? p.t[p.t.length - 1] - p.t[0] : 0)"  # [s] shown
+    span0 = page.evaluate(spans)
+    t0 = page.evaluate("hrp2Plots.f.t[hrp2Plots.f.t.length - 1] || 0")
+    page.locator("#plots").scroll_into_view_if_needed()
+    draws = page.evaluate("hrp2Plots.f.draws")
+    legend = page.locator("#legend-f").inner_text()
+    wait_until(lambda: page.evaluate("hrp2Plots.f.t[hrp2Plots.f.t.length - 1]") > t0 + 1.0, 20.0,
+               "the plots' newest sample 1 s later")
+    span1 = page.evaluate(spans)  # each plot shows more time, or its whole 10 s window
+    assert all(b > a or b >= 9.0 for a, b in zip(span0, span1, strict=True)), (span0, span1)
+    forces = page.evaluate("hrp2Plots.f.v.map((a) => a[a.length - 1])")
+    assert 150 < sum(forces) / 2 < 450, f"foot forces {forces} N: standing, each foot carries about half"
+    # redrawn (a standing robot's flat lines may look the same from one frame to the next: the count says)
+    assert page.evaluate("hrp2Plots.f.draws") > draws and page.locator("#legend-f").inner_text() != legend
+    playwright_api.expect(page.locator("#legend-x")).to_contain_text("ZMP x")
+    shot(page, artifacts, "plots")
+
+
+def test_take_and_release_control_with_two_pages(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    watcher = page.context.browser.new_page(viewport={"width": 1280, "height": 800})  # its own context: a client
+    try:
+        watcher.set_default_timeout(40_000)
+        watcher.goto(f"{hrp2_console.base}/", wait_until="domcontentloaded")
+        playwright_api.expect(watcher.locator("#conn")).to_contain_text("live", timeout=30_000)
+        playwright_api.expect(watcher.locator("#lock-state")).to_contain_text("free")
+        page.get_by_role("button", name="Take control").click()
+        playwright_api.expect(page.locator("#lock-state")).to_have_text("control: YOU")
+        holder = hrp2_console.state()["operator_lock"]["holder"]
+        assert holder and holder.startswith("page-")
+        playwright_api.expect(watcher.locator("#lock-state")).to_contain_text(f"{holder} (watching)")
+        assert "watching" in watcher.evaluate("document.body.className")
+        assert watcher.evaluate("document.querySelector('#controls > section').inert")
+        assert watcher.locator("#st-stop").is_disabled()
+        shot(watcher, artifacts, "watcher_greyed")
+        # the watcher's E-STOP still works (any authenticated client, always)
+        watcher.get_by_role("button", name="E-STOP", exact=True).click()
+        wait_until(lambda: hrp2_console.state()["emergency"]["hard_stop"], 5.0, "the watcher's E-STOP")
+        # the watcher cannot release it; the operator can
+        r = watcher.evaluate("""async () => (await fetch('/api/estop/release', {method: 'POST',
+            headers: {'Content-Type': 'application/json', 'X-Client-Id': 'page-other'}})).status""")
+        assert r == 423
+        page.get_by_role("button", name="Release e-stop").click()
+        wait_until(lambda: not hrp2_console.state()["emergency"]["hard_stop"], 5.0, "released by the operator")
+        page.get_by_role("button", name="Release control").click()
+        playwright_api.expect(watcher.locator("#lock-state")).to_contain_text("free")
+        assert "watching" not in watcher.evaluate("document.body.className")
+        assert not watcher.evaluate("document.querySelector('#controls > section').inert")
+    finally:
+        watcher.close()
+    released(hrp2_console)
+
+
+def test_a_recognition_popup_appears_after_locate_can_and_confirm_and_correct_reach_the_robot(page, hrp2_console,
+                                                                                            artifacts):
+    post_json(f"{hrp2_console.base}/api/sim/reset", {"scene": "expo"}, timeout=60.0)
+    try:
+        wait_until(lambda: hrp2_console.state()["scene"] == "expo", 30.0, "the expo scene")
+        run = post_json(f"{hrp2_console.base}/api/behaviors/locate_can", {})
+        done = wait_until(lambda: next((r for r in hrp2_console.state()["runs"] if r["id"] == run["id"]
+                                        and r["state"] != "running"), None), 90.0, "locate_can to end")
+        assert done["state"] == "succeeded", done
+        pop = page.locator(".rec-pop", has_text="can at")
+        playwright_api.expect(pop).to_be_visible(timeout=15_000)
+        playwright_api.expect(pop).to_contain_text("estimated")
+        box = page.locator(".rec-box").first
+        playwright_api.expect(box).to_be_visible()  # the can is in the view: its box drawn over the image
+        shot(page, artifacts, "recognition_popup")
+        pop.get_by_role("button", name="Confirm").click()
+        wait_until(lambda: get_json(f"{hrp2_console.base}/api/recognitions")["recognitions"]["can"].get("status")
+                   == "confirmed", 5.0, "the can confirmed")
+        playwright_api.expect(pop).to_contain_text("confirmed")
+        pop.get_by_role("button", name="Correct").click()
+        pop.get_by_label("can y [m]").fill("0.05")
+        pop.get_by_role("button", name="Send").click()
+        rec = wait_until(lambda: (r := get_json(f"{hrp2_console.base}/api/recognitions")["recognitions"]["can"])
+                         .get("status") == "corrected" and r, 5.0, "the can corrected")
+        assert rec["position_m"][1] == pytest.approx(0.05)
+        assert rec["estimated_position_m"][1] != pytest.approx(0.05)
+        playwright_api.expect(pop).to_contain_text("corrected")
+        shot(page, artifacts, "recognition_corrected")
+    finally:
+        post_json(f"{hrp2_console.base}/api/sim/reset", {"scene": "default"}, timeout=60.0)
+        wait_until(lambda: hrp2_console.state()["scene"] == "default", 30.0, "back to the default scene")
+
+
 def test_the_connection_lost_state_appears_when_the_server_stops_and_it_reconnects(page, hrp2_console, artifacts):
     playwright_api.expect(page.locator("#offline")).to_be_hidden()
     port = int(hrp2_console.base.rsplit(":", 1)[1])
