@@ -3,7 +3,9 @@ process from the state the robot publishes (the same board the snapshots come by
 controller, and no rendering or encoding in the robot process, whose loop therefore never waits for either).
 
 While a watcher's lease runs, the feed's thread takes each new publication (at most VIEW_RATE_HZ), has the
-rig's render thread (robot.camera.CameraRig: one EGL context on one thread) draw the wide camera from its qpos
+camera process (robot.camera.CameraProcess: MuJoCo's renderer holds the interpreter lock while it works, ~8 ms a
+frame and ~0.5 s for its GL context, which here would hold up the HTTP server and an e-stop) draw the wide camera
+from its qpos
 and mocap poses, encodes the JPEG and draws nothing itself: the recognitions go beside the image as boxes the
 page draws. A slow machine drops publications, it never queues them."""
 
@@ -201,13 +203,14 @@ class CameraFeed:
 
     def _rig_for(self, scene: str):
         if self._rig is None or self._rig_scene != scene:
-            from robot.camera import CameraRig
+            from robot.camera import CameraProcess
 
             if self._rig is not None:
                 self._rig.close()
                 self._rig = None
-            self._rig = CameraRig(scene, cameras=(self.camera,), width=self.size_px[0], height=self.size_px[1],
-                                  depth_cameras=())
+            # no model in this process (loading one takes the lock ~0.1 s): the child says the sizes
+            self._rig = CameraProcess(scene, None, cameras=(self.camera,), width=self.size_px[0],
+                                      height=self.size_px[1], depth_cameras=())
             self._rig_scene = scene
         return self._rig
 
