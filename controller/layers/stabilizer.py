@@ -56,6 +56,10 @@ class StabilizerParams(Params):
     # standing (more push margin: 26 N s forward stands), stiff walking (D = 300 walking sideways
     # drives the COP to the sole edge at each support switch and tips the robot over; 3000 walks)
     rot_damping_gain: float = field(default=300.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
+    # standing, the pitch (about y) apart (hrpsys has a gain per axis): softer, so after a forward push the
+    # foot that tipped onto its toe lands without slapping the heel down (300: the ZMP then jumps to the heel
+    # edge and the capture point rings; 150 lands it flat); roll keeps 300 (150 drops a 40 N s side push)
+    rot_damping_gain_pitch: float = field(default=150.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_damping_gain_walking: float = field(default=3000.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
     rot_limit_deg: float = field(default=10.0, metadata={"unit": "deg", "min": 0.0, "max": 30.0})
@@ -282,7 +286,8 @@ class Stabilizer(Layer):
         """Eq. 3 with m = 0 on each sole's roll and pitch: d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T for a
         foot in contact; a swing foot returns to the plan with SWING_FOOT_RETURN_TIME_CONST_S."""
         p = self.params
-        damping = p.rot_damping_gain_walking if walking else p.rot_damping_gain
+        damping = ((p.rot_damping_gain_walking, p.rot_damping_gain_walking) if walking
+                   else (p.rot_damping_gain, p.rot_damping_gain_pitch))  # (roll, pitch)
         T_rot = p.rot_time_const_s
         d_foot = self.d_foot_rpy.tolist()
         n_xy = forces.n_xy_nm.tolist()
@@ -291,7 +296,7 @@ class Stabilizer(Layer):
             if contact_act[i]:
                 ta = (foot_wrenches[i][3], foot_wrenches[i][4])
                 tau_ref = (-n_xy[k][0], -n_xy[k][1])  # ground-reaction moment about the sole origin
-                rate = [(ta[j] - tau_ref[j]) / damping - d[j] / T_rot for j in range(2)]
+                rate = [(ta[j] - tau_ref[j]) / damping[j] - d[j] / T_rot for j in range(2)]
             else:
                 rate = [-d[j] / T_rot for j in range(2)]
             d_foot[i] = [d[j] + rate[j] * dt for j in range(2)]
