@@ -24,8 +24,9 @@ class KalmanFilterParams(Params):
     # ... and less when BODY turns (roll, pitch rate) at this rate or more: the robot rocking after a push
     # accelerates BODY in ways no plan knows, and the accelerometer reads that as tilt (a 20 N s forward push:
     # the attitude first read backward, then 1.4 deg too far forward and 0.1 s late, and the COG estimate with
-    # it, 20 mm off). 0 = off
-    gyro_trust_band_rad_s: float = field(default=0.05, metadata={"unit": "rad/s", "min": 0.0, "max": 10.0})
+    # it, 20 mm off). 0.05 did as well on the push but, a hand pulled down, the attitude caught up with the
+    # accelerometer in one jump when the turning ended (a 60 mm capture-point spike raised the flag). 0 = off
+    gyro_trust_band_rad_s: float = field(default=0.1, metadata={"unit": "rad/s", "min": 0.0, "max": 10.0})
 
 
 def _floats3(v) -> list[float]:
