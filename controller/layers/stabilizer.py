@@ -58,7 +58,8 @@ class StabilizerParams(Params):
     rot_damping_gain: float = field(default=300.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     # standing, the pitch (about y) apart (hrpsys has a gain per axis): softer, so after a forward push the
     # foot that tipped onto its toe lands without slapping the heel down (300: the ZMP then jumps to the heel
-    # edge and the capture point rings; 150 lands it flat); roll keeps 300 (150 drops a 40 N s side push)
+    # edge and the capture point rings; 150 lands it flat); roll keeps 300 (150 drops a 40 N s side push);
+    # with the hands loaded pitch uses rot_damping_gain too
     rot_damping_gain_pitch: float = field(default=150.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_damping_gain_walking: float = field(default=3000.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
@@ -201,7 +202,7 @@ class Stabilizer(Layer):
         zmp_new_xy = self._lip_feedback(cog, zmp, est, gait)
         contact_idx = [i for i in (0, 1) if gait.contact[i]]
         forces = self._distribute(zmp_new_xy, contact_idx, gait)
-        self._foot_damping(dt, contact_idx, contact_act, foot_wrenches, forces, gait.walking)
+        self._foot_damping(dt, contact_idx, contact_act, foot_wrenches, forces, gait.walking, self._hands_loaded(est))
         self._force_difference(dt, contact_idx, contact_act, foot_wrenches, forces)
         self._body_attitude(dt, est, ref)
         self._last_out = self._legs(ref, gait)
@@ -282,12 +283,15 @@ class Stabilizer(Layer):
         return forces
 
     def _foot_damping(self, dt: float, contact_idx: list[int], contact_act, foot_wrenches, forces,
-                      walking: bool) -> None:
+                      walking: bool, hands_loaded: bool = False) -> None:
         """Eq. 3 with m = 0 on each sole's roll and pitch: d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T for a
         foot in contact; a swing foot returns to the plan with SWING_FOOT_RETURN_TIME_CONST_S."""
         p = self.params
+        # (roll, pitch); with the hands loaded (a sustained moment: a wall, a door) pitch keeps the roll's gain,
+        # the soft pitch let the soles drift under it (the door push-plan's CP error crept back over the threshold)
+        pitch = p.rot_damping_gain if hands_loaded else p.rot_damping_gain_pitch
         damping = ((p.rot_damping_gain_walking, p.rot_damping_gain_walking) if walking
-                   else (p.rot_damping_gain, p.rot_damping_gain_pitch))  # (roll, pitch)
+                   else (p.rot_damping_gain, pitch))
         T_rot = p.rot_time_const_s
         d_foot = self.d_foot_rpy.tolist()
         n_xy = forces.n_xy_nm.tolist()
@@ -368,6 +372,12 @@ class Stabilizer(Layer):
             self._qp = ForceDistributionQP(polygons)
             self._qp_key = key
         return self._qp
+
+    @staticmethod
+    def _hands_loaded(est) -> bool:
+        """A measured hand force component beyond HAND_FORCE_DEADBAND_N."""
+        rows = est.wrenches_ext_world.tolist()
+        return any(abs(v) > HAND_FORCE_DEADBAND_N for i in HANDS for v in rows[i][:3])  # np.any(abs(f) > band)
 
     def static_balance_point(self, cog: np.ndarray, est, zmp_z: float) -> np.ndarray:
         """COG (3,) moved to where the measured hand forces put the ZMP of a robot at rest [m]."""
