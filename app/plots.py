@@ -13,6 +13,7 @@ import numpy as np  # noqa: E402
 
 from app.service import OperatorService  # noqa: E402
 from app.service.local import LocalRobot  # noqa: E402
+from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix  # noqa: E402
 
 
 def record_walk(seconds: float = 12.0):
@@ -43,6 +44,66 @@ def record_push(impulse_ns: float = 20.0, seconds: float = 4.0):
         rows.append([s.time_s, *st.cp_error, st.cp_error_norm, st.cp_threshold_m, float(st.emergency),
                      *s.zmp_world[:2], *s.cog_world[:2]])
     return np.array(rows)
+
+
+#: the tuning before issue 13.1 (the accelerometer trusted while BODY turns, one foot damping for roll and pitch)
+PUSH_TUNING_BEFORE = {"kf": {"gyro_trust_band_rad_s": 0.0}, "st": {"rot_damping_gain_pitch": 300.0}}
+
+
+def record_push_detail(impulse_ns: float = 20.0, seconds: float = 3.0, overrides: dict | None = None):
+    """Stand 3 s, push BODY forward; per tick: time, |CP error|, measured and commanded ZMP x from the ankle,
+    estimated and simulated BODY pitch. `overrides`: layer name -> parameter values."""
+    robot = LocalRobot()
+    loop = robot.loop
+    for name, values in (overrides or {}).items():
+        layer = loop.chain[name]
+        loop.call(lambda layer=layer, values=values: layer.set_params(layer.params.replaced(**values)))
+    robot.run_for(3.0)
+    loop.call(lambda: loop.plant.push("BODY", (impulse_ns / 0.1, 0.0, 0.0), 0.1))
+    rows = []
+    for _ in range(int(seconds / loop.dt_control_s)):
+        s = robot.step()
+        st = s.layers["st"]
+        ankle_x = s.reference.gait.p_rsole_world[0]
+        pitch_truth = matrix_to_rpy(quat_wxyz_to_matrix(np.asarray(s.truth.base_quat_wxyz, dtype=float)))[1]
+        rows.append([s.time_s, st.cp_error_norm, s.zmp_world[0] - ankle_x, st.new_zmp[0] - ankle_x,
+                     s.base_rpy_est_rad[1], pitch_truth])
+    d = np.array(rows)
+    d[:, 0] -= d[0, 0]
+    return d
+
+
+def plot_push_before_after(out: Path) -> None:
+    from controller.balance.capture_point import HRP2_RIGHT_SOLE
+
+    runs = (("before", record_push_detail(overrides=PUSH_TUNING_BEFORE)), ("after", record_push_detail()))
+    fig, axes = plt.subplots(3, 2, figsize=(12, 8), sharex=True, sharey="row")
+    for col, (label, d) in enumerate(runs):
+        t = d[:, 0]
+        ax = axes[0, col]
+        ax.plot(t, d[:, 1] * 1e3, color="tab:red", label="|CP error|")
+        ax.axhline(40.0, color="tab:blue", ls="--", label="threshold")
+        ax.axhline(10.0, color="tab:gray", ls=":", label="10 mm")
+        ax.set_title(label)
+        ax = axes[1, col]
+        ax.plot(t, d[:, 2] * 1e3, color="tab:green", label="ZMP x measured (F/T)")
+        ax.plot(t, d[:, 3] * 1e3, color="tab:orange", label="ZMP x commanded")
+        ax.axhline(HRP2_RIGHT_SOLE.front_m * 1e3, color="k", ls=":", lw=0.8, label="toe / heel edge")
+        ax.axhline(-HRP2_RIGHT_SOLE.rear_m * 1e3, color="k", ls=":", lw=0.8)
+        ax = axes[2, col]
+        ax.plot(t, np.degrees(d[:, 4]), color="tab:purple", label="BODY pitch (KalmanFilter)")
+        ax.plot(t, np.degrees(d[:, 5]), color="tab:gray", ls="--", label="BODY pitch (simulation)")
+        ax.set_xlabel("time after the push [s]")
+    axes[0, 0].set_ylabel("CP error [mm]")
+    axes[1, 0].set_ylabel("from the ankle [mm]")
+    axes[2, 0].set_ylabel("[deg]")
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+    for ax in axes[:, 1]:
+        ax.legend(fontsize=8)
+    fig.suptitle("20 N s forward push on BODY, standing: before / after issue 13.1 (KF gyro trust, pitch damping)")
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
 
 
 def plot_walk(out: Path) -> None:
@@ -96,6 +157,7 @@ def main(argv=None) -> int:
     args.out_dir.mkdir(parents=True, exist_ok=True)
     plot_walk(args.out_dir / "walk_zmp_cog_cp.png")
     plot_push(args.out_dir / "push_cp_error.png")
+    plot_push_before_after(args.out_dir / "push_before_after.png")
     return 0
 
 

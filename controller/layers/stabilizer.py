@@ -56,6 +56,11 @@ class StabilizerParams(Params):
     # standing (more push margin: 26 N s forward stands), stiff walking (D = 300 walking sideways
     # drives the COP to the sole edge at each support switch and tips the robot over; 3000 walks)
     rot_damping_gain: float = field(default=300.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
+    # standing, the pitch (about y) apart (hrpsys has a gain per axis): softer, so after a forward push the
+    # foot that tipped onto its toe lands without slapping the heel down (300: the ZMP then jumps to the heel
+    # edge and the capture point rings; 150 lands it flat); roll keeps 300 (150 drops a 40 N s side push);
+    # with the hands loaded pitch uses rot_damping_gain too
+    rot_damping_gain_pitch: float = field(default=150.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_damping_gain_walking: float = field(default=3000.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
     rot_limit_deg: float = field(default=10.0, metadata={"unit": "deg", "min": 0.0, "max": 30.0})
@@ -197,7 +202,7 @@ class Stabilizer(Layer):
         zmp_new_xy = self._lip_feedback(cog, zmp, est, gait)
         contact_idx = [i for i in (0, 1) if gait.contact[i]]
         forces = self._distribute(zmp_new_xy, contact_idx, gait)
-        self._foot_damping(dt, contact_idx, contact_act, foot_wrenches, forces, gait.walking)
+        self._foot_damping(dt, contact_idx, contact_act, foot_wrenches, forces, gait.walking, self._hands_loaded(est))
         self._force_difference(dt, contact_idx, contact_act, foot_wrenches, forces)
         self._body_attitude(dt, est, ref)
         self._last_out = self._legs(ref, gait)
@@ -278,11 +283,15 @@ class Stabilizer(Layer):
         return forces
 
     def _foot_damping(self, dt: float, contact_idx: list[int], contact_act, foot_wrenches, forces,
-                      walking: bool) -> None:
+                      walking: bool, hands_loaded: bool = False) -> None:
         """Eq. 3 with m = 0 on each sole's roll and pitch: d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T for a
         foot in contact; a swing foot returns to the plan with SWING_FOOT_RETURN_TIME_CONST_S."""
         p = self.params
-        damping = p.rot_damping_gain_walking if walking else p.rot_damping_gain
+        # (roll, pitch); with the hands loaded (a sustained moment: a wall, a door) pitch keeps the roll's gain,
+        # the soft pitch let the soles drift under it (the door push-plan's CP error crept back over the threshold)
+        pitch = p.rot_damping_gain if hands_loaded else p.rot_damping_gain_pitch
+        damping = ((p.rot_damping_gain_walking, p.rot_damping_gain_walking) if walking
+                   else (p.rot_damping_gain, pitch))
         T_rot = p.rot_time_const_s
         d_foot = self.d_foot_rpy.tolist()
         n_xy = forces.n_xy_nm.tolist()
@@ -291,7 +300,7 @@ class Stabilizer(Layer):
             if contact_act[i]:
                 ta = (foot_wrenches[i][3], foot_wrenches[i][4])
                 tau_ref = (-n_xy[k][0], -n_xy[k][1])  # ground-reaction moment about the sole origin
-                rate = [(ta[j] - tau_ref[j]) / damping - d[j] / T_rot for j in range(2)]
+                rate = [(ta[j] - tau_ref[j]) / damping[j] - d[j] / T_rot for j in range(2)]
             else:
                 rate = [-d[j] / T_rot for j in range(2)]
             d_foot[i] = [d[j] + rate[j] * dt for j in range(2)]
@@ -363,6 +372,12 @@ class Stabilizer(Layer):
             self._qp = ForceDistributionQP(polygons)
             self._qp_key = key
         return self._qp
+
+    @staticmethod
+    def _hands_loaded(est) -> bool:
+        """A measured hand force component beyond HAND_FORCE_DEADBAND_N."""
+        rows = est.wrenches_ext_world.tolist()
+        return any(abs(v) > HAND_FORCE_DEADBAND_N for i in HANDS for v in rows[i][:3])  # np.any(abs(f) > band)
 
     def static_balance_point(self, cog: np.ndarray, est, zmp_z: float) -> np.ndarray:
         """COG (3,) moved to where the measured hand forces put the ZMP of a robot at rest [m]."""

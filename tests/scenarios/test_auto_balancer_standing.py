@@ -71,7 +71,8 @@ def test_a_50_newton_downward_pull_at_one_hand_is_balanced_by_offsetting_the_cog
     assert abs((mid[0] - gait.cog_world[0]) - 0.0582) < 0.006
     # so the measured ZMP stays near the middle of the feet
     assert abs(snap.zmp_world[0] - mid[0]) < PULL_ZMP_ERROR_M
-    assert worst < 1.1  # [deg] measured 0.83, margin 30 %
+    # [deg] measured 0.96, margin 30 % (0.83 before issue 13.1's KalmanFilter gyro trust)
+    assert worst < 1.25
     assert not snap.fallen
 
 
