@@ -298,7 +298,7 @@ def run(progress=None, through: str = "table") -> FloorResult:
             raise _Done
         # standing up: the squat's path backwards (elsewhere the wrist meets its limits holding the pitch)
         op.drive(hand_m=np.array(BACK_M), hand_R=R_grasp, waist_z_m=waist0[2], waist_pitch_rad=0.0,
-                 angular_rad_s=WAIST_PITCH_RATE_RAD_S, label="stand", tol_m=0.01)
+                 angular_rad_s=WAIST_PITCH_RATE_RAD_S, label="stand", tol_m=0.01, waist_m_s=0.05)
         table_rel = np.array([*OBJECT_TABLE_IN_STANCE_M, top_z + half_h])
         place_at = hand_for(table_rel)
         op.drive(hand_m=np.array(UP_BEFORE_TABLE_M), hand_R=R_grasp, label="up, before the table", tol_m=0.01)
