@@ -339,6 +339,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from app.experiments.expo import main as expo_main
 
         code = expo_main(argv[2:])
+    elif argv[:2] == ["experiment", "floor"]:
+        from app.experiments.floor_object import main as floor_main
+
+        code = floor_main(argv[2:])
     elif argv and argv[0] == "experiment":
         code = experiment(argv[1:])
     else:

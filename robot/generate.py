@@ -673,8 +673,10 @@ TRASH_BOX_WALL_M = 0.01  # walls, bottom and lid thickness
 TRASH_BOX_CENTRE_M = (1.4, -2.0)
 TRASH_BOX_YAW_DEG = 0.0
 
-#: The "unknown object" on the floor [OP VI, Fig. 7c: a bag]: a small soft-looking box the robot has no model of.
-UNKNOWN_OBJECT_SIZE_M = (0.20, 0.12, 0.08)
+#: The "unknown object" on the floor [OP VI, Fig. 7c: a bag]: a box the robot has no model of, narrow across the
+#: jaws (y: 55 mm; the 85 mm JRL-hand opens to 0.10 m) and tall (x 80 mm, z 200 mm: a carton), so the squatting
+#: robot's hand takes it from the floor with a side grasp above its middle (app/experiments/floor_object.py).
+UNKNOWN_OBJECT_SIZE_M = (0.08, 0.055, 0.20)
 UNKNOWN_OBJECT_MASS_KG = 0.30
 UNKNOWN_OBJECT_CENTRE_M = (1.6, 1.0)
 
