@@ -245,6 +245,11 @@ class CameraRig:
         self.close()
 
 
+#: CameraProcess: the child must have made its renderer within this [s], and answer a request within this [s].
+START_TIMEOUT_S = 60.0
+FRAME_TIMEOUT_S = 20.0
+
+
 def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: int,
            depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None) -> None:
     """The camera process: a CameraRig of its own, rendering each request it receives until None arrives."""
@@ -338,8 +343,15 @@ class CameraProcess:
     def pid(self) -> int | None:
         return self._proc.pid
 
-    def _receive(self) -> Any:
+    def _receive(self, timeout_s: float) -> Any:
+        deadline = time.monotonic() + timeout_s
         try:
+            while not self._conn.poll(0.5):  # (no hang on a child that is gone or never starts)
+                if not self._proc.is_alive():
+                    raise EOFError
+                if time.monotonic() > deadline:
+                    raise RuntimeError(f"the camera process did not answer within {timeout_s:g} s (a script that "
+                                       "starts it needs `if __name__ == '__main__':`: the child imports it)")
             kind, payload = self._conn.recv()
         except (EOFError, OSError):
             raise RuntimeError(f"the camera process ended (exit code {self._proc.exitcode})") from None
@@ -349,7 +361,7 @@ class CameraProcess:
 
     def _ensure_ready(self) -> None:
         if not self._ready:
-            nq, nmocap, intrinsics = self._receive()  # "ready": the child's renderer exists
+            nq, nmocap, intrinsics = self._receive(START_TIMEOUT_S)  # "ready": the child's renderer exists
             if self._nq is None:
                 self._nq, self._nmocap = nq, nmocap
                 self._intrinsics = {name: intrinsics[name] for name in self._cameras}
@@ -367,7 +379,7 @@ class CameraProcess:
         except OSError:  # a broken pipe: the child is gone
             self._proc.join(1.0)
             raise RuntimeError(f"the camera process ended (exit code {self._proc.exitcode})") from None
-        frames: Frames = self._receive()
+        frames: Frames = self._receive(FRAME_TIMEOUT_S)
         for image in frames.images.values():  # read-only, as CameraRig's
             image.rgb.flags.writeable = False
             if image.depth_m is not None:
