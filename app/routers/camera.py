@@ -4,7 +4,6 @@ correction of one (what later behaviours use)."""
 
 from __future__ import annotations
 
-import asyncio
 import json
 import logging
 import math
@@ -15,9 +14,9 @@ from fastapi import APIRouter, Body, Path, WebSocket
 from fastapi.responses import Response
 from pydantic import BaseModel, Field
 
-from app.deps import ServiceDep, get_lock, get_service
+from app.deps import ServiceDep, get_service
 from app.errors import errors
-from app.routers.operator import MAX_MESSAGE_BYTES, receive_message, ws_client
+from app.routers.rate_stream import RateStream, check_rate, error_text
 from app.schemas import _Body
 from app.service import ServiceError
 from app.service.camera_feed import VIEW_CAMERA, VIEW_RATE_HZ
@@ -49,36 +48,7 @@ def camera_frame(service: ServiceDep) -> Response:
 
 
 def check_stream_rate(value: object) -> float:
-    lo, hi = STREAM_RATE_HZ
-    if isinstance(value, str):
-        try:
-            value = float(value)
-        except ValueError:
-            raise ValueError(f"rate_hz: {value!r} is not a number; give {lo:g} to {hi:g} [Hz]") from None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"rate_hz: {value!r} is not a number; give {lo:g} to {hi:g} [Hz]")
-    if not lo <= value <= hi:
-        raise ValueError(f"rate_hz: {value:g} Hz is outside the allowed range [{lo:g}, {hi:g}] Hz")
-    return float(value)
-
-
-def _error(detail: str, field: str | None = None) -> str:
-    return json.dumps({k: v for k, v in {"ok": False, "detail": detail, "field": field}.items() if v is not None})
-
-
-def _rate_message(text: str) -> float:
-    try:
-        msg = json.loads(text)
-    except ValueError as exc:
-        raise ValueError(f"body: invalid JSON ({exc})") from None
-    if not isinstance(msg, dict):
-        raise ValueError("body: send a JSON object {\"rate_hz\": N}")
-    unknown = sorted(set(msg) - {"rate_hz"})
-    if unknown:
-        raise ValueError(f"{unknown[0]}: unknown field; the only one is rate_hz")
-    if "rate_hz" not in msg:
-        raise ValueError("rate_hz: field required")
-    return check_stream_rate(msg["rate_hz"])
+    return check_rate(value, STREAM_RATE_HZ)
 
 
 @router.websocket("/ws/camera")
@@ -89,71 +59,35 @@ async def camera_stream(ws: WebSocket) -> None:
     message. The console renders while at least one client watches, at the highest rate asked. `?client=<id>`
     keeps its operator lock. Client messages: {"rate_hz": N}; an invalid one is answered with an error naming
     the field."""
-    lock = get_lock(ws)
-    client, bad_client = ws_client(ws)
-    await ws.accept()
-    try:
-        rate = check_stream_rate(ws.query_params.get("rate_hz", DEFAULT_STREAM_RATE_HZ))
-        if bad_client is not None:
-            raise ValueError(bad_client)
-    except ValueError as exc:
-        await ws.send_text(_error(str(exc), field=str(exc).split(":", 1)[0]))
-        await ws.close(code=1008, reason=str(exc)[:120])
+    stream = await RateStream.open(ws, STREAM_RATE_HZ, DEFAULT_STREAM_RATE_HZ)
+    if stream is None:
         return
-    if client is not None:
-        lock.connected(client)
-    period = [1.0 / rate]
-    send_lock = asyncio.Lock()
-
-    async def send_text(text: str) -> None:
-        async with send_lock:
-            await ws.send_text(text)
-
-    async def reader() -> None:
-        while True:
-            text = await receive_message(ws)
-            if text is None:
-                return
-            if len(text) > MAX_MESSAGE_BYTES:
-                await send_text(_error(f"body: message of {len(text)} bytes; the limit is {MAX_MESSAGE_BYTES}",
-                                       "body"))
-                continue
-            try:
-                period[0] = 1.0 / _rate_message(text or "null")
-            except ValueError as exc:
-                await send_text(_error(str(exc), field=str(exc).split(":", 1)[0]))
-                continue
-            await send_text(json.dumps({"ok": True, "rate_hz": round(1.0 / period[0], 6)}))
-
-    reading = asyncio.create_task(reader())
     try:
         last = None
         sent_at = -math.inf
-        while not reading.done():
+        while not stream.reading.done():
             try:
                 service = get_service(ws)
                 service.published()
-                frame = service.latest_camera_frame(1.0 / period[0])
+                frame = service.latest_camera_frame(1.0 / stream.period_s)
             except ServiceError as exc:
-                await send_text(_error(str(exc)))
-                await asyncio.wait({reading}, timeout=UNAVAILABLE_RETRY_S)
+                await stream.send(error_text(str(exc)))
+                await stream.wait(UNAVAILABLE_RETRY_S)
                 continue
             now = time.monotonic()
             # a new frame once the period is (nearly) over: looked for every POLL_S, so that a stream at the feed's
             # own rate does not alias with it and skip frames
-            if frame is not None and frame is not last and now - sent_at >= 0.9 * period[0]:
+            if frame is not None and frame is not last and now - sent_at >= 0.9 * stream.period_s:
                 last, sent_at = frame, now
-                async with send_lock:
+                async with stream.send_lock:
                     await ws.send_text(json.dumps({"ok": True, **frame.meta()}))
                     await ws.send_bytes(frame.jpeg)
             # nothing may be sent before 0.9 period after the last frame: sleep until then, then look every POLL_S
-            await asyncio.wait({reading}, timeout=max(POLL_S, sent_at + 0.9 * period[0] - time.monotonic()))
+            await stream.wait(max(POLL_S, sent_at + 0.9 * stream.period_s - time.monotonic()))
     except Exception as exc:  # noqa: BLE001 - the client left while we were sending
         log.debug("camera stream ended: %s", exc)
     finally:
-        reading.cancel()
-        if client is not None:
-            lock.disconnected(client)
+        stream.close()
 
 
 # ---- the recognitions ----------------------------------------------------------------------------------------
