@@ -180,6 +180,8 @@ def released(c: Console) -> None:
     if c.state()["emergency"]["hard_stop"]:
         post_json(f"{c.base}/api/estop/release")
     wait_until(lambda: not c.state()["emergency"]["hard_stop"], 5.0, "hard_stop == false")
+    # and its release blend over: until then the chain holds, and nothing operated moves (recover_time_s 2.5 s)
+    wait_until(lambda: not c.state()["layers"]["hes"]["recovering"], 10.0, "hes recovering == false")
 
 
 def motion(c: Console, point: str) -> list[float]:

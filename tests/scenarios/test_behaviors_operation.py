@@ -175,3 +175,33 @@ def test_a_behaviour_run_at_max_speed_is_the_same_every_time():
             rig.close()
 
     np.testing.assert_array_equal(squat_posture(), squat_posture())
+
+
+def test_a_squat_started_in_the_hard_estops_release_blend_makes_no_jump_when_the_blend_ends():
+    """The chain holds until the release blend is over; the operation layer does not integrate meanwhile (it did:
+    the waist target ran ahead, BODY came down 34 mm in one tick at the blend's end, CP error 108 mm, motion
+    stopped). Measured now: CP error at most 3.5 mm; the squat ends short by what fell into the blend."""
+    from app.service import OperatorService
+    from app.service.local import LocalRobot
+
+    robot = LocalRobot(speed=None)
+    service = OperatorService(robot)
+    robot.run_for(3.0)
+    service.estop()
+    robot.run_for(0.5)
+    service.release_estop()
+    robot.run_for(1.0)  # inside the 2.5 s release blend
+    run = service.run_behavior("squat", {"depth_m": 0.05, "speed_m_s": 0.05, "tolerance_m": 0.005})
+    worst, body_z, jump = 0.0, None, 0.0
+    for _ in range(int(4.0 / 0.005)):
+        robot.step()
+        snap = robot.loop.snapshot
+        worst = max(worst, snap.layers["st"].cp_error_norm)
+        z = float(snap.reference.base_pos_world[2])
+        jump = max(jump, abs(z - body_z) if body_z is not None else 0.0)
+        body_z = z
+        if service.get_run(run).state != "running":
+            break
+    assert not snap.layers["es"].stopped and snap.safety.fall is None
+    assert worst < 0.010, f"CP error {1e3 * worst:.1f} mm"  # measured 3.5 mm; the flag's threshold is 40 mm
+    assert jump < 0.001, f"BODY reference jumped {1e3 * jump:.1f} mm in a tick"  # 0.05 m/s: 0.25 mm a tick
