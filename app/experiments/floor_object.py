@@ -27,7 +27,7 @@ from app.service import OperatorService
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
 from behaviors.servo import rotation_vector
-from controller.kinematics.model import RobotKinematics
+from controller.kinematics.model import RobotKinematics, frame_from_soles_midpoint
 
 SETTLE_S = 2.5  # [s] standing before the first command (the AutoBalancer starts in 2 s)
 STANDOFF_M = 0.3  # [m] approach_table's feet centre to the table's near edge (its default)
@@ -128,11 +128,7 @@ class Operator:
     def measured(self, frame: str) -> tuple[np.ndarray, np.ndarray]:
         """(position [m], rotation) of `frame` relative to the soles' midpoint, from the encoders."""
         s = self.robot.loop.snapshot
-        kin = self.kin
-        kin.update_rpy(np.zeros(3), s.base_rpy_est_rad, s.q_meas_rad)
-        mid = 0.5 * (kin.frame_pose("rleg_end")[0] + kin.frame_pose("lleg_end")[0])
-        p, R = kin.frame_pose(frame)
-        return p - mid, R
+        return frame_from_soles_midpoint(self.kin, s.base_rpy_est_rad, s.q_meas_rad, frame)
 
     def step(self) -> None:
         obs = self.robot.step()

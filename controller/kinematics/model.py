@@ -147,3 +147,13 @@ class RobotKinematics:
             f"setTargetPose: {group} cannot reach the target (closest: "
             f"{sol.pos_error_m * 1e3:.1f} mm, {np.rad2deg(sol.rot_error_rad):.2f} deg off) within joint limits"
         )
+
+
+def frame_from_soles_midpoint(kin: RobotKinematics, base_rpy_rad, q_rad, frame: str):
+    """(position [m], rotation) of `frame` relative to the midpoint of the two soles, BODY at the origin with the
+    attitude `base_rpy_rad` (e.g. the KalmanFilter's) and the joints `q_rad` (e.g. the encoders): where the
+    robot itself sees one of its points, in axes of the world's attitude (yaw as BODY's)."""
+    kin.update_rpy(np.zeros(3), base_rpy_rad, q_rad)
+    mid = 0.5 * (kin.frame_pose("rleg_end")[0] + kin.frame_pose("lleg_end")[0])
+    p, R = kin.frame_pose(frame)
+    return p - mid, R

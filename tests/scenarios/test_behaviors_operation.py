@@ -13,7 +13,7 @@ import pytest
 
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from controller.kinematics.model import RobotKinematics
+from controller.kinematics.model import RobotKinematics, frame_from_soles_midpoint
 from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
 
 DT = 0.005
@@ -45,11 +45,7 @@ class Rig:
     def measured(self, frame: str) -> tuple[np.ndarray, np.ndarray]:
         """(position [m], rotation) of `frame` relative to the soles' midpoint (yaw 0), from the encoders."""
         s = self.robot.loop.snapshot
-        kin = self.kin
-        kin.update_rpy(np.zeros(3), s.base_rpy_est_rad, s.q_meas_rad)
-        mid = 0.5 * (kin.frame_pose("rleg_end")[0] + kin.frame_pose("lleg_end")[0])
-        p, R = kin.frame_pose(frame)
-        return p - mid, R
+        return frame_from_soles_midpoint(self.kin, s.base_rpy_est_rad, s.q_meas_rad, frame)
 
     def close(self) -> None:
         self.robot.stop()

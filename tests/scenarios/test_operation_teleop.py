@@ -18,7 +18,7 @@ from controller.balance.capture_point import (
     support_polygon,
 )
 from controller.core.system import ControllerSystem
-from controller.kinematics.model import RobotKinematics
+from controller.kinematics.model import RobotKinematics, frame_from_soles_midpoint
 from controller.operation.points import Twist
 from robot.plant import MujocoPlant
 
@@ -42,11 +42,7 @@ class Teleop:
     def measured(self, frame: str):
         """(position [m], rotation) of `frame` relative to the soles' midpoint, from the encoders."""
         s = self.snap
-        kin = self.kin
-        kin.update_rpy(np.zeros(3), s.base_rpy_est_rad, s.q_meas_rad)
-        mid = 0.5 * (kin.frame_pose("rleg_end")[0] + kin.frame_pose("lleg_end")[0])
-        p, R = kin.frame_pose(frame)
-        return p - mid, R
+        return frame_from_soles_midpoint(self.kin, s.base_rpy_est_rad, s.q_meas_rad, frame)
 
     def _margin(self) -> float:
         kin = self.kin
