@@ -55,6 +55,26 @@ def stereo_baseline_m(model: mujoco.MjModel) -> float:
     return float(np.linalg.norm(model.camera("narrow_left").pos - model.camera("narrow_right").pos))
 
 
+def _copied_request(qpos, mocap_pos, mocap_quat, cameras, rendered: tuple[str, ...]):
+    """A request's arrays copied (the caller may go on stepping) and its cameras (None: all the rig renders)."""
+    q = np.array(qpos, dtype=float, copy=True)
+    pos = None if mocap_pos is None else np.array(mocap_pos, dtype=float, copy=True).reshape(-1, 3)
+    quat = None if mocap_quat is None else np.array(mocap_quat, dtype=float, copy=True).reshape(-1, 4)
+    return q, pos, quat, rendered if cameras is None else tuple(cameras)
+
+
+def _check_request(q, pos, quat, chosen, nq: int, nmocap: int, rendered: tuple[str, ...]) -> None:
+    """ValueError naming what is wrong with a request for a model of nq positions and nmocap mocap bodies."""
+    if q.shape != (nq,) or not np.all(np.isfinite(q)):
+        raise ValueError(f"qpos must be {nq} finite numbers, got shape {q.shape}")
+    for name, a in (("mocap_pos", pos), ("mocap_quat", quat)):
+        if a is not None and a.shape[0] != nmocap:
+            raise ValueError(f"{name} must have {nmocap} rows (one per mocap body), got {a.shape}")
+    unknown = [c for c in chosen if c not in rendered]
+    if unknown or not chosen:
+        raise ValueError(f"cameras {unknown or chosen} not rendered by this rig; valid: {', '.join(rendered)}")
+
+
 class CameraRig:
     """Renders the head cameras from snapshots of the plant state, on one dedicated render thread.
 
@@ -201,18 +221,8 @@ class CameraRig:
         qpos (nq,); mocap_pos (nmocap, 3) and mocap_quat (nmocap, 4) for fixed objects (None: the model's
         poses); cameras: a subset of the rig's (None: all). The future's result is a Frames.
         """
-        q = np.array(qpos, dtype=float, copy=True)
-        if q.shape != (self._model.nq,) or not np.all(np.isfinite(q)):
-            raise ValueError(f"qpos must be {self._model.nq} finite numbers, got shape {q.shape}")
-        pos = None if mocap_pos is None else np.array(mocap_pos, dtype=float, copy=True).reshape(-1, 3)
-        quat = None if mocap_quat is None else np.array(mocap_quat, dtype=float, copy=True).reshape(-1, 4)
-        for name, a in (("mocap_pos", pos), ("mocap_quat", quat)):
-            if a is not None and a.shape[0] != self._model.nmocap:
-                raise ValueError(f"{name} must have {self._model.nmocap} rows (one per mocap body), got {a.shape}")
-        chosen = self._cameras if cameras is None else tuple(cameras)
-        unknown = [c for c in chosen if c not in self._cameras]
-        if unknown or not chosen:
-            raise ValueError(f"cameras {unknown or chosen} not rendered by this rig; valid: {', '.join(self._cameras)}")
+        q, pos, quat, chosen = _copied_request(qpos, mocap_pos, mocap_quat, cameras, self._cameras)
+        _check_request(q, pos, quat, chosen, self._model.nq, self._model.nmocap, self._cameras)
         with self._lock:
             if self._closed:
                 raise RuntimeError("CameraRig is closed")
@@ -389,10 +399,7 @@ class CameraProcess:
     def request(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
                 cameras: Sequence[str] | None = None) -> Future[Frames]:
         """As CameraRig.request: the arrays are copied now; the future's result is a Frames."""
-        q = np.array(qpos, dtype=float, copy=True)
-        pos = None if mocap_pos is None else np.array(mocap_pos, dtype=float, copy=True).reshape(-1, 3)
-        quat = None if mocap_quat is None else np.array(mocap_quat, dtype=float, copy=True).reshape(-1, 4)
-        chosen = self._cameras if cameras is None else tuple(cameras)
+        q, pos, quat, chosen = _copied_request(qpos, mocap_pos, mocap_quat, cameras, self._cameras)
         msg = (q, float(time_s), pos, quat, chosen)
         if self._nq is not None:
             self._check(*msg)
@@ -402,14 +409,7 @@ class CameraProcess:
             return self._executor.submit(self._roundtrip, msg)
 
     def _check(self, q, time_s, pos, quat, chosen) -> None:
-        if q.shape != (self._nq,) or not np.all(np.isfinite(q)):
-            raise ValueError(f"qpos must be {self._nq} finite numbers, got shape {q.shape}")
-        for name, a in (("mocap_pos", pos), ("mocap_quat", quat)):
-            if a is not None and a.shape[0] != self._nmocap:
-                raise ValueError(f"{name} must have {self._nmocap} rows (one per mocap body), got {a.shape}")
-        unknown = [c for c in chosen if c not in self._cameras]
-        if unknown or not chosen:
-            raise ValueError(f"cameras {unknown or chosen} not rendered by this rig; valid: {', '.join(self._cameras)}")
+        _check_request(q, pos, quat, chosen, self._nq, self._nmocap, self._cameras)
 
     def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None) -> Future[Frames]:
         return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras)
