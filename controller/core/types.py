@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -40,25 +40,25 @@ class Reference:
     Immutable: a layer that changes it returns `ref.with_(q_rad=...)`.
     """
 
-    q_rad: np.ndarray  # (30,) joint angles, JOINT_NAMES order
-    base_pos_world: np.ndarray  # (3,) BODY position [m]
-    base_rpy_rad: np.ndarray  # (3,) BODY roll, pitch, yaw [rad]
-    zmp_base: np.ndarray  # (3,) reference ZMP in the BODY frame [m]
-    wrenches: np.ndarray  # (4, 6) reference wrenches at the force sensors, world frame [N, N m]
+    # an array field states its shape in its metadata: with_ copies, checks and freezes it to that shape
+    q_rad: np.ndarray = field(metadata={"shape": (NUM_JOINTS,)})  # joint angles, JOINT_NAMES order
+    base_pos_world: np.ndarray = field(metadata={"shape": (3,)})  # BODY position [m]
+    base_rpy_rad: np.ndarray = field(metadata={"shape": (3,)})  # BODY roll, pitch, yaw [rad]
+    zmp_base: np.ndarray = field(metadata={"shape": (3,)})  # reference ZMP in the BODY frame [m]
+    # reference wrenches at the force sensors, world frame [N, N m]
+    wrenches: np.ndarray = field(metadata={"shape": (len(FORCE_SENSOR_NAMES), 6)})
     gait: GaitState | None = None  # set by the AutoBalancer
 
     @staticmethod
     def from_arrays(q_rad, base_pos_world=(0.0, 0.0, 0.0), base_rpy_rad=(0.0, 0.0, 0.0),
-                    zmp_base=(0.0, 0.0, 0.0), wrenches=None) -> Reference:
+                    zmp_base=(0.0, 0.0, 0.0), wrenches=None, gait: GaitState | None = None) -> Reference:
+        """The one constructor from array-likes: each array is copied, checked against its field's shape
+        and frozen (as in with_)."""
         if wrenches is None:
             wrenches = np.zeros((len(FORCE_SENSOR_NAMES), 6))
-        return Reference(
-            q_rad=frozen_array(q_rad, (NUM_JOINTS,)),
-            base_pos_world=frozen_array(base_pos_world, (3,)),
-            base_rpy_rad=frozen_array(base_rpy_rad, (3,)),
-            zmp_base=frozen_array(zmp_base, (3,)),
-            wrenches=frozen_array(wrenches, (len(FORCE_SENSOR_NAMES), 6)),
-        )
+        arrays = {"q_rad": q_rad, "base_pos_world": base_pos_world, "base_rpy_rad": base_rpy_rad,
+                  "zmp_base": zmp_base, "wrenches": wrenches}
+        return Reference(**{k: frozen_array(v, _REFERENCE_SHAPES[k]) for k, v in arrays.items()}, gait=gait)
 
     def with_(self, **changes) -> Reference:
         """A copy with some fields replaced (arrays are copied and frozen)."""
@@ -83,15 +83,17 @@ class Reference:
     def _replace(self, changes: dict) -> Reference:
         if not changes.keys() <= _REFERENCE_FIELDS:
             return replace(self, **changes)  # raises the usual TypeError for unknown fields
+        # Every field by keyword, written out: a third faster than a loop over fields(Reference) on the hot
+        # path. tests/controller/core/test_types.py fails if a field is missing here.
         get = changes.get
         return Reference(q_rad=get("q_rad", self.q_rad), base_pos_world=get("base_pos_world", self.base_pos_world),
                          base_rpy_rad=get("base_rpy_rad", self.base_rpy_rad), zmp_base=get("zmp_base", self.zmp_base),
                          wrenches=get("wrenches", self.wrenches), gait=get("gait", self.gait))
 
 
-_REFERENCE_SHAPES = {"q_rad": (NUM_JOINTS,), "base_pos_world": (3,), "base_rpy_rad": (3,),
-                     "zmp_base": (3,), "wrenches": (len(FORCE_SENSOR_NAMES), 6)}
-_REFERENCE_FIELDS = frozenset((*_REFERENCE_SHAPES, "gait"))
+# computed once from the dataclass (with_ runs several times per tick)
+_REFERENCE_FIELDS = frozenset(f.name for f in fields(Reference))
+_REFERENCE_SHAPES = {f.name: f.metadata["shape"] for f in fields(Reference) if "shape" in f.metadata}
 
 
 _EYE_PER_SENSOR = np.tile(np.eye(3), (len(FORCE_SENSOR_NAMES), 1, 1))

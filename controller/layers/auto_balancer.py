@@ -460,7 +460,7 @@ class AutoBalancer(Layer):
             out = self._last_out
             if out.gait is not None:
                 still = read_only(np.zeros(3))
-                out = out._replace({"gait": dataclasses.replace(out.gait, cog_vel_world=still, cog_acc_world=still)})
+                out = out.with_(gait=dataclasses.replace(out.gait, cog_vel_world=still, cog_acc_world=still))
             self._last_out = out
             self.last_gait = out.gait
         return self._last_out

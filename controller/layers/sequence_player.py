@@ -10,7 +10,7 @@ import numpy as np
 
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
-from controller.core.types import Reference, TickContext, frozen_array
+from controller.core.types import Reference, TickContext
 from controller.interpolation.hoff_arbib import HoffArbibTrack
 from robot.names import FORCE_SENSOR_NAMES, JOINT_GROUPS, JOINT_NAMES, NUM_JOINTS
 
@@ -164,13 +164,9 @@ class SequencePlayer(Layer):
         return self.last_output
 
     def _output(self) -> Reference:
-        return Reference(
-            q_rad=frozen_array(self._q.x),
-            base_pos_world=frozen_array(self._base_pos.x),
-            base_rpy_rad=frozen_array(self._base_rpy.x),
-            zmp_base=frozen_array(self._zmp.x),
-            wrenches=frozen_array(self._wrenches.x.reshape(len(FORCE_SENSOR_NAMES), 6)),
-        )
+        return Reference.from_arrays(self._q.x, base_pos_world=self._base_pos.x, base_rpy_rad=self._base_rpy.x,
+                                     zmp_base=self._zmp.x,
+                                     wrenches=self._wrenches.x.reshape(len(FORCE_SENSOR_NAMES), 6))
 
     # ---- joint angles ---------------------------------------------------------------------------
 
