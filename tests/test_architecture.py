@@ -105,14 +105,65 @@ def test_only_the_collision_detector_imports_mujoco_in_the_controller():
     assert users <= MUJOCO_IN_CONTROLLER
 
 
-def test_no_private_name_is_imported_across_modules_of_the_controller():
+def names_a_module_defines(tree: ast.AST) -> set[str]:
+    """Names a module makes its own: functions, classes, assigned names, attributes it sets on self/cls or
+    through object.__setattr__ (frozen dataclasses), and __slots__ entries."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            names.add(node.name)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            names.add(node.id)
+        elif isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"):
+            names.add(node.attr)
+        elif (isinstance(node, ast.Call) and ast.unparse(node.func) == "object.__setattr__" and len(node.args) >= 2
+              and isinstance(node.args[1], ast.Constant) and isinstance(node.args[1].value, str)):
+            names.add(node.args[1].value)
+        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value.isidentifier():
+            names.add(node.value)  # __slots__ = ("_x", ...), namedtuple field lists
+    return names
+
+
+def private_names_crossing(source: str, filename: str = "<module>") -> list[str]:
+    """Private names (`_x`, not dunders) one module of the controller takes from another: imported (absolute
+    from controller, or relative), or read as `obj._x` on an object other than self/cls when the module
+    itself defines no `_x` (so `obj` is another module's object)."""
+    tree = ast.parse(source, filename=filename)
+    own = names_a_module_defines(tree)
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and (node.level > 0 or (node.module or "").startswith("controller")):
+            module = "." * node.level + (node.module or "")
+            found += [f"{a.name} imported from {module}" for a in node.names if a.name.startswith("_")]
+        elif (isinstance(node, ast.Attribute) and node.attr.startswith("_") and not node.attr.startswith("__")
+              and not (isinstance(node.value, ast.Name) and node.value.id in ("self", "cls"))
+              and node.attr not in own):
+            found.append(f"{ast.unparse(node)} read at line {node.lineno}")
+    return found
+
+
+def test_the_private_name_check_sees_imports_relative_imports_and_attribute_reads():
+    source = ("from controller.core.types import _REFERENCE_FIELDS\n"
+              "from .model import _helper\n"
+              "from . import _sibling\n"
+              "def f(kin, other):\n"
+              "    return kin._below_joint, other.public\n")
+    assert private_names_crossing(source) == [
+        "_REFERENCE_FIELDS imported from controller.core.types", "_helper imported from .model",
+        "_sibling imported from .", "kin._below_joint read at line 5"]
+    own = ("class A:\n"
+           "    def __init__(self):\n"
+           "        self._x = 1\n"
+           "def g(a):\n"
+           "    return a._x, a.__class__, a._x.__dict__\n")
+    assert private_names_crossing(own) == []
+
+
+def test_no_private_name_crosses_modules_of_the_controller():
     offenders = []
     for path in sorted((ROOT / "controller").rglob("*.py")):
-        tree = ast.parse(path.read_text(), filename=str(path))
-        for node in ast.walk(tree):
-            if isinstance(node, ast.ImportFrom) and node.module and node.module.startswith("controller"):
-                offenders += [f"{path.relative_to(ROOT)}: {a.name} from {node.module}" for a in node.names
-                              if a.name.startswith("_")]
+        found = private_names_crossing(path.read_text(), str(path))
+        offenders += [f"{path.relative_to(ROOT)}: {what}" for what in found]
     assert offenders == []
 
 

@@ -101,6 +101,11 @@ class RobotKinematics:
         M = self.data.oMf[fid]
         return M.translation.copy(), M.rotation.copy()
 
+    def joint_below(self, sensor: str) -> int:
+        """The pinocchio joint id whose subtree is the part below a force sensor (its `data.mass[j]` and
+        `data.com[j]` are that part's mass and COM after an update)."""
+        return self._below_joint[sensor]
+
     def mass_below(self, sensor: str) -> tuple[float, np.ndarray]:
         """Mass [kg] and world COM [m] of the links below a force sensor."""
         j = self._below_joint[sensor]

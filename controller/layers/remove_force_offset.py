@@ -137,8 +137,7 @@ class RemoveForceOffset(Layer):
         if ids is None:
             kin = self.kin
             ids = self._frame_ids = [kin.frame_ids[s] for s in FORCE_SENSOR_NAMES]
-            below = kin._below_joint
-            self._below_joints = [below[s] for s in FORCE_SENSOR_NAMES]
+            self._below_joints = [kin.joint_below(s) for s in FORCE_SENSOR_NAMES]
             # a subtree's mass does not depend on the configuration: read once (after an update)
             self._masses = [float(kin.data.mass[j]) for j in self._below_joints]
         return ids

@@ -1,5 +1,5 @@
-"""RobotKinematics.limb_ik: reaches a reachable target; an unreachable one raises, or in best-effort mode
-returns the closest posture it found."""
+"""RobotKinematics: limb_ik reaches a reachable target; an unreachable one raises, or in best-effort mode
+returns the closest posture it found; the joint below each force sensor carries the mass below it."""
 
 import numpy as np
 import pytest
@@ -37,3 +37,14 @@ def test_an_unreachable_target_raises_or_gives_the_closest_posture_in_best_effor
     closer = np.linalg.norm(hand(kin, q)[0] - far)
     assert closer < np.linalg.norm(p0 - far) - 0.02  # closer than where it started (the last iterate need not be)
     assert np.array_equal(np.delete(q, range(16, 23)), np.delete(forward, range(16, 23)))  # only the arm moved
+
+
+def test_the_joint_below_a_sensor_carries_the_mass_below_it():
+    from robot.names import FORCE_SENSOR_NAMES
+
+    kin = RobotKinematics()
+    kin.update_rpy(BASE, np.zeros(3), HALF)
+    for sensor in FORCE_SENSOR_NAMES:
+        mass, com = kin.mass_below(sensor)
+        j = kin.joint_below(sensor)
+        assert mass > 0.0 and float(kin.data.mass[j]) == mass and np.array_equal(kin.data.com[j], com)
