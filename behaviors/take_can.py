@@ -27,9 +27,9 @@ from behaviors.reach import Reach, ReachParams
 from behaviors.release import Release, ReleaseParams
 from behaviors.servo import rot_z
 from behaviors.walk_to import WalkTo, WalkToParams
+from controller.core.constants import GRAVITY_M_S2
 from controller.kinematics.rotations import matrix_to_rpy
 
-GRAVITY_M_S2 = 9.81
 CAN_MASS_KG = 0.33  # a full 300 ml can (robot/hrp2/README.md)
 #: The can where the right hand takes it best, relative to the support polygon's centre (the feet frame F) [m]:
 #: forward of the toes, on the right shoulder's line, at the height of the 0.70 m table (the grasp check).
