@@ -18,6 +18,7 @@ import placo
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, convex_hull_2d, shrink_polygon
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Params
+from controller.core.types import read_only
 from controller.kinematics.rotations import rows_mul as _mul
 from controller.kinematics.rotations import rows_tmul as _tmul
 from controller.kinematics.rotations import rows_tmulv as _tmulv
@@ -132,8 +133,7 @@ def _vector(value, n: int, what: str) -> np.ndarray:
     a = np.array(value, dtype=float)
     if a.shape != (n,) or not np.isfinite(a).all():
         raise InvalidCommand(f"{what} must be {n} finite numbers, got {value!r}")
-    a.setflags(write=False)
-    return a
+    return read_only(a)
 
 
 def _rotation(value, what: str) -> np.ndarray:
@@ -142,8 +142,7 @@ def _rotation(value, what: str) -> np.ndarray:
         raise InvalidCommand(f"{what} must be a (3, 3) rotation matrix, got shape {R.shape}")
     if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0.0:
         raise InvalidCommand(f"{what} is not a rotation (R R^T != I or det < 0); e.g. rpy_to_matrix(rpy)")
-    R.setflags(write=False)
-    return R
+    return read_only(R)
 
 
 @dataclass(frozen=True)
@@ -163,8 +162,8 @@ class HandTarget:
     def from_rows(cls, p_world: tuple[float, float, float], R_world: tuple) -> HandTarget:
         """trusted() from floats: a position 3-tuple and the rotation's 3 row tuples (kept as `_floats`)."""
         t = object.__new__(cls)
-        object.__setattr__(t, "p_world", _frozen(np.array(p_world)))
-        object.__setattr__(t, "R_world", _frozen(np.array(R_world)))
+        object.__setattr__(t, "p_world", read_only(np.array(p_world)))
+        object.__setattr__(t, "R_world", read_only(np.array(R_world)))
         object.__setattr__(t, "_floats", (p_world, R_world))
         return t
 
@@ -204,8 +203,7 @@ class GazeTarget:
         t = object.__new__(cls)
         object.__setattr__(t, "yaw_rad", 0.0)
         object.__setattr__(t, "pitch_rad", 0.0)
-        look_at_world.setflags(write=False)
-        object.__setattr__(t, "look_at_world", look_at_world)
+        object.__setattr__(t, "look_at_world", read_only(look_at_world))
         return t
 
 
@@ -407,11 +405,6 @@ def _split(T_rows):
     """(position, rotation rows) of a 4x4 pose given as nested lists."""
     r0, r1, r2 = T_rows[0], T_rows[1], T_rows[2]
     return (r0[3], r1[3], r2[3]), ((r0[0], r0[1], r0[2]), (r1[0], r1[1], r1[2]), (r2[0], r2[1], r2[2]))
-
-
-def _frozen(a: np.ndarray) -> np.ndarray:
-    a.setflags(write=False)  # (half the cost of a.flags.writeable = False)
-    return a
 
 
 class _Polygon:
@@ -993,9 +986,9 @@ class OperationIK:
         com = self._com_now()
         x, y, z = self.q[:3].tolist()
         return OperationIKResult(
-            q_rad=_frozen(self.q[self.idx_q]), base_pos_world=_frozen(np.array((x, y, z))),
-            base_rpy_rad=_frozen(np.array(_quat_rpy(*self.q[3:7].tolist()))), points=MappingProxyType(points),
-            active=True, ok=ok, com_world=_frozen(np.array(com)), com_margin_m=self._polygon.margin(com[0], com[1]))
+            q_rad=read_only(self.q[self.idx_q]), base_pos_world=read_only(np.array((x, y, z))),
+            base_rpy_rad=read_only(np.array(_quat_rpy(*self.q[3:7].tolist()))), points=MappingProxyType(points),
+            active=True, ok=ok, com_world=read_only(np.array(com)), com_margin_m=self._polygon.margin(com[0], com[1]))
 
     def _solve_upper_body(self, targets, q, q_ref, seeding, base_pos_world, base_rpy_rad) -> OperationIKResult:
         """The rest of solve() with the base and legs fixed: the points, the torso posture, the COM guard."""
@@ -1051,11 +1044,11 @@ class OperationIK:
         cx, cy, _ = self._com_in_base()
         base = self._base_arrays
         if base[0] != self._base_key:  # the base arrays of the result, rebuilt when the base moves
-            base = self._base_arrays = (self._base_key, _frozen(np.array(self._base_key[:3])),
-                                        _frozen(np.array(self._base_key[3:])))
+            base = self._base_arrays = (self._base_key, read_only(np.array(self._base_key[:3])),
+                                        read_only(np.array(self._base_key[3:])))
         return OperationIKResult(
-            q_rad=_frozen(self.q[self.idx_q]), base_pos_world=base[1], base_rpy_rad=base[2],
-            points=MappingProxyType(points), active=True, ok=ok, com_world=_frozen(np.array(com)),
+            q_rad=read_only(self.q[self.idx_q]), base_pos_world=base[1], base_rpy_rad=base[2],
+            points=MappingProxyType(points), active=True, ok=ok, com_world=read_only(np.array(com)),
             com_margin_m=self._polygon.margin(cx, cy))
 
     def _base_key_of(self, base_pos_world, base_rpy_rad) -> tuple[float, ...]:
@@ -1146,7 +1139,7 @@ class OperationIK:
             elif scale < p.limited_scale:
                 lists = lists or (q_prev.tolist(), self.q.tolist())
                 limited = self._limit_reason(point, *lists, step)
-            out[name] = PointResult(T_world=_frozen(T), error_m=error_m, error_rad=error_rad, scale=scale,
+            out[name] = PointResult(T_world=read_only(T), error_m=error_m, error_rad=error_rad, scale=scale,
                                     limited=limited)
         return out
 

@@ -13,7 +13,7 @@ import numpy as np
 
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Layer, Params, SharedStatus, Status, described, plain
-from controller.core.types import Reference, TickContext
+from controller.core.types import Reference, TickContext, frozen_array, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
@@ -58,8 +58,7 @@ _LOOK_AT_DISTANCE_M = 100.0  # a gaze direction becomes a point this far along i
 _LEGS = np.array(JOINT_GROUPS["rleg"] + JOINT_GROUPS["lleg"])
 _UPPER = np.array([i for i in range(len(JOINT_NAMES)) if i not in set(_LEGS.tolist())])  # torso, head, arms
 _IS_UPPER = np.isin(np.arange(len(JOINT_NAMES)), _UPPER)
-_ZERO3 = np.zeros(3)
-_ZERO3.setflags(write=False)
+_ZERO3 = read_only(np.zeros(3))
 
 
 @dataclass(frozen=True)
@@ -601,10 +600,11 @@ class OperationLayer(Layer):
             p_w = (fx + c * x - s * y, fy + s * x + c * y, fz + z)
             R_w = ((c * a0 - s * a3, c * a1 - s * a4, c * a2 - s * a5),
                    (s * a0 + c * a3, s * a1 + c * a4, s * a2 + c * a5), (a6, a7, a8))
-            points[point] = PointPose(p_world_m=_ro(p_w), R_world_point=_ro(R_w), p_feet_m=_ro((x, y, z)),
-                                      R_feet_point=_ro(((a0, a1, a2), (a3, a4, a5), (a6, a7, a8))))
+            points[point] = PointPose(p_world_m=frozen_array(p_w), R_world_point=frozen_array(R_w),
+                                      p_feet_m=frozen_array((x, y, z)),
+                                      R_feet_point=frozen_array(((a0, a1, a2), (a3, a4, a5), (a6, a7, a8))))
         gaze = GazeAngles.of_direction(points["head"].R_feet_point[:, 0])
-        view = OperationView(time_s=self._time_s, feet_p_world_m=_ro(F_world.p.copy()), feet_yaw_rad=F_world.yaw,
+        view = OperationView(time_s=self._time_s, feet_p_world_m=frozen_array(F_world.p), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
                              waist_height_m=float(points["waist"].p_feet_m[2]), walking=self._walking,
                              motion_stopped=self._stopped)
@@ -647,9 +647,3 @@ def _layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
 
 def _sub(a, b) -> tuple[float, float, float]:
     return a[0] - b[0], a[1] - b[1], a[2] - b[2]
-
-
-def _ro(a: np.ndarray) -> np.ndarray:
-    a = np.array(a, dtype=float)
-    a.setflags(write=False)
-    return a

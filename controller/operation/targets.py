@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 import pinocchio as pin
 
+from controller.core.types import read_only
 from controller.operation.points import Twist
 from robot.sensors import frozen_array
 
@@ -29,12 +30,6 @@ def yaw_rotation(yaw_rad: float) -> np.ndarray:
     return np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
 
 
-def _owned(a: np.ndarray) -> np.ndarray:
-    """A float64 array just computed (owning its data), made read-only in place instead of copied."""
-    a.setflags(write=False)  # (half the cost of a.flags.writeable = False)
-    return a
-
-
 @dataclass(frozen=True, slots=True)
 class HandPose:
     """A hand target in F: position [m] and rotation (F <- hand)."""
@@ -50,7 +45,7 @@ class HandPose:
     def owned(p_feet_m: np.ndarray, R_feet_hand: np.ndarray) -> HandPose:
         """of() for float64 arrays (3,) and (3, 3) the caller has just computed and hands over: frozen in
         place, not copied."""
-        return HandPose(_owned(p_feet_m), _owned(R_feet_hand))
+        return HandPose(read_only(p_feet_m), read_only(R_feet_hand))
 
     def integrated(self, twist: Twist, dt_s: float) -> HandPose:
         """One tick of `twist` (F axes): p += v dt, R = exp([w] dt) R."""
@@ -60,8 +55,8 @@ class HandPose:
                 return self
             R = self.R_feet_hand
         else:
-            R = _owned(pin.exp3(twist.angular_rad_s * dt_s) @ self.R_feet_hand)
-        p = self.p_feet_m if not any(v) else _owned(self.p_feet_m + twist.linear_m_s * dt_s)
+            R = read_only(pin.exp3(twist.angular_rad_s * dt_s) @ self.R_feet_hand)
+        p = self.p_feet_m if not any(v) else read_only(self.p_feet_m + twist.linear_m_s * dt_s)
         return HandPose(p, R)  # both read-only float64 arrays of their own (what HandPose.of makes)
 
 
