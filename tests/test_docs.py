@@ -1,0 +1,65 @@
+"""The README states the architecture the code has: its Layout tree lists exactly the controller's packages and
+modules, and its layer table lists the layers in CHAIN_ORDER."""
+
+import re
+from pathlib import Path
+
+from controller.core.chain import CHAIN_ORDER
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text()
+
+
+def section(title: str) -> str:
+    """The text of the README section `## title` (up to the next `## `)."""
+    start = README.index(f"\n## {title}\n")
+    end = README.find("\n## ", start + 1)
+    return README[start:end if end >= 0 else None]
+
+
+def controller_tree() -> dict[str, str]:
+    """{package: its description} from the Layout tree's controller/ entries (continuation lines included)."""
+    block = section("Layout").split("```")[1]
+    lines = block.splitlines()
+    first = next(i for i, line in enumerate(lines) if line.startswith("controller/"))
+    packages, current = {}, None
+    for line in lines[first + 1:]:
+        m = re.match(r"^  (\w+)/\s+(.*)$", line)
+        if m:
+            current = m.group(1)
+            packages[current] = m.group(2)
+        elif line.startswith("   ") and current is not None:
+            packages[current] += " " + line.strip()
+        else:
+            break
+    return packages
+
+
+def test_the_readme_tree_lists_exactly_the_controller_packages():
+    packages = sorted(p.name for p in (ROOT / "controller").iterdir() if (p / "__init__.py").exists())
+    assert sorted(controller_tree()) == packages
+
+
+def test_the_readme_tree_names_every_module_of_each_controller_package_but_the_layers():
+    missing = {}
+    for package, text in controller_tree().items():
+        if package == "layers":  # "one file per layer of the table above"
+            continue
+        names = {p.name for p in (ROOT / "controller" / package).glob("*.py") if p.name != "__init__.py"}
+        named = set(re.findall(r"\b(\w+\.py)\b", text))
+        if names != named:
+            missing[package] = {"not in the README": sorted(names - named), "not in the tree": sorted(named - names)}
+    assert missing == {}
+
+
+def test_the_readme_layer_table_is_in_chain_order_and_names_each_layers_file():
+    rows = re.findall(r"^\| (\w+) \| `controller/layers/(\w+)\.py` \|", section("What runs"), flags=re.M)
+    assert tuple(name for name, _ in rows) == CHAIN_ORDER
+    from controller.core.system import layer_classes
+
+    assert {name: cls.__module__.rsplit(".", 1)[-1] for name, cls in layer_classes().items()} == dict(rows)
+
+
+def test_the_readme_chain_line_is_in_chain_order():
+    line = next(x for x in section("What runs").splitlines() if x.startswith("plant.read()"))
+    assert tuple(line.split(" -> ")[1:-1]) == CHAIN_ORDER
