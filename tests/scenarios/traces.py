@@ -69,7 +69,9 @@ def _experiment_trace(name: str) -> dict:
     with tempfile.TemporaryDirectory() as d:
         r = run_experiment(name, out_dir=Path(d), plot=False)
         text = Path(r.csv_path).read_text()
-    return {"sha256": hashlib.sha256(text.encode()).hexdigest(), "verdict": r.verdict,
+    values = np.array([[float(v) for v in line.split(",")] for line in text.splitlines()[1:]])
+    return {"sha256": hashlib.sha256(text.encode()).hexdigest(), "ticks": len(values),
+            "rows": values[::SUBSAMPLE].tolist(), "verdict": r.verdict,
             "flag_time_s": r.flag_time_s, "peak_cp_error_m": round(r.peak_cp_error_m, 9),
             "outcome": {k: round(float(v), 9) for k, v in r.outcome.items()}}
 
