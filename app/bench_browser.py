@@ -32,7 +32,8 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
     browser's event time on the epoch clock, converted); each released through the API before the next."""
     from playwright.sync_api import sync_playwright
 
-    from app.console_process import Console, _percentiles
+    from app.console_process import Console
+    from app.stats import percentiles_ms
 
     chromium = os.environ.get("HRP2_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
     console = Console("--speed", "1.0", "--scene", scene, headless=False, viewer_port=_free_port())
@@ -68,5 +69,5 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
     finally:
         console.stop()
     return {"scenario": "estop-browser", "scene": scene, "clicks": clicks,
-            "pointerdown_to_engaged": _percentiles(latencies),
+            "pointerdown_to_engaged": percentiles_ms(latencies),
             "clicks_while_streaming": sum(streamed)}

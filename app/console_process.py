@@ -15,6 +15,8 @@ import threading
 import time
 from pathlib import Path
 
+from app.stats import percentiles_ms
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -78,14 +80,6 @@ class Console:
             self.proc.kill()
             out, _ = self.proc.communicate()
         return self.proc.returncode, "".join(self.lines) + (out or "")
-
-
-def _percentiles(values: list[float]) -> dict:
-    if not values:
-        return {"n": 0}
-    a = sorted(values)
-    return {"n": len(a), "p50_ms": round(a[len(a) // 2], 3), "p99_ms": round(a[min(len(a) - 1, int(0.99 * len(a)))], 3),
-            "max_ms": round(a[-1], 3)}
 
 
 def _operator(port: int, every_s: float, duration_s: float, results) -> None:
@@ -179,5 +173,5 @@ def run_load(console: Console, duration_s: float, pollers: int = 20, poll_hz: fl
     _, timing = console.request("GET", f"/api/loop/timing?last_s={max(1.0, duration_s - 1.0):g}")
     return {"duration_s": duration_s, "polls_per_s": round(counts["polls"] / duration_s, 1),
             "commands_per_s": round(counts["commands"] / duration_s, 1), "refused_during_estop": counts["refused"],
-            "state_request": _percentiles(state_ms), "estop_request_to_engaged": _percentiles(estop_ms),
+            "state_request": percentiles_ms(state_ms), "estop_request_to_engaged": percentiles_ms(estop_ms),
             "loop": timing, "errors": errors[:10]}

@@ -414,10 +414,12 @@ class RobotHost:
                          timing=self.timing(),
                          scene=self.scene, speed=loop.speed, stats=self.stats.summary(),
                          chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic(),
-                         runs=self._runs(), setpoint_acks=dict(self.setpoint_acks),
+                         runs=self.runs(), setpoint_acks=dict(self.setpoint_acks),
                          recognitions=dict(self.recognitions))
 
-    def _runs(self) -> tuple:
+    def runs(self) -> tuple:
+        """The runner's runs, the same tuple object until one of them changes (so a reader can compare by
+        identity)."""
         version = self.runner.version
         if self._runs_cache[0] != version:
             self._runs_cache = (version, self.runner.runs())

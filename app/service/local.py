@@ -121,7 +121,7 @@ class LocalRobot:
         snap = self.loop.snapshot
         cached = self._published
         if (cached is None or cached.snapshot is not snap or cached.generation != self.host.generation
-                or cached.setpoint_acks != self.host.setpoint_acks or cached.runs is not self.host._runs()
+                or cached.setpoint_acks != self.host.setpoint_acks or cached.runs is not self.host.runs()
                 or cached.recognitions != self.host.recognitions):
             cached = self._published = self.host.publish()
         return cached

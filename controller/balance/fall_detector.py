@@ -24,7 +24,8 @@ class FallDetectorParams(Params):
 
 class FallDetector:
     """`update(rpy_rad, foot_fz_n, dt_s)` each tick; `reason` is None until a fall is detected, then the
-    first reason ("tilt ..." or "feet unloaded ..."), latched until `reset()`."""
+    first reason ("tilt ..." or "feet unloaded ..."), latched for the life of the detector (the loop builds
+    a new one when it resets)."""
 
     def __init__(self, weight_n: float, params: FallDetectorParams | None = None) -> None:
         self.params = params or FallDetectorParams()
@@ -55,10 +56,6 @@ class FallDetector:
         else:
             self._unloaded_s = 0.0
         return self.reason
-
-    def reset(self) -> None:
-        self.reason = None
-        self._unloaded_s = 0.0
 
 
 def foot_load_n(wrenches_ext_sensor) -> float:

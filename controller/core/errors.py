@@ -19,7 +19,3 @@ class UnknownName(InvalidCommand, LookupError):
 
 class InvalidState(ControllerError):
     """A command is valid but not now (e.g. stopping what is not running)."""
-
-
-class LayerFault(ControllerError):
-    """A layer failed inside the tick; the loop stopped the robot safely and reports this."""

@@ -188,7 +188,7 @@ class ControlLoop:
             self._on_fault(exc)
             ref = ref_in.with_(q_rad=self._last_q_cmd)
             q_cmd = self._last_q_cmd
-            ctx.ports.hold = True
+            ctx.ports.hold = True  # hold's second writer (Ports): hes may not have run; safe_stop engaged it
         self._ports = ctx.ports
         fall = self.fall
         if fall is not None and fall.reason is None:

@@ -142,10 +142,12 @@ class Ports:
     """What layers publish for later layers and for the next tick (hrpsys data ports), besides the reference.
 
     Each tick the loop hands the chain the ports the previous tick published (`TickContext.last_ports`,
-    to read) and a fresh set (`TickContext.ports`, to publish into). A port is written by one layer only.
+    to read) and a fresh set (`TickContext.ports`, to publish into). A port is written by one layer only;
+    the one exception is `hold`, which the loop also raises when a tick faults (the chain stopped before hes
+    could publish it, and the loop has just engaged the safe stop).
     """
 
-    hold: bool = False  # hes: the hard e-stop is engaged; the layers before it hold their motion
+    hold: bool = False  # hes, and the loop on a fault: the hard e-stop is engaged; the layers before it hold
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick

@@ -19,10 +19,18 @@ from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, co
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Params
 from controller.core.types import read_only
+from controller.kinematics.rotations import (
+    quat_xyzw_to_rows,
+    quat_xyzw_to_rpy,
+    rows_angle_between,
+    rows_exp3,
+    rows_log3,
+    rows_small_log3,
+    rpy_to_rows,
+)
 from controller.kinematics.rotations import rows_mul as _mul
 from controller.kinematics.rotations import rows_tmul as _tmul
 from controller.kinematics.rotations import rows_tmulv as _tmulv
-from controller.kinematics.rotations import rpy_to_rows
 from robot.names import END_EFFECTORS, JOINT_GROUPS, JOINT_NAMES, PARAMETERS_JSON, URDF
 
 #: The operational points, in the order they are solved and reported.
@@ -304,61 +312,9 @@ class OperationIKResult:
 _NO_POINTS: Mapping[str, PointResult] = MappingProxyType({})
 
 
-# ---------------------------------------------------------------------------------------------- SO(3) on floats
-# Rotations as 3 row tuples, vectors as 3-tuples: on 3x3 data plain floats are several times faster than
-# numpy's per-call overhead, and this runs a few times per point per 5 ms tick.
-
-
-def _log3(R) -> tuple[float, float, float]:
-    """Rotation vector (axis * angle [rad], angle in [0, pi]) of R."""
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R
-    c = max(-1.0, min(1.0, 0.5 * (r00 + r11 + r22 - 1.0)))
-    vx, vy, vz = r21 - r12, r02 - r20, r10 - r01  # 2 sin(angle) axis
-    angle = math.acos(c)
-    s = math.sin(angle)
-    if s > 1e-6:
-        k = angle / (2.0 * s)
-        return vx * k, vy * k, vz * k
-    if c > 0.0:  # near identity: first order
-        return 0.5 * vx, 0.5 * vy, 0.5 * vz
-    # near a half turn: the axis from the diagonal (R = c I + (1 - c) a a^T + s [a]x)
-    d = (r00, r11, r22)
-    i = max(range(3), key=d.__getitem__)
-    a = [0.0, 0.0, 0.0]
-    a[i] = math.sqrt(max(0.0, (d[i] - c) / (1.0 - c)))
-    for j in range(3):
-        if j != i:
-            a[j] = (R[i][j] + R[j][i]) / (2.0 * (1.0 - c) * a[i])
-    if a[0] * vx + a[1] * vy + a[2] * vz < 0.0:
-        a = [-x for x in a]
-    return a[0] * angle, a[1] * angle, a[2] * angle
-
-
-def _small_log3(R) -> tuple[float, float, float]:
-    """Rotation vector of R to first order (the antisymmetric part): error ~ angle^3 / 6, enough for the
-    few-mrad rotation a point makes in one tick."""
-    return 0.5 * (R[2][1] - R[1][2]), 0.5 * (R[0][2] - R[2][0]), 0.5 * (R[1][0] - R[0][1])
-
-
-def _exp3(w):
-    """Rotation of the rotation vector w (Rodrigues)."""
-    x, y, z = w
-    t2 = x * x + y * y + z * z
-    if t2 < 1e-18:
-        return ((1.0, -z, y), (z, 1.0, -x), (-y, x, 1.0))
-    t = math.sqrt(t2)
-    s, c = math.sin(t) / t, (1.0 - math.cos(t)) / t2
-    return ((1.0 - c * (y * y + z * z), c * x * y - s * z, c * x * z + s * y),
-            (c * x * y + s * z, 1.0 - c * (x * x + z * z), c * y * z - s * x),
-            (c * x * z - s * y, c * y * z + s * x, 1.0 - c * (x * x + y * y)))
-
-
-def _angle(A, B) -> float:
-    """Rotation angle of A^T B [rad], from its trace (the sum of the element-wise products)."""
-    (a0, a1, a2), (a3, a4, a5), (a6, a7, a8) = A
-    (b0, b1, b2), (b3, b4, b5), (b6, b7, b8) = B
-    t = a0 * b0 + a1 * b1 + a2 * b2 + a3 * b3 + a4 * b4 + a5 * b5 + a6 * b6 + a7 * b7 + a8 * b8
-    return math.acos(max(-1.0, min(1.0, 0.5 * (t - 1.0))))
+# ---------------------------------------------------------------------------------------- 3-vectors on floats
+# Vectors as 3-tuples (rotations as 3 row tuples, in controller.kinematics.rotations): on 3x3 data plain floats
+# are several times faster than numpy's per-call overhead, and this runs a few times per point per 5 ms tick.
 
 
 def _sub(a, b):
@@ -382,23 +338,6 @@ def _clip2(v, limit: float):
         return (x, y, z), False
     k = limit / math.sqrt(n2)
     return (x * k, y * k, z * k), True
-
-
-def _quat_rows(x: float, y: float, z: float, w: float):
-    """Rotation of the unit quaternion (x, y, z, w) (pinocchio's order in a configuration)."""
-    n = 1.0 / math.sqrt(x * x + y * y + z * z + w * w)
-    x, y, z, w = x * n, y * n, z * n, w * n
-    return ((1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)),
-            (2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)),
-            (2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)))
-
-
-def _quat_rpy(x: float, y: float, z: float, w: float) -> tuple[float, float, float]:
-    """Roll, pitch, yaw (R = Rz(yaw) Ry(pitch) Rx(roll)) of the quaternion (x, y, z, w)."""
-    n2 = x * x + y * y + z * z + w * w
-    return (math.atan2(2.0 * (w * x + y * z), n2 - 2.0 * (x * x + y * y)),
-            math.asin(max(-1.0, min(1.0, 2.0 * (w * y - x * z) / n2))),
-            math.atan2(2.0 * (w * z + x * y), n2 - 2.0 * (y * y + z * z)))
 
 
 def _split(T_rows):
@@ -557,14 +496,14 @@ class _Hand(_Point):
         p0, R0 = _split(rows)
         pt, Rt = target._floats
         dp, clipped_p = _clip2(_sub(pt, p0), p.hand_speed_m_s * dt)
-        w, clipped_w = _clip2(_log3(_tmul(R0, Rt)), p.hand_angular_speed_rad_s * dt)
+        w, clipped_w = _clip2(rows_log3(_tmul(R0, Rt)), p.hand_angular_speed_rad_s * dt)
         # the target itself when it is within one step (no conversion), else one step toward it
         if clipped_p:
             self.tasks[0].target_world = np.array((p0[0] + dp[0], p0[1] + dp[1], p0[2] + dp[2]))
         elif self.servo_key[0] is not target:
             self.tasks[0].target_world = target.p_world
         if clipped_w:
-            self.tasks[1].R_world_frame = np.array(_mul(R0, _exp3(w)))
+            self.tasks[1].R_world_frame = np.array(_mul(R0, rows_exp3(w)))
         elif self.servo_key[1] is not target:
             self.tasks[1].R_world_frame = target.R_world
         self.servo_key = (None if clipped_p else target, None if clipped_w else target)
@@ -577,9 +516,9 @@ class _Hand(_Point):
         p1, R1 = _split(rows)
         p0, R0, dp, w = self.requested
         pt, Rt = target._floats
-        scale = self.scale(0.0, 0.0, _sub(p1, p0), dp, _small_log3(_tmul(R0, R1)), w, ik.params)
+        scale = self.scale(0.0, 0.0, _sub(p1, p0), dp, rows_small_log3(_tmul(R0, R1)), w, ik.params)
         error_m = math.dist(pt, p1)
-        return T, error_m, _angle(R1, Rt), scale
+        return T, error_m, rows_angle_between(R1, Rt), scale
 
 
 class _Head(_Point):
@@ -639,18 +578,18 @@ class _Waist(_Point):
         z0, R0 = ik.base_pose()
         step = p.waist_speed_m_s * dt
         dz = max(-step, min(step, target.height_m - z0))
-        w = _clip(_log3(_tmul(R0, target._R)), p.waist_angular_speed_rad_s * dt)
+        w = _clip(rows_log3(_tmul(R0, target._R)), p.waist_angular_speed_rad_s * dt)
         ik.body_z_task.target_world = np.array((0.0, 0.0, z0 + dz))
-        ik.body_R_task.R_world_frame = np.array(_mul(R0, _exp3(w)))
+        ik.body_R_task.R_world_frame = np.array(_mul(R0, rows_exp3(w)))
         self.requested = (z0, R0, dz, w)
 
     def result(self, ik: OperationIK, target: WaistTarget) -> tuple:
         z1, R1 = ik.base_pose()
         z0, R0, dz, w = self.requested
-        scale = self.scale(z1 - z0, dz, None, None, _small_log3(_tmul(R0, R1)), w, ik.params)
+        scale = self.scale(z1 - z0, dz, None, None, rows_small_log3(_tmul(R0, R1)), w, ik.params)
         x, y, _ = ik.q[:3].tolist()
         T = np.array((R1[0] + (x,), R1[1] + (y,), R1[2] + (z1,), (0.0, 0.0, 0.0, 1.0)))
-        return T, abs(target.height_m - z1), _angle(R1, target._R), scale
+        return T, abs(target.height_m - z1), rows_angle_between(R1, target._R), scale
 
 
 # ---------------------------------------------------------------------------------------------- solver
@@ -844,7 +783,7 @@ class OperationIK:
 
     def from_placo(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(joints (30,) in JOINT_NAMES order [rad], BODY position (3,) [m], BODY rotation (3, 3))."""
-        return q[self.idx_q].copy(), q[:3].copy(), np.array(_quat_rows(*q[3:7].tolist()))
+        return q[self.idx_q].copy(), q[:3].copy(), np.array(quat_xyzw_to_rows(*q[3:7].tolist()))
 
     def head_angles(self) -> tuple[float, float]:
         """(HEAD_JOINT0, HEAD_JOINT1) [rad] in the current configuration."""
@@ -852,7 +791,7 @@ class OperationIK:
 
     def base_pose(self) -> tuple[float, tuple]:
         """(BODY height [m], BODY rotation rows) in the current configuration."""
-        return float(self.q[2]), _quat_rows(*self.q[3:7].tolist())
+        return float(self.q[2]), quat_xyzw_to_rows(*self.q[3:7].tolist())
 
     def _forward_kinematics(self) -> None:
         self.robot.update_kinematics()
@@ -987,7 +926,7 @@ class OperationIK:
         x, y, z = self.q[:3].tolist()
         return OperationIKResult(
             q_rad=read_only(self.q[self.idx_q]), base_pos_world=read_only(np.array((x, y, z))),
-            base_rpy_rad=read_only(np.array(_quat_rpy(*self.q[3:7].tolist()))), points=MappingProxyType(points),
+            base_rpy_rad=read_only(np.array(quat_xyzw_to_rpy(*self.q[3:7].tolist()))), points=MappingProxyType(points),
             active=True, ok=ok, com_world=read_only(np.array(com)), com_margin_m=self._polygon.margin(com[0], com[1]))
 
     def _solve_upper_body(self, targets, q, q_ref, seeding, base_pos_world, base_rpy_rad) -> OperationIKResult:

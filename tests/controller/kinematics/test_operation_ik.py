@@ -4,7 +4,6 @@ import dataclasses
 import math
 
 import numpy as np
-import pinocchio as pin
 import pytest
 
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, distance_to_polygon_edge, support_polygon
@@ -21,17 +20,13 @@ from controller.kinematics.operation_ik import (
     OperationIKParams,
     OperationTargets,
     WaistTarget,
-    _angle,
-    _exp3,
-    _log3,
-    _quat_rpy,
 )
-from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
+from controller.kinematics.rotations import rows_angle_between, rpy_to_matrix
+from robot.generate import half_sitting_deg, load_parameters
 from robot.names import JOINT_NAMES, joint_index
 
-HALF_SITTING = np.deg2rad([0, 0, -26, 50, -24, 0] * 2 + [0, 0, 0, 0]
-                          + [15, -10, 0, -30, 0, 0, 10] + [15, 10, 0, -30, 0, 0, 10])
-BASE = np.array([0.0, 0.0, 0.648702])
+HALF_SITTING = np.deg2rad(half_sitting_deg())
+BASE = np.array([0.0, 0.0, load_parameters()["half_sitting_deg"]["base_height_m"]])
 RPY = np.zeros(3)
 DT = OperationIKParams().dt_s
 STEP = OperationIKParams().joint_velocity_limit_rad_s * DT
@@ -87,18 +82,6 @@ def test_joint_order_maps_openhrp_names_to_placo_and_back():
             p_ref, R_ref = KIN.frame_pose(frame)
             assert np.allclose(T[:3, 3], p_ref, atol=1e-12) and np.allclose(T[:3, :3], R_ref, atol=1e-12)
 
-
-def test_rotation_helpers_agree_with_pinocchio():
-    rng = np.random.default_rng(1)
-    axes = rng.normal(size=(40, 3))
-    angles = np.concatenate([rng.uniform(0, np.pi, 34), [0.0, 1e-9, 1e-4, np.pi - 1e-4, np.pi - 1e-8, np.pi]])
-    for axis, angle in zip(axes, angles, strict=True):
-        w = axis / np.linalg.norm(axis) * angle
-        R = pin.exp3(w)
-        assert np.allclose(np.array(_exp3(tuple(w))), R, atol=1e-12)
-        R_rows = tuple(map(tuple, R.tolist()))
-        assert np.allclose(pin.exp3(np.array(_log3(R_rows))), R, atol=1e-9)
-        assert _angle(R_rows, ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.0))) == pytest.approx(angle, abs=1e-6)
 
 
 # ---- reaching ------------------------------------------------------------------------------------------
@@ -370,13 +353,6 @@ def test_the_com_goes_where_the_caller_holds_it_and_never_past_the_margin():
     assert 0.035 - 1e-4 <= distance_to_polygon_edge(res.com_world[:2], poly) <= 0.042
 
 
-def test_base_orientation_is_reported_as_roll_pitch_yaw():
-    rng = np.random.default_rng(2)
-    for _ in range(20):
-        rpy = rng.uniform([-1.0, -1.4, -3.0], [1.0, 1.4, 3.0])
-        x, y, z, w = pin.Quaternion(rpy_to_matrix(rpy)).coeffs()
-        assert np.allclose(_quat_rpy(x, y, z, w), matrix_to_rpy(rpy_to_matrix(rpy)), atol=1e-9)
-
 
 def test_new_parameters_take_effect_on_the_next_tick():
     ik = OperationIK()
@@ -399,7 +375,8 @@ def test_upper_body_mode_reaches_with_the_arm_and_never_moves_the_base_or_the_le
     assert np.array_equal(res.base_pos_world, BASE) and np.array_equal(res.base_rpy_rad, RPY)
     assert np.array_equal(res.q_rad[legs], HALF_SITTING[legs])
     p, R = fk(res).frame_pose("rarm_end")
-    assert np.linalg.norm(p - (p0 + (0.15, 0.0, 0.05))) < 1e-3 and math.degrees(_angle(R.tolist(), R0.tolist())) < 0.5
+    assert np.linalg.norm(p - (p0 + (0.15, 0.0, 0.05))) < 1e-3
+    assert math.degrees(rows_angle_between(R.tolist(), R0.tolist())) < 0.5
 
 
 def test_upper_body_mode_guard_keeps_the_com_near_where_it_was_and_refuses_the_waist():
