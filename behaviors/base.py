@@ -204,6 +204,13 @@ class Behavior(ABC):
 
 
 # ---- parameters from a request ---------------------------------------------------------------------------------
+def held_by_collision(view: OperationView) -> str:
+    """Why a goal check that reads the reference must not succeed while the CollisionDetector holds."""
+    pairs = ", ".join(f"{a}-{b}" for a, b in view.collision_pairs)
+    return (f"the CollisionDetector holds the last collision-free posture ({pairs} would collide): the robot "
+            "did not follow the motion")
+
+
 def params_from(cls: type[BehaviorParams], values: Mapping[str, Any], prefix: str = "") -> BehaviorParams:
     """`cls` built from plain values (JSON): unknown names, wrong types, non-finite numbers and values out of
     the declared range or choices raise InvalidCommand naming the field (after `prefix`) and what is allowed."""

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
+from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output, held_by_collision
 from behaviors.servo import min_jerk_duration_s, min_jerk_rate, rot_z, wrap_rad
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.operation.points import OperationView, Twist
@@ -69,6 +69,8 @@ class LookAt(Behavior):
         view = ctx.require_view()
         error_deg = math.degrees(float(np.abs(self._error(view)).max()))
         result = {"gaze_deg": [round(math.degrees(a), 3) for a in view.gaze_rad], "error_deg": round(error_deg, 3)}
+        if view.collision_pairs:
+            return self.fail(held_by_collision(view), **result)
         if error_deg <= self.params.tolerance_deg:
             return self.succeed(f"looking at the target ({error_deg:.2f} deg off)", **result)
         return self.fail(f"the gaze ended {error_deg:.1f} deg off the target (the IK limited it, or the operator "

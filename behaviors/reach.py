@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
+from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output, held_by_collision
 from behaviors.servo import min_jerk_duration_s, min_jerk_rate, rotation_vector
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.kinematics.rotations import rpy_to_matrix
@@ -83,6 +83,8 @@ class Reach(Behavior):
         p = self.params
         result = {"error_m": round(dist, 5), "error_deg": round(angle, 3),
                   "p_feet_m": [round(float(v), 5) for v in view.points[p.hand].p_feet_m]}
+        if view.collision_pairs:
+            return self.fail(held_by_collision(view), **result)
         if dist <= p.tolerance_m and angle <= p.tolerance_deg:
             return self.succeed(f"{p.hand} within {dist * 1000:.1f} mm and {angle:.2f} deg of the goal", **result)
         return self.fail(f"{p.hand} ended {dist * 1000:.1f} mm and {angle:.1f} deg from the goal (the IK limited "

@@ -155,6 +155,10 @@ class Ports:
     walk_command: WalkCommand | None = None  # op: the walking point, read by abc; None: not driven this tick
     motion_stopped: bool = False  # es: it holds or reverts the motion (op freezes its integration)
     motion_reverted_to_s: float | None = None  # es: while stopped, the plan time its revert goes back to [s]
+    #: co: the body pairs the command would make collide while it holds the last collision-free posture
+    #: (empty: the command passes); op shows it to behaviours, whose goal checks would otherwise read the
+    #: reference and believe a held motion arrived
+    collision_pairs: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(slots=True)

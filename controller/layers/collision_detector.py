@@ -108,6 +108,7 @@ class CollisionDetector(Layer):
             self.in_collision = True
             self.blend = None
             self.collision_ticks += 1
+            ctx.ports.collision_pairs = tuple(tuple(p) for p in pairs[:4])
             return ref.with_(q_rad=self.q_safe)
         self.in_collision = False
         self.pairs = []

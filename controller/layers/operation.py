@@ -193,6 +193,7 @@ class OperationLayer(Layer):
         self._walk_key: tuple | None = None  # (vx, vy, vtheta, step parameters, params) of _last_walk
         self._neck_feet: np.ndarray | None = None
         self._stopped = False
+        self._collision_pairs: tuple[tuple[str, str], ...] = ()  # the CollisionDetector's hold, last tick
         self._revert_to_s: float | None = None
         self._history: deque[tuple[float, dict, np.ndarray]] = deque()
         self._active_since_s: float | None = None
@@ -273,6 +274,7 @@ class OperationLayer(Layer):
         t = ctx.time_s
         self._time_s = t
         self._last_in = ref
+        self._collision_pairs = ctx.last_ports.collision_pairs
         stopped = ctx.last_ports.motion_stopped
         if stopped:
             if ctx.last_ports.motion_reverted_to_s is not None:
@@ -584,7 +586,7 @@ class OperationLayer(Layer):
         ref = self._last_out or self._last_in
         if ref is None:
             raise InvalidCommand("the operation layer has not ticked yet; no view before the first tick")
-        key = (ref, self._gait, self._time_s, self._walking, self._stopped)
+        key = (ref, self._gait, self._time_s, self._walking, self._stopped, self._collision_pairs)
         cached = self._view_cache
         if cached is not None and cached[0][0] is ref and cached[0][1] is self._gait and cached[0][2:] == key[2:]:
             return cached[1]
@@ -607,7 +609,7 @@ class OperationLayer(Layer):
         view = OperationView(time_s=self._time_s, feet_p_world_m=frozen_array(F_world.p), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
                              waist_height_m=float(points["waist"].p_feet_m[2]), walking=self._walking,
-                             motion_stopped=self._stopped)
+                             motion_stopped=self._stopped, collision_pairs=self._collision_pairs)
         self._view_cache = (key, view)
         return view
 

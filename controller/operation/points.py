@@ -140,3 +140,6 @@ class OperationView:
     waist_height_m: float  # BODY height above F
     walking: bool
     motion_stopped: bool  # the EmergencyStopper holds (or reverts) the motion: nothing moves until released
+    #: the CollisionDetector holds the last collision-free posture (these body pairs would collide): the
+    #: poses above are the reference, not where the robot is
+    collision_pairs: tuple[tuple[str, str], ...] = ()

@@ -42,6 +42,7 @@ class FakeOp:
         self.gaze = [0.0, 0.0]  # pitch, yaw
         self.walking = False
         self.motion_stopped = False
+        self.collision_pairs: tuple[tuple[str, str], ...] = ()
         self.pending: tuple[dict[str, Twist], WalkCommand | None] = ({}, None)
         self.calls: list[tuple[dict[str, Twist], WalkCommand | None]] = []
 
@@ -70,7 +71,7 @@ class FakeOp:
         return OperationView(time_s=self.time_s, feet_p_world_m=self.feet_p.copy(), feet_yaw_rad=self.feet_yaw,
                              points=points, gaze_rad=(self.gaze[0], self.gaze[1]),
                              waist_height_m=float(self.p["waist"][2] - self.feet_p[2]), walking=self.walking,
-                             motion_stopped=self.motion_stopped)
+                             motion_stopped=self.motion_stopped, collision_pairs=self.collision_pairs)
 
 
 class FakeCommands:

@@ -58,6 +58,19 @@ def test_look_at_turns_the_gaze_onto_a_world_point():
     assert h.op.gaze[0] == pytest.approx(math.atan2(-d[2], math.hypot(d[0], d[1])), abs=math.radians(0.5))
 
 
+@pytest.mark.parametrize("name, params", [("look_at", {"x_m": 1.0, "y_m": 1.0, "z_m": 0.4}),
+                                          ("reach", {"x_m": 0.4, "y_m": -0.25, "z_m": 0.9})])
+def test_a_goal_reached_only_in_the_reference_fails_while_the_collision_detector_holds(name, params):
+    """The goal checks read the operation layer's reference; held by the CollisionDetector downstream, the
+    robot did not follow (a relocation looked at the floor, measured): the behaviour fails and says why."""
+    h = harness()
+    rid = h.runner.run(make(name, params))
+    h.op.collision_pairs = (("LARM_LINK3", "CHEST_LINK1"),)
+    status = h.run_until_done(rid)
+    assert status.state == "failed"
+    assert "CollisionDetector holds" in status.message and "LARM_LINK3-CHEST_LINK1" in status.message
+
+
 def test_reach_plans_a_line_whose_rates_sum_to_the_move_and_an_operator_offset_adds():
     h = harness()
     rid = h.runner.run(make("reach", {"hand": "lhand", "x_m": 0.4, "y_m": 0.2, "z_m": 0.9,

@@ -111,13 +111,20 @@ def test_collision_detector_stops_an_arm_motion_through_the_torso():
     torso = {"BODY", "CHEST_LINK0", "CHEST_LINK1"}
     target = np.deg2rad(pose_deg(RARM_JOINT0=-20, RARM_JOINT1=0, RARM_JOINT2=80, RARM_JOINT3=-120))
     seq_call(system, "set_joint_angles", target, 3.0)
-    hits, contacts = 0, []
+    hits, contacts, shown, prev_pairs = 0, [], 0, ()
     for _ in range(int(4.0 / loop.dt_control_s)):
         snap = loop.step()
         hits += snap.layers["co"].collision
         contacts += robot_contacts(system.loop.plant, arm, torso)
-    # 1. the planned motion would go through the torso; the detector held the arm
+        # the hold reaches the behaviours' view on the next tick, with the pairs the status names
+        view_pairs = loop.chain["op"].view().collision_pairs
+        if view_pairs:
+            shown += 1
+            assert set(view_pairs) <= {tuple(p) for p in prev_pairs}
+        prev_pairs = snap.layers["co"].pairs
+    # 1. the planned motion would go through the torso; the detector held the arm, and said so to behaviours
     assert hits > 0
+    assert shown >= hits - 1
     assert np.max(np.abs(snap.q_cmd_rad - target)) > np.deg2rad(5.0)
     # 2. MuJoCo saw no arm-torso contact at any physics tick we sampled
     assert contacts == []
