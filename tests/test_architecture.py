@@ -218,3 +218,53 @@ def test_no_router_imports_another():
         if found:
             offenders[str(path.relative_to(ROOT))] = found
     assert offenders == {}
+
+
+#: where a layer may be looked up in the chain by its name: the operator service (the one door) and the
+#: controller that builds the chain
+CHAIN_LOOKUP_ALLOWED = ("app/service/", "controller/")
+
+
+def _is_chain(node: ast.AST) -> bool:
+    named = lambda n: (isinstance(n, ast.Name) and n.id == "chain") or (  # noqa: E731
+        isinstance(n, ast.Attribute) and n.attr == "chain")
+    return named(node) or (isinstance(node, ast.Attribute) and node.attr == "layers" and named(node.value))
+
+
+def chain_lookups(source: str, filename: str = "<module>") -> list[str]:
+    """Where a module looks a layer up in the chain by name: `chain[...]`, `x.chain[...]`, `x.chain.layers[...]`
+    or `x.chain.layers.get(...)` (iterating over the whole chain is not a lookup)."""
+    found = []
+    for node in ast.walk(ast.parse(source, filename=filename)):
+        if isinstance(node, ast.Subscript) and _is_chain(node.value):
+            found.append(f"{ast.unparse(node)} at line {node.lineno}")
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get"
+              and _is_chain(node.func.value)):
+            found.append(f"{ast.unparse(node)} at line {node.lineno}")
+    return sorted(found, key=lambda s: int(s.rsplit(" ", 1)[1]))
+
+
+def test_the_chain_lookup_check_sees_subscripts_and_gets():
+    source = ("op = loop.chain['op']\n"
+              "layer = robot.chain[name]\n"
+              "seq = chain['seq']\n"
+              "es = loop.chain.layers.get('es')\n"
+              "st = system.chain.layers['st']\n"
+              "names = loop.chain.order(); timer = loop.chain.timers['st']\n"
+              "for name, layer in loop.chain.layers.items(): pass\n")
+    assert chain_lookups(source) == ["loop.chain['op'] at line 1", "robot.chain[name] at line 2",
+                                     "chain['seq'] at line 3", "loop.chain.layers.get('es') at line 4",
+                                     "system.chain.layers['st'] at line 5"]
+
+
+def test_nothing_outside_the_service_looks_a_layer_up_in_the_chain():
+    """The bench, the plots, the experiments, the routers and the behaviours reach a layer through the operator
+    service's verbs (or its robot host), never by its name in the chain."""
+    offenders = []
+    for package in ("app", "behaviors", "robot"):
+        for path in sorted((ROOT / package).rglob("*.py")):
+            rel = path.relative_to(ROOT).as_posix()
+            if rel.startswith(CHAIN_LOOKUP_ALLOWED):
+                continue
+            offenders += [f"{rel}: {where}" for where in chain_lookups(path.read_text(), rel)]
+    assert offenders == []
