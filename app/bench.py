@@ -13,6 +13,7 @@ import numpy as np
 from app.bench_cameras import CAMERA_SCENARIOS, run_camera_bench, run_recognition_bench, run_recognition_paced_bench
 from app.service import OperatorService
 from app.service.local import LocalRobot
+from app.service.setpoints import Setpoint
 from controller.core.chain import CHAIN_ORDER
 from controller.core.loop import ControlLoop
 from robot.generate import half_sitting_deg
@@ -28,8 +29,8 @@ class Scenario:
     setup: Callable[[OperatorService], None]
     warmup_s: float = 0.0
     needs: tuple[str, ...] = ()  # layers the scenario commands
-    #: called with the loop at every tick boundary of the timed part (streamed setpoints), not timed
-    stream: Callable[[ControlLoop], None] | None = None
+    #: called with the robot at every tick boundary of the timed part (streamed setpoints), not timed
+    stream: Callable[[LocalRobot], None] | None = None
 
 
 def _stand(service: OperatorService) -> None:
@@ -55,18 +56,18 @@ def _teleop_walk(service: OperatorService) -> None:
     """Nothing to set up: the walking point streamed by `_teleop_stream` drives the AutoBalancer."""
 
 
-def _teleop_stream(loop: ControlLoop) -> None:
-    """Both hands on slow circles (0.05 m/s) and the head sweeping (20 deg/s), streamed through
-    op.set_motion every tick, with the walk point at 0.1 m/s."""
-    from controller.operation.points import Twist
-
-    op = loop.chain["op"]
-    t = loop.plant.time_s
+def _teleop_stream(robot: LocalRobot) -> None:
+    """Both hands on slow circles (0.05 m/s) and the head sweeping (20 deg/s), with the walk point at 0.1 m/s:
+    one setpoint table every tick, applied at the boundary as the robot applies the operator's stream."""
+    t = robot.plant.time_s
     c, s_ = math.cos(1.0 * t), math.sin(1.0 * t)
-    op.set_motion("rhand", Twist.of((0.05 * c, 0.0, 0.05 * s_)), t)
-    op.set_motion("lhand", Twist.of((0.05 * c, 0.0, -0.05 * s_)), t)
-    op.set_motion("head", Twist.of(angular_rad_s=(0.0, 0.0, math.radians(20.0) * c)), t)
-    op.set_motion("walk", Twist.of((0.1, 0.0, 0.0)), t)
+    still = (0.0, 0.0, 0.0)
+    robot.host.apply_setpoints({
+        "rhand": Setpoint("rhand", (0.05 * c, 0.0, 0.05 * s_), still),
+        "lhand": Setpoint("lhand", (0.05 * c, 0.0, -0.05 * s_), still),
+        "head": Setpoint("head", still, (0.0, 0.0, math.radians(20.0) * c)),
+        "walk": Setpoint("walk", (0.1, 0.0, 0.0), still),
+    }, t)
 
 
 #: Benchmark scenarios by name.
@@ -264,7 +265,7 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         stream = spec.stream
         for i in range(first, last):
             if stream is not None:
-                stream(loop)
+                stream(robot)
             t_step = clock()
             step()
             step_ms[i] = (clock() - t_step) * 1e3

@@ -71,6 +71,7 @@ def run_recognition_bench(recognitions: int = RENDERS) -> dict[str, Any]:
     """The robot (controller running, standing at the start, head 25 deg down) recognises the can `recognitions`
     times: copy of the plant state -> narrow_left colour + depth -> camera pose from its snapshot -> locate_can.
     Reports the wall time per recognition and its parts."""
+    from app.service import OperatorService
     from app.service.local import LocalRobot
     from behaviors.perception import locate_can
     from behaviors.perception.head_pose import T_world_camera_from_snapshot
@@ -79,8 +80,7 @@ def run_recognition_bench(recognitions: int = RENDERS) -> dict[str, Any]:
 
     robot = LocalRobot("expo")
     robot.run_for(1.0)
-    seq = robot.chain["seq"]
-    robot.loop.submit(lambda: seq.set_joint_angles_of_group("head", np.radians([0.0, VIEW_HEAD_PITCH_DEG]), 1.0))
+    OperatorService(robot).set_group_sequence("head", [np.radians([0.0, VIEW_HEAD_PITCH_DEG])], [1.0])
     robot.run_for(1.5)
     kin = RobotKinematics()
     camera = "narrow_left"

@@ -55,9 +55,8 @@ def record_push_detail(impulse_ns: float = 20.0, seconds: float = 3.0, overrides
     estimated and simulated BODY pitch. `overrides`: layer name -> parameter values."""
     robot = LocalRobot()
     loop = robot.loop
-    for name, values in (overrides or {}).items():
-        layer = loop.chain[name]
-        loop.call(lambda layer=layer, values=values: layer.set_params(layer.params.replaced(**values)))
+    if overrides:
+        OperatorService(robot).set_params(overrides)
     robot.run_for(3.0)
     loop.call(lambda: loop.plant.push("BODY", (impulse_ns / 0.1, 0.0, 0.0), 0.1))
     rows = []

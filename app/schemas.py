@@ -34,7 +34,7 @@ MAX_GO_POS_DEG = round(math.degrees(MAX_GO_POS_RAD), 6)  # [deg] |theta| of goPo
 MAX_VELOCITY_DEG_S = round(math.degrees(MAX_VELOCITY_RAD_S), 6)  # [deg/s] |vtheta| of goVelocity
 
 
-class _Body(BaseModel):
+class StrictBody(BaseModel):
     """Request bodies: strict types (no "1" or true for a number), no unknown fields, finite numbers."""
 
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
@@ -49,7 +49,7 @@ SceneName = Literal[available_scenes()]  # type: ignore[valid-type]
 Angle = Annotated[float, Field(ge=-360.0, le=360.0)]
 
 
-class JointAnglesRequest(_Body):
+class JointAnglesRequest(StrictBody):
     angles_deg: Annotated[dict[JointName, Angle], Field(min_length=1)] | Annotated[
         list[Angle], Field(min_length=NUM_JOINTS, max_length=NUM_JOINTS)] = Field(
         description="{joint name: angle [deg]} for some joints, or a list of all 30 angles [deg] in "
@@ -58,7 +58,7 @@ class JointAnglesRequest(_Body):
     time: float = MotionTime
 
 
-class TargetPoseRequest(_Body):
+class TargetPoseRequest(StrictBody):
     limb: Literal["rarm", "larm", "rleg", "lleg"] = Field(description="the limb to move", examples=["rarm"])
     frame: str | None = Field(default=None, max_length=64,
                               description="reference link (e.g. BODY); default: the SequencePlayer's default frame")
@@ -69,12 +69,12 @@ class TargetPoseRequest(_Body):
     time: float = MotionTime
 
 
-class ResetRequest(_Body):
+class ResetRequest(StrictBody):
     scene: SceneName | None = Field(default=None, description="scene name (GET /api/sim/scenes); default: the "
                                                                "current one")
 
 
-class PlaceObjectRequest(_Body):
+class PlaceObjectRequest(StrictBody):
     position: list[Annotated[float, Field(ge=-MAX_OBJECT_XY_M, le=MAX_OBJECT_XY_M)]] = Field(
         description=f"[x, y]: standing on what is below (table, box, floor); [x, y, z]: the body origin, z in "
                     f"[0, {MAX_OBJECT_Z_M:g}] [m], world frame; |x|, |y| <= {MAX_OBJECT_XY_M:g} m",
@@ -87,7 +87,7 @@ class PlaceObjectRequest(_Body):
     yaw_deg: float = Field(default=0.0, ge=-360.0, le=360.0, description="turn about the world z axis [deg]")
 
 
-class PushRequest(_Body):
+class PushRequest(StrictBody):
     body: str = Field(description="MuJoCo body name, e.g. BODY", examples=["BODY"], max_length=64)
     force: list[Annotated[float, Field(ge=-MAX_PUSH_COMPONENT_N, le=MAX_PUSH_COMPONENT_N)]] = Field(
         description=f"world-frame force [N], each component within +-{MAX_PUSH_COMPONENT_N:g} N (so |force| <= "
@@ -97,7 +97,7 @@ class PushRequest(_Body):
                             ge=MIN_MOTION_TIME_S, le=MAX_PUSH_DURATION_S)
 
 
-class GoPosRequest(_Body):
+class GoPosRequest(StrictBody):
     x: float = Field(description=f"forward [m], |x| <= {MAX_GO_POS_M:g}, relative to the feet's mid-coords",
                      ge=-MAX_GO_POS_M, le=MAX_GO_POS_M, examples=[0.3])
     y: float = Field(description=f"left [m], |y| <= {MAX_GO_POS_M:g}", ge=-MAX_GO_POS_M, le=MAX_GO_POS_M,
@@ -106,7 +106,7 @@ class GoPosRequest(_Body):
                              ge=-MAX_GO_POS_DEG, le=MAX_GO_POS_DEG, examples=[0.0])
 
 
-class GoVelocityRequest(_Body):
+class GoVelocityRequest(StrictBody):
     vx: float = Field(description=f"forward velocity [m/s], |vx| <= {MAX_VELOCITY_M_S:g}",
                       ge=-MAX_VELOCITY_M_S, le=MAX_VELOCITY_M_S, examples=[0.1])
     vy: float = Field(description=f"left velocity [m/s], |vy| <= {MAX_VELOCITY_M_S:g}",
@@ -119,7 +119,7 @@ FootstepCoord = Annotated[float, Field(ge=-MAX_FOOTSTEP_POS_M, le=MAX_FOOTSTEP_P
 FootstepAngle = Annotated[float, Field(ge=-MAX_GO_POS_DEG, le=MAX_GO_POS_DEG)]
 
 
-class FootstepItem(_Body):
+class FootstepItem(StrictBody):
     leg: Literal["rleg", "lleg"] = Field(description="the leg that lands here", examples=["rleg"])
     pos: list[FootstepCoord] = Field(description=f"sole position [m] (x, y, z), each |v| <= {MAX_FOOTSTEP_POS_M:g}; "
                                                  "relative to the first footstep, which is snapped onto the "
@@ -136,7 +136,7 @@ def _step_range(name: str, to_shown=float) -> dict:
     return {"ge": math.ceil(to_shown(meta["min"]) * 1e6) / 1e6, "le": math.floor(to_shown(meta["max"]) * 1e6) / 1e6}
 
 
-class StepRequest(_Body):
+class StepRequest(StrictBody):
     """Swing parameters; the ranges are those of controller.footsteps.StepParams."""
 
     step_height: float | None = Field(default=None, description="swing height [m] (default 0.05)",
@@ -149,7 +149,7 @@ class StepRequest(_Body):
                                          **_step_range("heel_angle_rad", math.degrees))
 
 
-class FootstepsRequest(_Body):
+class FootstepsRequest(StrictBody):
     footsteps: list[FootstepItem] = Field(description=f"1..{MAX_FOOTSTEPS} footsteps; the first is the "
                                                       "current support foot", min_length=1,
                                           max_length=MAX_FOOTSTEPS)
@@ -232,7 +232,7 @@ class ConsoleConfig(BaseModel):
 StateDict = dict[str, Any]
 
 
-class ExperimentRequest(_Body):
+class ExperimentRequest(StrictBody):
     es: bool = Field(default=True, description="run with the EmergencyStopper (false: without, as in [MLC] Fig. 8a)")
     variant: str | None = Field(default=None, description="variant of the experiment (GET /api/experiments); "
                                                           "default: its first")
@@ -330,7 +330,7 @@ def _velocity_model(point: str) -> type[BaseModel]:
             "waist": "waist: linear (0, 0, height rate) [m/s], angular BODY (roll, pitch, yaw) rates [deg/s]",
             "walk": "walking (goVelocity): linear (vx, vy, 0) [m/s], angular (0, 0, vtheta) [deg/s], and the "
                     "step parameters"}
-    return create_model(f"{point.capitalize()}Velocity", __base__=_Body, __doc__=docs[point], **fields)
+    return create_model(f"{point.capitalize()}Velocity", __base__=StrictBody, __doc__=docs[point], **fields)
 
 
 def _velocity_request() -> Any:
@@ -376,7 +376,7 @@ class BehaviorDoc(BaseModel):
 
 
 # ---- the operator lock ---------------------------------------------------------------------------------------
-class LockRequest(_Body):
+class LockRequest(StrictBody):
     client: str = Field(pattern=r"^[A-Za-z0-9._:-]{1,64}$", min_length=1, max_length=64, examples=["page-1"],
                         description="this client's id (1 to 64 of A-Z a-z 0-9 . _ : -), sent again as the "
                                     "X-Client-Id header of its control requests and as ?client= of its WebSockets")

@@ -1,6 +1,7 @@
 """Import rules of the design card: the controller never imports the app nor the simulator (plant, cameras,
 object operations, ground truth); robot imports no other package; behaviours never reach the app, MuJoCo or
-the simulator, nor read a ground-truth attribute; no private name crosses modules of the controller."""
+the simulator, nor read a ground-truth attribute; no private name crosses modules of the controller; no HTTP
+router imports another; nothing outside the operator service and the controller indexes the chain by string."""
 
 import ast
 from pathlib import Path
@@ -177,3 +178,93 @@ def test_the_controller_tree_shows_its_architecture():
     assert tuple(layer_classes()) == CHAIN_ORDER  # one layer per file of controller/layers, in chain order
     layer_files = {p.stem for p in (ROOT / "controller" / "layers").glob("*.py") if p.name != "__init__.py"}
     assert {cls.__module__.rsplit(".", 1)[-1] for cls in layer_classes().values()} == layer_files
+
+
+def router_imports(source: str, filename: str = "<module>") -> list[str]:
+    """The app.routers modules a router module imports: absolute (`from app.routers.x import y`,
+    `from app.routers import x`, `import app.routers.x`) or relative (`from .x import y`)."""
+    found = []
+    for node in ast.walk(ast.parse(source, filename=filename)):
+        if isinstance(node, ast.Import):
+            found += [a.name for a in node.names if a.name == "app.routers" or a.name.startswith("app.routers.")]
+        elif isinstance(node, ast.ImportFrom):
+            module = node.module or ""
+            if node.level > 0:
+                found.append("." * node.level + module)
+            elif module == "app.routers":  # `from app.routers import x`: x is a router module
+                found += [f"app.routers.{a.name}" for a in node.names]
+            elif module.startswith("app.routers."):
+                found.append(module)
+    return found
+
+
+def test_the_router_import_check_sees_absolute_and_relative_imports():
+    source = ("from app.routers.params import params_document\n"
+              "from app.routers import rate_stream\n"
+              "import app.routers.operator\n"
+              "from .layers import ChangesBody\n"
+              "from app.params_http import ChangesBody\n"
+              "from app.ws import RateStream\n")
+    assert router_imports(source) == ["app.routers.params", "app.routers.rate_stream", "app.routers.operator",
+                                      ".layers"]
+
+
+def test_no_router_imports_another():
+    """Each router is one door's HTTP face: what routers share (params documents, WebSocket helpers, schemas)
+    lives in non-router modules of app (app.params_http, app.ws, app.schemas)."""
+    offenders = {}
+    for path in sorted((ROOT / "app" / "routers").glob("*.py")):
+        found = router_imports(path.read_text(), str(path))
+        if found:
+            offenders[str(path.relative_to(ROOT))] = found
+    assert offenders == {}
+
+
+#: where a layer may be looked up in the chain by its name: the operator service (the one door) and the
+#: controller that builds the chain
+CHAIN_LOOKUP_ALLOWED = ("app/service/", "controller/")
+
+
+def _is_chain(node: ast.AST) -> bool:
+    named = lambda n: (isinstance(n, ast.Name) and n.id == "chain") or (  # noqa: E731
+        isinstance(n, ast.Attribute) and n.attr == "chain")
+    return named(node) or (isinstance(node, ast.Attribute) and node.attr == "layers" and named(node.value))
+
+
+def chain_lookups(source: str, filename: str = "<module>") -> list[str]:
+    """Where a module looks a layer up in the chain by name: `chain[...]`, `x.chain[...]`, `x.chain.layers[...]`
+    or `x.chain.layers.get(...)` (iterating over the whole chain is not a lookup)."""
+    found = []
+    for node in ast.walk(ast.parse(source, filename=filename)):
+        if isinstance(node, ast.Subscript) and _is_chain(node.value):
+            found.append(f"{ast.unparse(node)} at line {node.lineno}")
+        elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "get"
+              and _is_chain(node.func.value)):
+            found.append(f"{ast.unparse(node)} at line {node.lineno}")
+    return sorted(found, key=lambda s: int(s.rsplit(" ", 1)[1]))
+
+
+def test_the_chain_lookup_check_sees_subscripts_and_gets():
+    source = ("op = loop.chain['op']\n"
+              "layer = robot.chain[name]\n"
+              "seq = chain['seq']\n"
+              "es = loop.chain.layers.get('es')\n"
+              "st = system.chain.layers['st']\n"
+              "names = loop.chain.order(); timer = loop.chain.timers['st']\n"
+              "for name, layer in loop.chain.layers.items(): pass\n")
+    assert chain_lookups(source) == ["loop.chain['op'] at line 1", "robot.chain[name] at line 2",
+                                     "chain['seq'] at line 3", "loop.chain.layers.get('es') at line 4",
+                                     "system.chain.layers['st'] at line 5"]
+
+
+def test_nothing_outside_the_service_looks_a_layer_up_in_the_chain():
+    """The bench, the plots, the experiments, the routers and the behaviours reach a layer through the operator
+    service's verbs (or its robot host), never by its name in the chain."""
+    offenders = []
+    for package in ("app", "behaviors", "robot"):
+        for path in sorted((ROOT / package).rglob("*.py")):
+            rel = path.relative_to(ROOT).as_posix()
+            if rel.startswith(CHAIN_LOOKUP_ALLOWED):
+                continue
+            offenders += [f"{rel}: {where}" for where in chain_lookups(path.read_text(), rel)]
+    assert offenders == []

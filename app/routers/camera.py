@@ -16,11 +16,11 @@ from pydantic import BaseModel, Field
 
 from app.deps import ServiceDep, get_service
 from app.errors import errors
-from app.routers.rate_stream import RateStream, check_rate, error_text
-from app.schemas import _Body
+from app.schemas import StrictBody
 from app.service import ServiceError
 from app.service.camera_feed import VIEW_CAMERA, VIEW_RATE_HZ
 from app.service.verbs import MAX_POSITION_M
+from app.ws import RateStream, check_rate, error_text
 
 log = logging.getLogger(__name__)
 router = APIRouter(tags=["camera"])
@@ -98,11 +98,11 @@ class RecognitionsState(BaseModel):
                     "status 'confirmed' or 'corrected' and estimated_position_m (the robot's own)")
 
 
-class ConfirmRequest(_Body):
+class ConfirmRequest(StrictBody):
     status: Literal["confirmed"] = Field(default="confirmed", description="the operator saw it where the robot says")
 
 
-class CorrectRequest(_Body):
+class CorrectRequest(StrictBody):
     position_m: list[Coordinate] = Field(min_length=3, max_length=3, examples=[[1.2, 0.0, 0.75]],
                                          description=f"[x, y, z] world frame [m], |each| <= {MAX_POSITION_M:g}: where "
                                                      "the object really is (later behaviours use it)")

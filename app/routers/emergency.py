@@ -3,14 +3,14 @@ the EmergencyStopper's parameters (hrpsys EmergencyStopperService)."""
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Any
 
-from fastapi import APIRouter, Body
+from fastapi import APIRouter
 
 from app.deps import ServiceDep
 from app.errors import errors
 from app.hot_paths import estop_reply
-from app.routers.params import changes_json_schema, params_document
+from app.params_http import ES_PARAMS, EsChangesBody, es_changes, es_changes_schema, es_document
 from app.schemas import EstopResponse, Ok
 from app.service import InvalidArgument
 
@@ -49,54 +49,7 @@ def release_motion(service: ServiceDep) -> Ok:
     return Ok(message=service.release_motion())
 
 
-# ---- EmergencyStopper parameters: one view over the layers that own them ---------------------------------
-
-#: presented name -> (owning chain layer, field of that layer's Params dataclass). The revert timing lives in
-#: the EmergencyStopper's params, the capture-point flag that triggers it in the Stabilizer's.
-ES_PARAMS: dict[str, tuple[str, str]] = {
-    "t1": ("es", "t1_s"),
-    "t2": ("es", "t2_s"),
-    "recover_time": ("es", "recover_time_s"),
-    "cp_threshold_m": ("st", "cp_threshold_m"),
-    "mode": ("st", "emergency_mode"),
-}
-#: deprecated presented name -> the name it stands for (accepted in changes, also given in the document)
-ES_DEPRECATED: dict[str, str] = {"threshold": "cp_threshold_m"}
-
-EsChangesBody = Annotated[dict[str, Any], Body(
-    description="{parameter name: new value} for some of " + ", ".join(ES_PARAMS) + ", e.g. {\"t1\": 0.8}")]
-
-
-def es_changes(changes: dict[str, Any]) -> dict[str, dict[str, Any]]:
-    """{owner: {field: value}} from the presented names (unknown names -> 422 listing the valid ones)."""
-    if not changes:
-        raise InvalidArgument("body", f"give at least one parameter; valid: {list(ES_PARAMS)}")
-    unknown = sorted(set(changes) - set(ES_PARAMS) - set(ES_DEPRECATED))
-    if unknown:
-        raise InvalidArgument(unknown[0], f"unknown parameter(s) {unknown}; valid: {list(ES_PARAMS)}")
-    for old, name in ES_DEPRECATED.items():
-        if old in changes and name in changes:  # (the schema says so too: not both)
-            raise InvalidArgument(old, f"{old!r} is the deprecated name of {name!r}: give one of them")
-    grouped: dict[str, dict[str, Any]] = {}
-    for name, value in changes.items():
-        layer, field = ES_PARAMS[ES_DEPRECATED.get(name, name)]
-        grouped.setdefault(layer, {})[field] = value
-    return grouped
-
-
-def es_document(params: dict) -> dict[str, Any]:
-    """{"params": {name: value}, "schema": [...]} in the presented names, from the owners' declarations."""
-    docs = {layer: params_document(p) for layer, p in params.items()}
-    values, schema = {}, []
-    for name, (layer, field) in ES_PARAMS.items():
-        values[name] = docs[layer]["params"][field]
-        declared = next(d for d in docs[layer]["schema"] if d["name"] == field)
-        schema.append({**declared, "name": name, "layer": layer, "param": f"{type(params[layer]).__name__}.{field}"})
-    for old, name in ES_DEPRECATED.items():
-        values[old] = values[name]
-    return {"params": values, "schema": schema}
-
-
+# ---- EmergencyStopper parameters (app.params_http: the view over the layers that own them) ---------------
 params_router = APIRouter(prefix="/api/emergency-stopper", tags=["emergency"])
 
 
@@ -105,21 +58,6 @@ params_router = APIRouter(prefix="/api/emergency-stopper", tags=["emergency"])
                            "capture-point flag (cp_threshold_m [m], mode), with units, defaults and ranges")
 def get_es_params(service: ServiceDep) -> dict[str, Any]:
     return es_document(service.params("es", "st"))
-
-
-def es_changes_schema() -> dict[str, Any]:
-    """The JSON schema of some EmergencyStopper parameters in the presented names (the PUT's body, and an
-    experiment's `params`), from the owning layers' declarations."""
-    from controller.core.system import layer_params_classes
-
-    classes = layer_params_classes()
-    schema = changes_json_schema({name: (classes[layer], field) for name, (layer, field) in ES_PARAMS.items()},
-                                 "EmergencyStopperChanges")
-    for old, name in ES_DEPRECATED.items():
-        schema["properties"][old] = {**schema["properties"][name], "deprecated": True,
-                                     "description": f"deprecated name of {name}"}
-        schema.setdefault("allOf", []).append({"not": {"required": [old, name]}})
-    return schema
 
 
 def _es_body() -> dict[str, Any]:

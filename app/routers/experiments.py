@@ -20,7 +20,7 @@ from pydantic import Field, WithJsonSchema
 
 from app import experiments
 from app.errors import errors
-from app.routers.emergency import ES_DEPRECATED, ES_PARAMS, es_changes, es_changes_schema
+from app.params_http import ES_DEPRECATED, ES_PARAMS, es_changes, es_changes_schema
 from app.schemas import ExperimentInfo, ExperimentList, ExperimentRequest, ExperimentResponse
 from app.service import InvalidArgument, NotFound, Refused
 from app.service.verbs import typed_changes

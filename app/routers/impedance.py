@@ -9,8 +9,7 @@ from fastapi import APIRouter, Path
 
 from app.deps import ServiceDep
 from app.errors import errors
-from app.routers.layers import ChangesBody
-from app.routers.params import params_changes_body, params_document
+from app.params_http import ChangesBody, params_changes_body, params_document
 from app.schemas import Ok
 from app.service import NotFound
 from controller.layers.impedance_controller import LIMBS, ImpedanceParams

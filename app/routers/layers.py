@@ -3,13 +3,13 @@ dataclass: the controller declares (names, defaults, units, ranges, choices), th
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Any
 
-from fastapi import APIRouter, Body
+from fastapi import APIRouter
 
 from app.deps import ServiceDep
 from app.errors import errors
-from app.routers.params import params_changes_body, params_document
+from app.params_http import ChangesBody, params_changes_body, params_document
 from app.schemas import Ok
 
 #: URL segment -> chain layer name (hrpsys component), with the label used in summaries.
@@ -17,10 +17,6 @@ LAYERS: dict[str, tuple[str, str]] = {
     "auto-balancer": ("abc", "AutoBalancer"),
     "stabilizer": ("st", "Stabilizer"),
 }
-
-ChangesBody = Annotated[dict[str, Any], Body(
-    description="{parameter name: new value}, e.g. {\"cp_threshold_m\": 0.05}")]
-
 
 def _add_routes(router: APIRouter, segment: str, layer: str, label: str) -> None:
     from controller.core.system import layer_params_classes

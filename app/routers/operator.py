@@ -17,17 +17,17 @@ from pydantic import TypeAdapter, ValidationError
 from app.deps import LockDep, ServiceDep, get_service
 from app.deps import get_lock as lock_of
 from app.errors import errors
-from app.operator_lock import Locked, check_client_id
-from app.routers.params import params_changes_body
+from app.operator_lock import Locked
+from app.params_http import params_changes_body, params_document
 from app.schemas import LockRequest, OperatorAck, OperatorLockState, OperatorVelocityRequest
 from app.service import ServiceError, ignored_message
 from app.service.setpoints import Setpoint, SetpointAck
 from app.state import jsonable
+from app.ws import MAX_MESSAGE_BYTES, receive_message, ws_client
 
 router = APIRouter(prefix="/api/operator", tags=["operator"])
 ws_router = APIRouter(tags=["operator"])
 
-MAX_MESSAGE_BYTES = 4096  # a setpoint is ~150 bytes
 ACK_POLL_S = 0.003  # [s] how often the stream looks for the robot's acknowledgements
 ACK_GIVE_UP_S = 1.0  # [s] a setpoint not acknowledged by then is answered with an error
 
@@ -67,8 +67,6 @@ _OP_PARAMS = _operation_params_class()
 @router.get("/params", responses=errors(404),
             summary="The operation layer's parameters (per-point speed limits, dead-man, ...) and their schema")
 def get_params(service: ServiceDep) -> dict[str, Any]:
-    from app.routers.params import params_document
-
     return params_document(service.params("op")["op"])
 
 
@@ -77,8 +75,6 @@ def get_params(service: ServiceDep) -> dict[str, Any]:
             summary="Replace some of the operation layer's parameters (all or none, at one tick boundary)")
 def put_params(service: ServiceDep,
                changes: Annotated[dict[str, Any], Body(description="{field: value}")]) -> dict[str, Any]:
-    from app.routers.params import params_document
-
     new = service.set_params({"op": changes})
     return params_document(new["op"])
 
@@ -114,27 +110,6 @@ def _error(detail: str, field: str | None = None, reason: str | None = None, seq
            **extra: Any) -> str:
     return json.dumps({k: v for k, v in {"ok": False, "detail": detail, "field": field, "reason": reason,
                                          "seq": seq, **extra}.items() if v is not None})
-
-
-def ws_client(ws: WebSocket) -> tuple[str | None, str | None]:
-    """(the ?client= id or None, an error message naming the field)."""
-    client = ws.query_params.get("client")
-    if client is None:
-        return None, None
-    try:
-        return check_client_id(client, "client"), None
-    except ValueError as exc:
-        return None, str(exc)
-
-
-async def receive_message(ws: WebSocket) -> str | None:
-    """The next text message; None when the client left. A binary message is answered by the caller as
-    invalid (it gets b"" here)."""
-    message = await ws.receive()
-    if message["type"] == "websocket.disconnect":
-        return None
-    text = message.get("text")
-    return "" if text is None else text
 
 
 @ws_router.websocket("/ws/operator")

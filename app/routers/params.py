@@ -1,6 +1,6 @@
-"""Layer parameters as documents: current values and the schema (unit, default, range, choices) taken from
-each layer's Params dataclass, so a new parameter appears here without code. Routes: every layer's
-parameters at once (dump), and loading such a document (all or none)."""
+"""Every layer's parameters as one document: dump them, or load such a document (all or none). The values
+and the schema (unit, default, range, choices) come from each layer's Params dataclass through
+app.params_http, so a new parameter appears here without code."""
 
 from __future__ import annotations
 
@@ -11,46 +11,10 @@ from fastapi import APIRouter, Body
 
 from app.deps import ServiceDep
 from app.errors import errors
+from app.params_http import changes_json_schema
 from app.service import InvalidArgument
 from app.state import jsonable
 from controller.core.layer import Params
-
-_JSON_TYPES = {float: "number", int: "integer", bool: "boolean", str: "string"}
-
-
-def field_json_schema(cls: type[Params], name: str) -> dict[str, Any]:
-    """The JSON schema of one Params field: its type, range, choices, unit and default."""
-    f = next(f for f in dataclasses.fields(cls) if f.name == name)
-    meta = f.metadata
-    out: dict[str, Any] = {"type": _JSON_TYPES.get(type(f.default), "string")}
-    if meta.get("choices") is not None:
-        out["enum"] = list(meta["choices"])
-    if meta.get("min") is not None and out["type"] in ("number", "integer"):
-        out["minimum"] = meta["min"]
-    if meta.get("max") is not None and out["type"] in ("number", "integer"):
-        out["maximum"] = meta["max"]
-    unit = meta.get("unit")
-    out["description"] = f"{cls.__name__}.{name}" + (f" [{unit}]" if unit and unit != "-" else "")
-    out["default"] = f.default
-    return out
-
-
-def changes_json_schema(fields: dict[str, tuple[type[Params], str]], title: str) -> dict[str, Any]:
-    """The request body of a parameter change: some of `fields` {presented name: (Params class, field)}."""
-    return {"title": title, "type": "object", "minProperties": 1, "additionalProperties": False,
-            "properties": {name: field_json_schema(cls, field) for name, (cls, field) in fields.items()}}
-
-
-def params_changes_body(cls: type[Params]) -> dict[str, Any]:
-    """OpenAPI `openapi_extra` declaring the body of a PUT of some fields of `cls`."""
-    schema = changes_json_schema({f.name: (cls, f.name) for f in dataclasses.fields(cls)}, f"{cls.__name__}Changes")
-    return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
-
-
-def params_document(params: Params) -> dict[str, Any]:
-    """{"params": current values, "schema": [{name, default, unit, min, max, choices}...]}."""
-    return jsonable({"params": params.to_dict(), "schema": type(params).describe()})
-
 
 router = APIRouter(prefix="/api", tags=["layers"])
 

@@ -10,10 +10,10 @@ import time
 from fastapi import APIRouter, WebSocket
 
 from app.deps import get_service
-from app.routers import rate_stream
-from app.routers.rate_stream import RateStream, error_text
 from app.service import ServiceError
 from app.state import with_operator_lock
+from app.ws import RateStream, error_text
+from app.ws import check_rate as check_stream_rate
 
 log = logging.getLogger(__name__)
 router = APIRouter(tags=["state"])
@@ -25,7 +25,7 @@ UNAVAILABLE_RETRY_S = 0.5  # [s] while the robot process is down, how often the 
 
 def check_rate(value: object) -> float:
     """A rate [Hz] in RATE_RANGE_HZ, or ValueError saying what is allowed."""
-    return rate_stream.check_rate(value, RATE_RANGE_HZ)
+    return check_stream_rate(value, RATE_RANGE_HZ)
 
 
 @router.websocket("/ws/telemetry")

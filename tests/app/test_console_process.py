@@ -9,8 +9,25 @@ import pytest
 
 from app.console_process import Console, run_load
 
-PARAM_PUTS = ["/api/stabilizer/params", "/api/auto-balancer/params", "/api/impedance/rarm/params",
-              "/api/emergency-stopper/params"]
+HUGE = "1" + "0" * 400  # 10**400 written out: no float holds it
+#: (method, path, the field given HUGE, the field the 422 names): every request that takes layer parameters
+PARAM_REQUESTS = [
+    ("PUT", "/api/stabilizer/params", "transition_time_s", "transition_time_s"),
+    ("PUT", "/api/auto-balancer/params", "transition_time_s", "transition_time_s"),
+    ("PUT", "/api/impedance/rarm/params", "k_p", "k_p"),
+    ("PUT", "/api/emergency-stopper/params", "t1", "t1"),
+    ("PUT", "/api/operator/params", "hand_speed_m_s", "hand_speed_m_s"),
+    ("PUT", "/api/params", "st.k1", "st.k1"),
+    ("POST", "/api/experiments/wall-push-left", "params.t1", "params.t1"),
+]
+
+
+def nested_body(dotted: str, value: str) -> str:
+    """{"a": {"b": value}} for "a.b", with `value` written verbatim."""
+    body = value
+    for key in reversed(dotted.split(".")):
+        body = f'{{"{key}": {body}}}'
+    return body
 
 
 @pytest.fixture(scope="module")
@@ -40,8 +57,7 @@ def wait_health(console, predicate, timeout_s=10.0):
 
 def test_a_bad_parameter_request_then_an_estop_on_the_same_connection_is_applied(console):
     conn = console.connection()
-    huge = '{"k1": ' + "1" + "0" * 400 + "}"
-    status, body = console.request("PUT", "/api/stabilizer/params", body=huge, conn=conn)
+    status, body = console.request("PUT", "/api/stabilizer/params", body=nested_body("k1", HUGE), conn=conn)
     assert status == 422 and body["field"] == "k1" and "finite" in body["detail"]
     status, body = console.request("POST", "/api/estop", conn=conn)  # the same keep-alive connection
     assert status == 200, body
@@ -52,10 +68,11 @@ def test_a_bad_parameter_request_then_an_estop_on_the_same_connection_is_applied
     conn.close()
 
 
-@pytest.mark.parametrize("path", PARAM_PUTS)
-def test_every_parameter_put_answers_a_huge_integer_with_a_422_naming_the_field(console, path):
-    field = {"/api/impedance/rarm/params": "k_p", "/api/emergency-stopper/params": "t1"}.get(path, "transition_time_s")
-    status, body = console.request("PUT", path, body=f'{{"{field}": 1{"0" * 400}}}')
+@pytest.mark.parametrize(("method", "path", "given", "field"), PARAM_REQUESTS,
+                         ids=[f"{m} {p}" for m, p, _, _ in PARAM_REQUESTS])
+def test_every_parameter_request_answers_a_huge_integer_with_a_422_naming_the_field(console, method, path, given,
+                                                                                    field):
+    status, body = console.request(method, path, body=nested_body(given, HUGE))
     assert status == 422, body
     assert body["field"] == field and "finite" in body["detail"]
 

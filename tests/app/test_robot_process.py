@@ -1,12 +1,17 @@
 """The robot in its own process: verbs over the command pipe, the e-stop over its own, snapshots on the
-shared-memory board; a crash the console survives and a reset recovers from."""
+shared-memory board; a crash the console survives (over HTTP too) and a reset recovers from."""
 
+import os
+import signal
 import time
 
 import pytest
+from fastapi.testclient import TestClient
 
+from app.main import create_app
 from app.service import OperatorService, Refused, Unavailable
 from app.service.process import RobotConfig, RobotProcess
+from app.settings import Settings
 
 
 def wait_for(predicate, timeout_s=20.0, period_s=0.01):
@@ -69,6 +74,41 @@ def test_a_crash_of_the_robot_process_is_reported_and_a_reset_starts_a_new_one()
         assert robot.alive and robot.process.pid != pid
         wait_for(lambda: service.snapshot().tick > 10)
         assert service.state()["emergency"]["hard_stop"] is False
+    finally:
+        robot.close()
+
+
+def test_over_http_a_killed_robot_process_is_reported_commands_are_503_and_a_reset_runs_a_new_one():
+    robot = RobotProcess(RobotConfig(speed=1.0))
+    try:
+        app = create_app(Settings(extra_hosts=("testserver",)), service=OperatorService(robot))
+        with TestClient(app, headers={"content-type": "application/json"}) as client:
+            # 1. the robot runs
+            wait_for(lambda: client.get("/api/state").json()["tick"] > 10)
+            assert client.get("/api/health").json()["robot_alive"] is True
+            pid = robot.process.pid
+            # 2. SIGKILL: what a crash of the robot process looks like to the console
+            os.kill(pid, signal.SIGKILL)
+            health = wait_for(lambda: (h := client.get("/api/health").json())["robot_alive"] is False and h)
+            assert "exit code" in health["exit_reason"] and health["run"] is None
+            # 3. the console keeps serving: reads and commands are 503 saying what to do
+            for method, path, body in [("GET", "/api/state", None), ("POST", "/api/estop", None),
+                                       ("POST", "/api/walk/go-pos", {"x": 0.1, "y": 0.0, "theta_deg": 0.0})]:
+                r = client.request(method, path, json=body)
+                assert r.status_code == 503, (path, r.text)
+                assert "reset" in r.json()["detail"], (path, r.json())
+            # 4. reset starts a new robot process, which runs
+            r = client.post("/api/sim/reset")
+            assert r.status_code == 200, r.text
+            assert robot.process.pid != pid
+            health = client.get("/api/health").json()
+            assert health["robot_alive"] is True and health["exit_reason"] is None
+            def state():  # None until the new process has published
+                r = client.get("/api/state")
+                return r.json() if r.status_code == 200 else None
+
+            t0 = wait_for(state)["time"]
+            assert wait_for(lambda: (s := state()) and s["time"] > t0 + 0.2 and s)["emergency"]["hard_stop"] is False
     finally:
         robot.close()
 

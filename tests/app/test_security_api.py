@@ -1,11 +1,19 @@
 """The console's token and operator lock: a console bound beyond loopback refuses to start without a token;
 with one, every /api/ request and WebSocket needs it (missing or wrong: 401 / closed with 1008); while a
 client holds the lock, the others' control requests are 423 naming the holder, the e-stop never is; the lock
-goes after a grace time once the holder's last WebSocket closed."""
+goes after a grace time once the holder's last WebSocket closed; an unexpected error is a JSON 500 after which
+the same keep-alive connection still carries an e-stop."""
 
 from __future__ import annotations
 
+import http.client
+import json
+import socket
+import threading
+import time
+
 import pytest
+import uvicorn
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
@@ -227,3 +235,63 @@ def test_the_lock_expires_after_its_lease_without_a_websocket_and_control_renews
     assert lock.holder == "bob"
     now[0] = 101.0
     assert lock.holder is None
+
+
+# ---- an unexpected error on a kept-alive connection -------------------------------------------------------------
+@pytest.fixture
+def served():
+    """A running robot (real time) and its console app served by uvicorn on a loopback port, in this process
+    (so a test can break a verb): (service, port)."""
+    robot = LocalRobot(speed=1.0)
+    robot.start()
+    service = OperatorService(robot)
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    sock.bind(("127.0.0.1", 0))
+    server = uvicorn.Server(uvicorn.Config(create_app(Settings(), service=service), log_level="critical"))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 30.0
+    while not server.started:
+        assert time.monotonic() < deadline, "uvicorn did not start"
+        time.sleep(0.02)
+    try:
+        yield service, sock.getsockname()[1]
+    finally:
+        server.should_exit = True
+        thread.join(timeout=10.0)
+        sock.close()
+        robot.stop()
+
+
+def _request(conn: http.client.HTTPConnection, method: str, path: str) -> tuple[int, dict, dict]:
+    conn.request(method, path, body=b"{}" if method == "POST" else None, headers=JSON)
+    r = conn.getresponse()
+    raw = r.read()
+    return r.status, json.loads(raw), dict(r.getheaders())
+
+
+def test_an_unexpected_error_is_a_json_500_and_an_estop_on_the_same_connection_is_applied(served, monkeypatch):
+    service, port = served
+
+    def broken() -> str:
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(service, "clear_sequence", broken)  # POST /api/sequence/clear calls it
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=10)
+    status, body, headers = _request(conn, "POST", "/api/sequence/clear")
+    assert status == 500, body
+    assert headers["content-type"] == "application/json" and body["detail"] == "internal error: RuntimeError: boom"
+    sock = conn.sock
+    status, body, _ = _request(conn, "POST", "/api/estop")  # the same keep-alive connection
+    assert status == 200, body
+    assert conn.sock is sock  # not reconnected: the server kept the connection open after the 500
+    deadline = time.monotonic() + 5.0
+    while True:
+        status, state, _ = _request(conn, "GET", "/api/state")
+        assert status == 200, state
+        if state["emergency"]["hard_stop"]:
+            break
+        assert time.monotonic() < deadline, state["emergency"]
+        time.sleep(0.05)
+    assert conn.sock is sock
+    conn.close()

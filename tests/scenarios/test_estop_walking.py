@@ -1,12 +1,14 @@
 """The hard e-stop in the middle of a walk: the command freezes, the walk behind it holds (the plan does
 not run on), commands sent meanwhile are refused, and after the release the robot puts its swing foot
-down, brings its weight between the feet and stands, facing where it faced.
+down, brings its weight between the feet and stands for 10 s, facing where it faced, its capture-point
+error under the Stabilizer's threshold (40 mm) the whole time.
 
-Measured (/tmp sweeps of this machine): over 11 e-stop phases of a step cycle at 0.2 m/s, and 11 at
-0.1 m/s turning 10 deg/s, the robot stood every time; yaw change 0.3 deg at most. Frozen on one foot, the
-robot tips onto its swing foot, away from the held plan: the capture-point error is 75-99 mm through the
-2.5 s release blend (the chain still holds) and below the 40 mm threshold 0.3 s after the chain resumes;
-frozen in double support it stays under 7 mm."""
+Measured on this machine (e-stop at 11 instants of one step, 1.80-2.60 s into the walk, at 0.2 m/s and at
+0.1 m/s turning 10 deg/s; 3 s hold; 10 s after the release): the robot stood every time, yaw change 0.44 deg
+at most. Frozen in double support the capture-point error peaks under 5 mm; frozen on one foot at 30-36 mm
+in most instants (the cases below: 30 and 36 mm). Frozen on the right foot 2.22-2.32 s into the walk it
+peaks at 56-149 mm (0.2 m/s; 96 mm at 2.28 s turning), though the robot stands: the issue's "CP error under
+the threshold" does not hold there yet (the xfail case)."""
 
 import math
 
@@ -21,8 +23,6 @@ from controller.layers.stabilizer import StabilizerParams
 THRESHOLD_M = StabilizerParams().cp_threshold_m
 HOLD_S = 3.0
 STAND_S = 10.0
-#: after the release: the swing foot's landing (0.8 s) and the 2 s final double support, plus 0.5 s margin
-SETTLED_AFTER_S = 3.3
 MAX_YAW_CHANGE_DEG = 2.0
 #: half the 0.2 m stride: the COG goes to the middle of the feet, which stay where they are
 MAX_BODY_SHIFT_M = 0.12
@@ -38,7 +38,11 @@ def yaw_deg(quat_wxyz) -> float:
     (0.2, 0.0, 2.0, "both"),  # frozen in the double support between two steps
     (0.1, 10.0, 2.2, "rleg"),  # turning, frozen on the right foot
     (0.1, 10.0, 3.0, "both"),
-], ids=["0.2m_s-single", "0.2m_s-double", "0.1m_s-turning-single", "0.1m_s-turning-double"])
+    pytest.param(0.2, 0.0, 2.3, "rleg", marks=pytest.mark.xfail(
+        strict=True, raises=AssertionError, reason="frozen on the right foot 2.22-2.32 s into the walk, the CP "
+        "error after the release peaks at 56-149 mm (120 mm here), over the 40 mm threshold")),
+], ids=["0.2m_s-single", "0.2m_s-double", "0.1m_s-turning-single", "0.1m_s-turning-double",
+        "0.2m_s-single-late"])
 def test_estop_mid_walk_holds_and_after_release_the_robot_stands_where_it_is(vx, vtheta_deg, walk_s, phase):
     robot = LocalRobot()
     service = OperatorService(robot)
@@ -73,11 +77,9 @@ def test_estop_mid_walk_holds_and_after_release_the_robot_stands_where_it_is(vx,
         errors.append((snap.time_s - t_release, snap.layers["st"].cp_error_norm))
     t, err = np.array(errors).T
     assert abs(yaw_deg(snap.truth.base_quat_wxyz) - yaw0) < MAX_YAW_CHANGE_DEG
-    assert err[t >= SETTLED_AFTER_S].max() < THRESHOLD_M, f"peak {err.max() * 1e3:.0f} mm"
     assert not snap.layers["abc"].walking and not snap.safety.hard_stop
     # the robot stands where it stopped: no step of the walk it was on (the body only moves between the feet)
     assert np.linalg.norm(np.array(snap.truth.base_pos_world[:2]) - base0[:2]) < MAX_BODY_SHIFT_M
-    above = np.flatnonzero(err >= THRESHOLD_M)
-    settled = t[above[-1] + 1] if above.size else 0.0
-    print(f"\n{vx} m/s, {vtheta_deg} deg/s, frozen in {phase}: CP error peak {err.max() * 1e3:.0f} mm, "
-          f"below {THRESHOLD_M * 1e3:.0f} mm from {settled:.2f} s after the release")
+    print(f"\n{vx} m/s, {vtheta_deg} deg/s, frozen in {phase}: CP error peak {err.max() * 1e3:.0f} mm "
+          f"{t[err.argmax()]:.2f} s after the release")
+    assert err.max() < THRESHOLD_M, f"CP error peak {err.max() * 1e3:.0f} mm at {t[err.argmax()]:.2f} s"

@@ -1,6 +1,8 @@
-"""A WebSocket that streams at a rate its client chooses (`?rate_hz=N`, then {"rate_hz": N} messages): the
-opening checks, the operator lock kept by `?client=<id>`, the sends under one lock, and the reader that answers
-rate messages. The telemetry and the camera streams are built on it; each says only what it sends."""
+"""The console's WebSockets, shared by the routers that serve them: the message size limit, the `?client=<id>`
+check, receiving a text message, and a stream at a rate its client chooses (`?rate_hz=N`, then {"rate_hz": N}
+messages: the opening checks, the operator lock kept by `?client=<id>`, the sends under one lock, and the reader
+that answers rate messages). The telemetry and the camera streams are built on it; each says only what it
+sends."""
 
 from __future__ import annotations
 
@@ -11,7 +13,30 @@ import math
 from fastapi import WebSocket
 
 from app.deps import get_lock
-from app.routers.operator import MAX_MESSAGE_BYTES, receive_message, ws_client
+from app.operator_lock import check_client_id
+
+MAX_MESSAGE_BYTES = 4096  # a setpoint is ~150 bytes
+
+
+def ws_client(ws: WebSocket) -> tuple[str | None, str | None]:
+    """(the ?client= id or None, an error message naming the field)."""
+    client = ws.query_params.get("client")
+    if client is None:
+        return None, None
+    try:
+        return check_client_id(client, "client"), None
+    except ValueError as exc:
+        return None, str(exc)
+
+
+async def receive_message(ws: WebSocket) -> str | None:
+    """The next text message; None when the client left. A binary message is answered by the caller as
+    invalid (it gets b"" here)."""
+    message = await ws.receive()
+    if message["type"] == "websocket.disconnect":
+        return None
+    text = message.get("text")
+    return "" if text is None else text
 
 
 def error_text(detail: str, field: str | None = None) -> str:
