@@ -10,7 +10,10 @@ as located vs where it is, the can at the release vs the hole's centre, whether 
 from __future__ import annotations
 
 import csv
+import multiprocessing
 import time
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -145,6 +148,21 @@ def placements(n: int, seed: int) -> list[tuple[float, float, float]]:
              float(rng.uniform(*ROBOT_DISTANCE_RANGE_M))) for _ in range(n)]
 
 
+def run_trials(trials: list[tuple[float, float, float]], workers: int = 1,
+               progress=None) -> Iterator[TrialResult]:
+    """Each (U, V, distance) as a trial, in `workers` spawned processes (each trial builds its own robot:
+    the results are the same however many run at once); yields them as they finish."""
+    if workers <= 1:
+        for i, (u, v, d) in enumerate(trials):
+            yield run_trial(u, v, d, trial=i, progress=progress)
+        return
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        futures = [pool.submit(run_trial, u, v, d, i) for i, (u, v, d) in enumerate(trials)]
+        for future in as_completed(futures):
+            yield future.result()
+
+
 def write_csv(results: list[TrialResult], path: Path) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", newline="") as fh:
@@ -192,6 +210,8 @@ def main(argv) -> int:
     p.add_argument("--seed", type=int, default=2005, help="seed of the random placements")
     p.add_argument("--out", type=Path, default=Path("out/experiments"), help="where the CSV goes")
     p.add_argument("--verbose", action="store_true", help="print each behaviour's outcome")
+    p.add_argument("--workers", type=int, default=1, choices=range(1, 65), metavar="N",
+                   help="trials run in N processes at once (1-64; the results do not depend on it)")
     args = p.parse_args(list(argv))
     log = _verbose if args.verbose else None
     if args.can is not None:
@@ -203,11 +223,11 @@ def main(argv) -> int:
         return 0 if r.succeeded else 1
     n = args.trials or 20
     results = []
-    for i, (u, v, d) in enumerate(placements(n, args.seed)):
-        r = run_trial(u, v, d, trial=i, progress=log)
+    for done, r in enumerate(run_trials(placements(n, args.seed), args.workers, progress=log), start=1):
         results.append(r)
-        print(f"[{i + 1}/{n}] U {u:+.3f} V {v:.3f} D {d:.2f}: {trial_line(r)} "
-              f"({r.sim_time_s:.0f} s sim, {r.wall_time_s:.0f} s wall)", flush=True)
+        print(f"[{done}/{n}] trial {r.trial}: U {r.can_u_m:+.3f} V {r.can_v_m:.3f} D {r.robot_distance_m:.2f}: "
+              f"{trial_line(r)} ({r.sim_time_s:.0f} s sim, {r.wall_time_s:.0f} s wall)", flush=True)
+    results.sort(key=lambda r: r.trial)
     path = args.out / f"expo-seed{args.seed}-{n}.csv"
     write_csv(results, path)
     print(summary_table(results))
