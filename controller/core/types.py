@@ -153,6 +153,9 @@ class Ports:
     walk_command: WalkCommand | None = None  # op: the walking point, read by abc; None: not driven this tick
     motion_stopped: bool = False  # es: it holds or reverts the motion (op freezes its integration)
     motion_reverted_to_s: float | None = None  # es: while stopped, the plan time its revert goes back to [s]
+    # st: BODY (roll, pitch) [rad] from the kinematics of the soles lying flat where the plan puts them
+    # (body_tilt_from_flat_soles); kf takes it as its tilt measurement next tick. None: no sole qualified
+    body_tilt_kin_rad: tuple[float, float] | None = None
 
 
 @dataclass(slots=True)
