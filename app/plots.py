@@ -46,8 +46,10 @@ def record_push(impulse_ns: float = 20.0, seconds: float = 4.0):
     return np.array(rows)
 
 
-#: the tuning before issue 13.1 (the accelerometer trusted while BODY turns, one foot damping for roll and pitch)
-PUSH_TUNING_BEFORE = {"kf": {"gyro_trust_band_rad_s": 0.0}, "st": {"rot_damping_gain_pitch": 300.0}}
+#: the tuning before issue 13.1 (the accelerometer trusted while BODY turns, one foot damping for roll and pitch;
+#: the tilt from the accelerometer, not the flat soles, as before issue 13.2)
+PUSH_TUNING_BEFORE = {"kf": {"gyro_trust_band_rad_s": 0.0, "use_sole_tilt": False},
+                      "st": {"rot_damping_gain_pitch": 300.0}}
 
 
 def record_push_detail(impulse_ns: float = 20.0, seconds: float = 3.0, overrides: dict | None = None):
@@ -100,7 +102,8 @@ def plot_push_before_after(out: Path) -> None:
         ax.grid(alpha=0.3)
     for ax in axes[:, 1]:
         ax.legend(fontsize=8)
-    fig.suptitle("20 N s forward push on BODY, standing: before / after issue 13.1 (KF gyro trust, pitch damping)")
+    fig.suptitle("20 N s forward push on BODY, standing: before / after issue 13.1 (KF gyro trust, pitch damping) "
+                 "and 13.2 (KF tilt from the flat soles)")
     fig.tight_layout()
     fig.savefig(out, dpi=100)
 

@@ -2,10 +2,14 @@
 
 from __future__ import annotations
 
+import math
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from controller.core.types import Estimate, Reference, read_only
 from controller.kinematics.model import RobotKinematics
+from controller.kinematics.rotations import rows_mul, rows_tmul
 from robot.names import FORCE_SENSOR_NAMES
 
 FOOT_SENSORS = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
@@ -15,6 +19,62 @@ _FEET = (slice(FOOT_SENSORS[0], FOOT_SENSORS[1] + 1) if FOOT_SENSORS[1] == FOOT_
          else list(FOOT_SENSORS))
 _EQUAL_WEIGHTS = np.array([0.5, 0.5])
 read_only(_EQUAL_WEIGHTS)
+
+if TYPE_CHECKING:
+    from controller.balance.capture_point import FootRectangle
+
+#: [-] a sole gives the BODY tilt (body_tilt_from_flat_soles) only if it carries at least this share of the
+#: feet's vertical load: a foot just touching down or about to lift may not lie flat yet
+FLAT_SOLE_MIN_LOAD_SHARE = 0.25
+#: [m] ... and its centre of pressure is at least this far inside every sole edge: a COP near an edge means
+#: the sole may be tipping about it
+FLAT_SOLE_COP_MARGIN_M = 0.02
+#: [rad] a planned sole whose z axis is tilted more than this from the vertical is not planned flat (toe-off,
+#: heel-strike)
+FLAT_SOLE_PLAN_TILT_RAD = 1e-3
+
+
+def body_tilt_from_flat_soles(R_body_est, R_soles_plan, R_soles_meas, wrenches_sole, rectangles: tuple[
+        FootRectangle, ...], contact: tuple[bool, ...], min_load_share: float = FLAT_SOLE_MIN_LOAD_SHARE,
+        cop_margin_m: float = FLAT_SOLE_COP_MARGIN_M) -> tuple[float, float] | None:
+    """BODY roll, pitch [rad] from the kinematics of the soles that lie flat where the plan puts them.
+
+    A sole planned in contact and flat (`contact[i]`, `R_soles_plan[i]` (3, 3) world) that carries at least
+    `min_load_share` of the feet's vertical load, with its centre of pressure at least `cop_margin_m` inside
+    its rectangle's edges, is taken to have the planned orientation; BODY then is
+    R_plan R_sole_meas^T R_body_est, where `R_soles_meas[i]` (3, 3) is the sole's orientation that the
+    encoders and the attitude estimate `R_body_est` (3, 3) give (world-aligned). `wrenches_sole` (n, 6):
+    the external wrench on each foot at its sole frame's origin, in the sole frame [N, N m]. The soles that
+    qualify are averaged, weighted by their load. None when none qualifies (no measurement: the caller
+    falls back on the accelerometer). The result does not depend on the estimate's attitude (it cancels)."""
+    rows = (wrenches_sole.tolist() if isinstance(wrenches_sole, np.ndarray)
+            else [w.tolist() if isinstance(w, np.ndarray) else w for w in wrenches_sole])
+    fz = [max(float(w[2]), 0.0) for w in rows]
+    total = sum(fz)
+    if total <= 0.0:
+        return None
+    R_body = R_body_est.tolist() if isinstance(R_body_est, np.ndarray) else R_body_est
+    roll_sum = pitch_sum = weight = 0.0
+    for i, rect in enumerate(rectangles):
+        f = fz[i]
+        if not contact[i] or f < min_load_share * total:
+            continue
+        plan = R_soles_plan[i].tolist() if isinstance(R_soles_plan[i], np.ndarray) else R_soles_plan[i]
+        if math.hypot(plan[2][0], plan[2][1]) > FLAT_SOLE_PLAN_TILT_RAD:  # the sole's z axis off the vertical
+            continue
+        cop_x, cop_y = -rows[i][4] / f, rows[i][3] / f  # [m] in the sole frame
+        m = cop_margin_m
+        if not (-rect.rear_m + m <= cop_x <= rect.front_m - m and -rect.right_m + m <= cop_y <= rect.left_m - m):
+            continue
+        meas = R_soles_meas[i].tolist() if isinstance(R_soles_meas[i], np.ndarray) else R_soles_meas[i]
+        R = rows_mul(plan, rows_tmul(meas, R_body))
+        r20, r21, r22 = R[2]
+        roll_sum += f * math.atan2(r21, r22)
+        pitch_sum += f * math.atan2(-r20, math.hypot(r21, r22))
+        weight += f
+    if weight <= 0.0:
+        return None
+    return roll_sum / weight, pitch_sum / weight
 
 
 def zmp_from_foot_wrenches(pos_world: np.ndarray, wrench_world: np.ndarray, z0: float,

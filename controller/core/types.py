@@ -159,6 +159,9 @@ class Ports:
     #: (empty: the command passes); op shows it to behaviours, whose goal checks would otherwise read the
     #: reference and believe a held motion arrived
     collision_pairs: tuple[tuple[str, str], ...] = ()
+    # st: BODY (roll, pitch) [rad] from the kinematics of the soles lying flat where the plan puts them
+    # (body_tilt_from_flat_soles); kf takes it as its tilt measurement next tick. None: no sole qualified
+    body_tilt_kin_rad: tuple[float, float] | None = None
 
 
 @dataclass(slots=True)

@@ -95,6 +95,9 @@ class AutoBalancerParams(Params):
     stride_inside_th_rad: float = field(default=math.radians(5.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
     # distance between the feet's centres when walking (hrpsys leg_default_translate_pos, both legs)
     foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": 0.14, "max": 0.30})
+    # the Stabilizer's capture-point flag rising while walking (Ports.cp_flag, its estop_while_walking) calls the
+    # emergency walking stop: the steps end in place while the EmergencyStopper holds the motion
+    walking_stop_on_cp_flag: bool = field(default=True, metadata={"unit": "-"})
 
     def gait_params(self, base: GaitParams | None = None) -> GaitParams:
         return (base or GaitParams()).replaced(double_support_ratio_before=self.double_support_ratio_before,
@@ -193,6 +196,7 @@ class AutoBalancer(Layer):
         self._port_walking = False  # the walk in progress is driven by the walking point (Ports.walk_command)
         self._walk_armed = True  # False after an e-stop or walking stop, until the walking point reads zero
         self._walk_point = "idle"
+        self._last_cp_flag = False  # Ports.cp_flag as the last tick read it (the walking stop is on its rise)
         if active:
             self.start()
 
@@ -387,6 +391,11 @@ class AutoBalancer(Layer):
         if self._weight <= 0.0 and not self.active:
             self.last_gait = None
             return ref
+        flag = ctx.last_ports.cp_flag
+        if flag and not self._last_cp_flag and self.params.walking_stop_on_cp_flag and self.gait.walking \
+                and not self.walking_stop:
+            self.emergency_stop_walking()
+        self._last_cp_flag = flag
         cmd = ctx.ports.walk_command
         if cmd is not None or self._port_walking or not self._walk_armed:
             self._walk_at(cmd)

@@ -1,4 +1,5 @@
-"""KalmanFilter layer: BODY attitude (roll, pitch, yaw) from the gyro and the accelerometer ([MLC] III)."""
+"""KalmanFilter layer: BODY attitude (roll, pitch, yaw) from the gyro and the accelerometer ([MLC] III), or the
+kinematics of the soles lying flat on the ground when the Stabilizer has it."""
 
 from __future__ import annotations
 
@@ -27,6 +28,12 @@ class KalmanFilterParams(Params):
     # it, 20 mm off). 0.05 did as well on the push but, a hand pulled down, the attitude caught up with the
     # accelerometer in one jump when the turning ended (a 60 mm capture-point spike raised the flag). 0 = off
     gyro_trust_band_rad_s: float = field(default=0.1, metadata={"unit": "rad/s", "min": 0.0, "max": 10.0})
+    # the tilt measurement from the kinematics of the soles lying flat on the ground (the Stabilizer's
+    # Ports.body_tilt_kin_rad) instead of the accelerometer's whenever there is one: at a foot landing the
+    # accelerometer reads the impact as tilt (1.1 deg of pitch, the estimated COG 15-20 mm off and the
+    # capture-point error 80 mm on a 3 m walk); the soles do not. r_sole_tilt is its variance
+    use_sole_tilt: bool = field(default=True, metadata={"unit": "-"})
+    r_sole_tilt: float = field(default=1e-4, metadata={"unit": "rad^2", "min": 1e-9, "max": 10.0})
 
 
 def _floats3(v) -> list[float]:
@@ -58,8 +65,11 @@ class AttitudeKalmanFilter:
         ax, ay, az = (float(v) for v in accel_m_s2)
         return np.array([math.atan2(ay, az), math.atan2(-ax, math.hypot(ay, az))])
 
-    def update(self, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray, dt_s: float) -> np.ndarray:
-        """One predict (gyro) + correct (accelerometer tilt) step; scalar maths, it runs every tick."""
+    def update(self, gyro_rad_s: np.ndarray, accel_m_s2: np.ndarray | None, dt_s: float,
+               tilt_rad: tuple[float, float] | None = None) -> np.ndarray:
+        """One predict (gyro) + correct step; scalar maths, it runs every tick. The correction measures the
+        tilt with `tilt_rad` (roll, pitch [rad], variance r_sole_tilt) when given, else with the
+        accelerometer."""
         p = self.params
         wx, wy, wz = _floats3(gyro_rad_s)
         bias = self.bias.tolist()
@@ -71,13 +81,17 @@ class AttitudeKalmanFilter:
         r += (wx + sr * tp * wy + cr * tp * wz) * dt_s
         pi += (cr * wy - sr * wz) * dt_s
         y += (sr * wy + cr * wz) / cp * dt_s
-        ax, ay, az = _floats3(accel_m_s2)
-        z = (math.atan2(ay, az), math.atan2(-ax, math.hypot(ay, az)))
-        excess = abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2) / p.accel_trust_band
-        r_meas = p.r_angle * (1.0 + 100.0 * excess * excess)
-        if p.gyro_trust_band_rad_s > 0.0:
-            turning = (wx * wx + wy * wy) / (p.gyro_trust_band_rad_s * p.gyro_trust_band_rad_s)
-            r_meas *= 1.0 + 100.0 * turning
+        if tilt_rad is not None:
+            z = (float(tilt_rad[0]), float(tilt_rad[1]))
+            r_meas = p.r_sole_tilt
+        else:
+            ax, ay, az = _floats3(accel_m_s2)
+            z = (math.atan2(ay, az), math.atan2(-ax, math.hypot(ay, az)))
+            excess = abs(math.sqrt(ax * ax + ay * ay + az * az) - GRAVITY_M_S2) / p.accel_trust_band
+            r_meas = p.r_angle * (1.0 + 100.0 * excess * excess)
+            if p.gyro_trust_band_rad_s > 0.0:
+                turning = (wx * wx + wy * wy) / (p.gyro_trust_band_rad_s * p.gyro_trust_band_rad_s)
+                r_meas *= 1.0 + 100.0 * turning
         angles = [r, pi]
         for i in range(2):
             p00, p01, p11 = self._P[i]
@@ -109,7 +123,7 @@ class KalmanFilter(Layer):
     """Estimates the BODY attitude every tick into `ctx.estimate`; the reference passes through."""
 
     name = "kf"
-    description = "KalmanFilter: BODY attitude from gyro + accelerometer"
+    description = "KalmanFilter: BODY attitude from gyro + accelerometer (or the flat soles' kinematics)"
 
     def __init__(self, params: KalmanFilterParams | None = None, rpy0=(0.0, 0.0, 0.0)) -> None:
         super().__init__()
@@ -122,6 +136,11 @@ class KalmanFilter(Layer):
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         s = ctx.sensors
+        tilt = ctx.last_ports.body_tilt_kin_rad if self.params.use_sole_tilt else None
+        if tilt is not None:  # the soles measure the tilt (the accelerometer is not read)
+            ctx.estimate.base_rpy_rad = read_only(self.filter.update(s.gyro_rad_s, None, ctx.dt_s, tilt_rad=tilt))
+            ctx.estimate.base_angvel_rad_s = np.array(s.gyro_rad_s, dtype=float)
+            return ref
         accel = s.accel_m_s2
         cog_acc = ctx.last_ports.cog_acc_world  # the AutoBalancer's plan of the tick before
         if self.params.use_planned_acceleration and cog_acc is not None:

@@ -86,7 +86,8 @@ def test_a_20ns_forward_push_settles_without_ringing():
     # issue 13.1: the capture-point error crosses the threshold once, the measured ZMP never reaches the heel
     # edge, and the error is under 10 mm from 1 s after its peak on. Measured: 1 crossing (4 before the
     # attitude estimate trusted the gyro while BODY turns and the standing pitch damping was 300), ZMP at
-    # least 16.7 mm in front of the heel edge (it sat on it for 0.45 s before), 5.1 mm (62 mm before).
+    # least 26.5 mm in front of the heel edge (it sat on it for 0.45 s before), 6.0 mm (62 mm before); with
+    # the accelerometer's tilt instead of the soles' (before issue 13.2) 16.7 mm and 5.1 mm.
     from controller.balance.capture_point import HRP2_RIGHT_SOLE
 
     fallen, _, snaps = push_and_watch(np.array([20.0, 0.0, 0.0]), seconds=3.0)
@@ -98,7 +99,7 @@ def test_a_20ns_forward_push_settles_without_ringing():
     ankle_x = snaps[0].reference.gait.p_rsole_world[0]
     zmp_from_ankle_x = np.array([s.zmp_world[0] for s in snaps]) - ankle_x
     heel_clearance_m = zmp_from_ankle_x.min() + HRP2_RIGHT_SOLE.rear_m
-    assert heel_clearance_m > 0.0167 / MARGIN, f"measured ZMP {heel_clearance_m * 1e3:.1f} mm from the heel edge"
+    assert heel_clearance_m > 0.0265 / MARGIN, f"measured ZMP {heel_clearance_m * 1e3:.1f} mm from the heel edge"
     peak = int(np.argmax(errors))
     late = errors[peak + int(1.0 / (snaps[1].time_s - snaps[0].time_s)):]
-    assert late.max() < MARGIN * 0.0051, f"|CP error| {late.max() * 1e3:.1f} mm 1 s after its peak"
+    assert late.max() < MARGIN * 0.0060, f"|CP error| {late.max() * 1e3:.1f} mm 1 s after its peak"

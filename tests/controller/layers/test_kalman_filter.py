@@ -68,3 +68,30 @@ def test_the_planned_body_acceleration_is_not_read_as_tilt():
             ctx.last_ports.cog_acc_world = a_world
             layer.tick(ctx, ref)
         assert abs(np.rad2deg(ctx.estimate.base_rpy_rad[0]) - expected_roll) < 0.1
+
+
+def test_the_soles_tilt_is_the_measurement_when_the_stabilizer_publishes_one():
+    """A landing: the accelerometer reads 2 deg of pitch that is not there (an unplanned acceleration); the
+    soles' kinematics (Ports.body_tilt_kin_rad of the tick before) say 0.3 deg roll, -0.5 deg pitch. Without
+    the port, or with use_sole_tilt off, the accelerometer wins."""
+    ref = Reference.from_arrays(np.zeros(30))
+    accel = accel_for_tilt(0.0, np.deg2rad(2.0))
+    soles = (np.deg2rad(0.3), np.deg2rad(-0.5))
+    for use, port, expected in ((True, soles, (0.3, -0.5)), (False, soles, (0.0, 2.0)), (True, None, (0.0, 2.0))):
+        layer = KalmanFilter(KalmanFilterParams(use_sole_tilt=use))
+        for _ in range(4000):  # 20 s
+            ctx = make_ctx(accel=accel)
+            ctx.last_ports.body_tilt_kin_rad = port
+            layer.tick(ctx, ref)
+        np.testing.assert_allclose(np.rad2deg(ctx.estimate.base_rpy_rad[:2]), expected, atol=0.05)
+
+
+def test_the_soles_tilt_is_followed_within_a_tenth_of_a_second():
+    """r_sole_tilt = 1e-4 rad^2 against q_angle 1e-6 per tick: a gain of ~0.1 per tick, so a 1 deg step of the
+    soles' tilt is 90 % taken in 0.1 s (the accelerometer's r_angle 1e-2 takes seconds)."""
+    kf = AttitudeKalmanFilter(KalmanFilterParams())
+    for _ in range(200):
+        kf.update(np.zeros(3), None, 0.005, tilt_rad=(0.0, 0.0))
+    for _ in range(20):  # 0.1 s
+        rpy = kf.update(np.zeros(3), None, 0.005, tilt_rad=(0.0, np.deg2rad(1.0)))
+    assert np.rad2deg(rpy[1]) > 0.9

@@ -132,3 +132,29 @@ def test_hand_forces_reading_more_than_the_robot_weight_fall_back_to_the_plain_c
     assert np.array_equal(st.static_balance_point(cog, est, 0.0), cog)
     wrenches[2, 2] = -700.0
     assert np.array_equal(st.static_balance_point(cog, est, 0.0), cog)
+
+
+def test_the_body_tilt_port_is_the_soles_kinematics_not_the_attitude_estimate():
+    """Both soles loaded and planned flat, the encoders at half-sitting (planned with BODY level): the port says
+    BODY is level although the attitude estimate says 0.6 deg roll, 1.7 deg pitch; a sole lifted in the plan
+    does not count, and soles planned pitched (toe-off) give None."""
+    from controller.kinematics.rotations import rpy_to_matrix
+    from controller.layers.remove_force_offset import RemoveForceOffset
+
+    st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+    rmfo = RemoveForceOffset(RobotKinematics())
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE)
+    base = gait()
+    fields = {f: getattr(base, f) for f in GaitState.__slots__}
+    toe_off = rpy_to_matrix(np.radians([0.0, 5.0, 0.0]))
+    cases = (({}, True), ({"contact": (True, False)}, True),
+             ({"R_rsole_world": toe_off @ base.R_rsole_world, "R_lsole_world": toe_off @ base.R_lsole_world}, False))
+    for changes, level in cases:
+        ctx = standing_ctx()
+        ctx.estimate.base_rpy_rad = np.array([0.01, 0.03, 0.0])
+        rmfo.tick(ctx, ref)
+        st.tick(ctx, ref.with_(gait=GaitState(**{**fields, **changes})))
+        if level:
+            np.testing.assert_allclose(ctx.ports.body_tilt_kin_rad, (0.0, 0.0), atol=1e-9)
+        else:
+            assert ctx.ports.body_tilt_kin_rad is None
