@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from behaviors.approach_table import TABLE_NEAR_EDGE_X_M
+from behaviors.approach_table import TABLE_CENTRE_Y_M, TABLE_NEAR_EDGE_X_M
 from behaviors.base import BehaviorParams, Context
 from behaviors.composite import Composite, Plan, StepFailed, Wait
 from behaviors.grasp import Grasp, GraspParams
@@ -26,9 +26,11 @@ from behaviors.perception.models import CAN
 from behaviors.reach import Reach, ReachParams
 from behaviors.release import Release, ReleaseParams
 from behaviors.servo import rot_z
+from behaviors.table_model import KnownTable
 from behaviors.walk_to import WalkTo, WalkToParams
 from controller.core.constants import GRAVITY_M_S2
 from controller.kinematics.rotations import matrix_to_rpy
+from controller.walking.footsteps import FootstepParams
 
 CAN_MASS_KG = 0.33  # a full 300 ml can (robot/hrp2/README.md)
 #: The can where the right hand takes it best, relative to the support polygon's centre (the feet frame F) [m]:
@@ -43,6 +45,20 @@ FEET_TO_EDGE_MIN_M = 0.22
 GRASP_CAN_X_MAX_M = 0.52
 #: The reachable box around it [m]: closer or farther, the 30 deg hand would meet the table or its limits.
 REACH_BOX_M = ((0.38, GRASP_CAN_X_MAX_M + 0.03), (-0.28, -0.16))
+#: The can's F y [m] the stance may choose instead of GRASP_CAN_FEET_M's to keep the legs clear of the table's
+#: legs: the reach box's y less 1 cm each side.
+CAN_Y_FEET_RANGE_M = (REACH_BOX_M[1][0] + 0.01, REACH_BOX_M[1][1] - 0.01)
+#: [m] a foot's centre from the feet centre, across (the gait's leg_offset_y_m)
+FOOT_OFFSET_Y_M = FootstepParams().leg_offset_y_m
+#: [m] how far the leg reaches across from its foot's centre line: outward, the knee's capsule (0.092 m) and the
+#: sole (0.079 m); inward, the sole (0.059 m) (robot/hrp2 model)
+LEG_OUT_M, LEG_IN_M = 0.095, 0.06
+#: [m] kept between the robot's legs and a table leg beside them, across (walking tolerance and sway)
+LEG_CLEARANCE_M = 0.03
+#: [m] the feet centre stays this far back from the face of a table leg that stands in line with a foot: the
+#: knee of a foot lifting in place reaches 0.23-0.25 m ahead of it (LLEG_LINK3 met the leg at 0.25 m when the
+#: aligning step lifted the left foot in line with it: seed 2005, trial 10, the robot fell).
+KNEE_TO_LEG_MIN_M = 0.30
 #: Located from farther than this [m], the can is located again from LOOK_BACK_M behind the grasping stance
 #: (the head cannot pitch down 57 deg to see it from the stance, and a long walk adds odometry error).
 RELOCATE_FROM_M = 1.3
@@ -85,6 +101,8 @@ class TakeCanParams(BehaviorParams):
     table_edge_x_m: float = field(default=TABLE_NEAR_EDGE_X_M, metadata={
         "unit": "m", "min": -20.0, "max": 20.0,
         "doc": "the table's near edge, world x (its known place; the near side faces -x)"})
+    table_centre_y_m: float = field(default=TABLE_CENTRE_Y_M, metadata={
+        "unit": "m", "min": -20.0, "max": 20.0, "doc": "the table's middle along its near edge, world y (known)"})
 
 
 def can_in_feet(view, can_world) -> np.ndarray:
@@ -100,10 +118,36 @@ def grasp_can_x_feet(can_from_edge_m: float) -> float:
 
 
 def stance_for(can_world, yaw_rad: float, x_feet_m: float = GRASP_CAN_FEET_M[0],
-               back_m: float = 0.0) -> tuple[float, float]:
-    """The feet frame's place (world x, y) that puts the can at (x_feet_m + back_m, GRASP_CAN_FEET_M's y) in F."""
-    offset = rot_z(yaw_rad) @ np.array([x_feet_m + back_m, GRASP_CAN_FEET_M[1], 0.0])
+               back_m: float = 0.0, y_feet_m: float = GRASP_CAN_FEET_M[1]) -> tuple[float, float]:
+    """The feet frame's place (world x, y) that puts the can at (x_feet_m + back_m, y_feet_m) in F."""
+    offset = rot_z(yaw_rad) @ np.array([x_feet_m + back_m, y_feet_m, 0.0])
     return float(can_world[0] - offset[0]), float(can_world[1] - offset[1])
+
+
+def legs_clear_of_table_legs(feet_y_m: float, table: KnownTable) -> bool:
+    """Both of the robot's legs (feet centre at world y `feet_y_m`, facing the table) LEG_CLEARANCE_M or more
+    across from each of the table's near legs."""
+    bands = ((feet_y_m + FOOT_OFFSET_Y_M - LEG_IN_M, feet_y_m + FOOT_OFFSET_Y_M + LEG_OUT_M),  # left leg
+             (feet_y_m - FOOT_OFFSET_Y_M - LEG_OUT_M, feet_y_m - FOOT_OFFSET_Y_M + LEG_IN_M))  # right leg
+    c = LEG_CLEARANCE_M
+    legs = table.near_leg_spans_y_m()
+    return all(hi + c <= lo_leg or lo - c >= hi_leg for lo, hi in bands for lo_leg, hi_leg in legs)
+
+
+def grasp_beside_legs(can_world, yaw_rad: float, x_feet_m: float, table: KnownTable) -> tuple[float, float]:
+    """Where in F (x, y) [m] to take the can so that the knees keep off the table's legs: (x_feet_m,
+    GRASP_CAN_FEET_M's y) when the feet stand KNEE_TO_LEG_MIN_M or more back from the legs' faces or no leg is
+    beside them; else the nearest y in CAN_Y_FEET_RANGE_M that keeps the legs across from the table's legs; else
+    (no such y: a can near a table leg, a little in from the end) x farther out, the feet KNEE_TO_LEG_MIN_M back."""
+    y0 = GRASP_CAN_FEET_M[1]
+    feet_x, feet_y = stance_for(can_world, yaw_rad, x_feet_m, y_feet_m=y0)
+    if feet_x <= table.near_leg_face_x_m - KNEE_TO_LEG_MIN_M or legs_clear_of_table_legs(feet_y, table):
+        return x_feet_m, y0
+    lo, hi = CAN_Y_FEET_RANGE_M
+    for y in sorted(np.linspace(lo, hi, round((hi - lo) / 0.005) + 1).tolist(), key=lambda v: abs(v - y0)):
+        if legs_clear_of_table_legs(stance_for(can_world, yaw_rad, x_feet_m, y_feet_m=y)[1], table):
+            return x_feet_m, y
+    return max(x_feet_m, x_feet_m + feet_x - (table.near_leg_face_x_m - KNEE_TO_LEG_MIN_M)), y0
 
 
 def within_reach(can_feet, can_from_edge_m: float | None = None) -> bool:
@@ -167,6 +211,7 @@ class TakeCan(Composite):
         can_f = can_in_feet(view, can_world)
         self.result["can_feet_m"] = [round(float(v), 4) for v in can_f]
         edge_x_m = p.table_edge_x_m
+        table = KnownTable(near_edge_x_m=edge_x_m, centre_y_m=p.table_centre_y_m)
         in_from_edge_m = float(can_world[0]) - edge_x_m
         x_grasp = grasp_can_x_feet(in_from_edge_m)
         self.result["grasp_can_x_feet_m"] = round(x_grasp, 4)
@@ -182,11 +227,18 @@ class TakeCan(Composite):
                 # walk's odometry drift, and the table's known edge drifts with it in the odometry frame (55 mm
                 # after a 1.8 m walk: the feet ended 0.17 m from the edge, not 0.22, and the hand met it)
                 edge_x_m += float(relocated[0] - can_world[0])
+                table = table.shifted(float(relocated[0] - can_world[0]), float(relocated[1] - can_world[1]))
                 can_world = relocated
                 in_from_edge_m = float(can_world[0]) - edge_x_m
                 x_grasp = grasp_can_x_feet(in_from_edge_m)
             self.set_phase("walk")
-            x, y = stance_for(can_world, yaw, x_grasp)
+            x_grasp, y_grasp = grasp_beside_legs(can_world, yaw, x_grasp, table)
+            self.result.update(grasp_can_x_feet_m=round(x_grasp, 4), grasp_can_y_feet_m=round(y_grasp, 4))
+            if x_grasp > REACH_BOX_M[0][1]:
+                raise StepFailed(f"the can stands in line with a leg of the table, {in_from_edge_m:.2f} m in from "
+                                 f"the edge: from where the knees keep {KNEE_TO_LEG_MIN_M} m off the leg it is "
+                                 f"{x_grasp:.2f} m ahead, beyond the reach box {REACH_BOX_M}")
+            x, y = stance_for(can_world, yaw, x_grasp, y_feet_m=y_grasp)
             self.require((yield WalkTo(WalkToParams(x_m=x, y_m=y, theta_deg=math.degrees(yaw),
                                                     tolerance_m=0.02))))
             yield Wait(0.5)
