@@ -148,6 +148,9 @@ class Ports:
     """
 
     hold: bool = False  # hes, and the loop on a fault: the hard e-stop is engaged; the layers before it hold
+    #: hes: its release blend is in progress (hold is set too): the balance layers (abc, st) resume at once, so
+    #: the stop of a walk the e-stop cut plays under the blend; the motion layers hold until it is over
+    releasing: bool = False
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
@@ -180,3 +183,9 @@ class TickContext:
     def hold(self) -> bool:
         """The hard e-stop was engaged at the end of the last tick: motion-producing layers hold."""
         return self.last_ports.hold
+
+    @property
+    def balance_hold(self) -> bool:
+        """The hard e-stop is engaged (not releasing): the balance layers (abc, st) hold."""
+        last = self.last_ports
+        return last.hold and not last.releasing

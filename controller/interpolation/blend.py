@@ -69,11 +69,16 @@ class Transition:
 
 class RecoverBlend:
     """From `x0` at rest back to a live, possibly moving input over `duration_s`: output = x0 + w (input - x0)
-    with w a min-jerk Transition from 0 to 1 (hrpsys's recover interpolation); exactly the input at the end."""
+    with w a min-jerk Transition from 0 to 1 (hrpsys's recover interpolation); exactly the input at the end.
 
-    def __init__(self, x0: np.ndarray, duration_s: float) -> None:
+    `carry_motion`: the input's own motion passes unscaled and only the gap found at the first step is blended
+    out, output = input + (1 - w) (x0 - input_0) (the same for a still input)."""
+
+    def __init__(self, x0: np.ndarray, duration_s: float, carry_motion: bool = False) -> None:
         self.x0 = np.array(x0, dtype=float)
         self._weight = Transition(0.0, 1.0, max(float(duration_s), 1e-9), "min_jerk")
+        self._carry_motion = carry_motion
+        self._gap: np.ndarray | None = None  # x0 - the first input, with carry_motion
 
     @property
     def done(self) -> bool:
@@ -88,4 +93,8 @@ class RecoverBlend:
         target = np.asarray(target, dtype=float)
         if self._weight.done:
             return target.copy()
+        if self._carry_motion:
+            if self._gap is None:
+                self._gap = self.x0 - target
+            return target + (1.0 - w) * self._gap
         return self.x0 + w * (target - self.x0)

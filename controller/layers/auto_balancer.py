@@ -14,6 +14,7 @@ import pinocchio as pin
 
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
 from controller.balance.hand_force_cog_offset import cog_offset_against_hand_forces
+from controller.balance.tilt_anchor import TiltAnchor
 from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
@@ -21,7 +22,7 @@ from controller.core.types import GaitState, Reference, TickContext, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
-from controller.kinematics.rotations import rpy_to_rows
+from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
 from controller.operation.points import WalkCommand
 from controller.walking.footsteps import FootstepParams, StepParams, StrideLimits
 from controller.walking.gait_generator import GaitGenerator, GaitParams
@@ -34,6 +35,8 @@ REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this f
 FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
 #: [N] a swing foot reading more has touched down (the Stabilizer's contact threshold)
 SWING_FOOT_LOADED_N = 25.0
+#: [s] a robot that tipped onto its swing foot under the hard e-stop lands it (and so levels) over this long
+TIPPED_LANDING_TIME_S = 2.0
 #: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it
 MAX_STRIDE_RANGE_M = (0.0, 0.3)
 #: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
@@ -193,6 +196,8 @@ class AutoBalancer(Layer):
         self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
         self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
         self._holding = False  # the hard e-stop holds the chain
+        #: the plan seen from a robot that tipped onto its swing foot while the e-stop held it (None: level)
+        self._tilt: TiltAnchor | None = None
         self._port_walking = False  # the walk in progress is driven by the walking point (Ports.walk_command)
         self._walk_armed = True  # False after an e-stop or walking stop, until the walking point reads zero
         self._walk_point = "idle"
@@ -376,8 +381,12 @@ class AutoBalancer(Layer):
         if not self.enabled:  # pass-through
             self.last_gait = None
             return ref
-        if ctx.hold and self._last_out is not None:
+        if ctx.balance_hold and self._last_out is not None:
             out = self._hold()
+            tilt = self._tipped(ctx, out.gait, 1.0)
+            if tilt is not None:  # the references follow the robot that tipped while held (nothing moves)
+                gait, base, base_rpy = self._tilted(out.gait, tilt)
+                out = out.with_(gait=gait, base_pos_world=base, base_rpy_rad=base_rpy)
             if out.gait is not None:
                 ctx.ports.cog_acc_world = out.gait.cog_acc_world
             ctx.ports.gait = out.gait
@@ -435,8 +444,13 @@ class AutoBalancer(Layer):
             cog_acc_world=np.array((cog_acc_xy[0], cog_acc_xy[1], 0.0)),
             base_pos_world=base, base_rpy_rad=base_rpy,
         )
-        self.last_gait = gait
         zmp_base = R_body.T @ (zmp - base)
+        if self._tilt is not None:
+            gait, base, base_rpy = self._tilted(gait, self._tilt)
+            self._tilt.step(ctx.dt_s)
+            if self._tilt.done:
+                self._tilt = None
+        self.last_gait = gait
         # all fresh arrays of this tick: frozen in place rather than copied
         self._last_out = ref.with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
                                          gait=gait)
@@ -446,14 +460,43 @@ class AutoBalancer(Layer):
 
     def _resume(self, ctx: TickContext) -> None:
         """Released from the hard e-stop: the robot stood still, so the COG plan restarts from rest where it
-        is; a walk that was cut ends from there, on both feet if the robot tipped onto its swing foot."""
+        is; a walk that was cut ends from there, on both feet if the robot tipped onto its swing foot. A robot
+        that tipped rests tilted: the plan is then seen rotated by that tilt about the support sole, levelling
+        as the swing foot lands (TiltAnchor), so the references agree with where the robot is."""
         self._holding = False
         self.preview.reset(self.preview.x[0].copy())
         gait = self._last_out.gait if self._last_out is not None else None
         if self.gait.walking and gait is not None and gait.support != "both":
-            swing = FEET[0] if gait.support == "lleg" else FEET[1]
-            loaded = float(ctx.estimate.wrenches_ext[swing][2]) > SWING_FOOT_LOADED_N
-            self.gait.stop_from_rest(self._rest_zmp_xy(gait if not loaded else None), swing_foot_loaded=loaded)
+            tilt = self._tipped(ctx, gait, 1.0)
+            landing_s = self.gait.stop_from_rest(self._rest_zmp_xy(gait if tilt is None else None),
+                                                 swing_foot_loaded=tilt is not None,
+                                                 min_landing_time_s=TIPPED_LANDING_TIME_S if tilt else 0.8)
+            if tilt is not None and landing_s > 0.0:
+                self._tilt = self._tipped(ctx, gait, landing_s)
+
+    def _tipped(self, ctx: TickContext, gait: GaitState | None, duration_s: float) -> TiltAnchor | None:
+        """The held walk's robot resting on its swing foot as well (it tipped onto it): the plan as it sees it,
+        levelling over `duration_s`; None when the plan is not on one foot or the swing foot carries nothing."""
+        if gait is None or gait.support == "both" or not self.gait.walking:
+            return None
+        swing = FEET[0] if gait.support == "lleg" else FEET[1]
+        if not float(ctx.estimate.wrenches_ext[swing][2]) > SWING_FOOT_LOADED_N:
+            return None
+        p_support = gait.p_rsole_world if gait.support == "rleg" else gait.p_lsole_world
+        return TiltAnchor(rpy_to_matrix(gait.base_rpy_rad), rpy_to_matrix(ctx.estimate.base_rpy_rad), p_support,
+                          duration_s)
+
+    @staticmethod
+    def _tilted(gait: GaitState, t: TiltAnchor) -> tuple[GaitState, np.ndarray, np.ndarray]:
+        """The gait, BODY position and rpy as the robot tipped by `t` sees them."""
+        R_body = t.rotation(rpy_to_matrix(gait.base_rpy_rad))
+        out = dataclasses.replace(
+            gait, p_rsole_world=t.point(gait.p_rsole_world), R_rsole_world=t.rotation(gait.R_rsole_world),
+            p_lsole_world=t.point(gait.p_lsole_world), R_lsole_world=t.rotation(gait.R_lsole_world),
+            zmp_world=t.point(gait.zmp_world), cog_world=t.point(gait.cog_world),
+            cog_vel_world=t.velocity(gait.cog_world, gait.cog_vel_world), cog_pc_world=t.point(gait.cog_pc_world),
+            base_pos_world=t.point(gait.base_pos_world), base_rpy_rad=matrix_to_rpy(R_body))
+        return out, out.base_pos_world, out.base_rpy_rad
 
     def _hold(self) -> Reference:
         """A tick under the hard e-stop: the plan does not advance, and the last output is repeated with the

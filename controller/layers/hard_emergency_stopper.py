@@ -68,13 +68,14 @@ class HardEmergencyStopper(Layer):
             raise InvalidState("hard e-stop is not engaged; nothing to release")
         self.engaged = False
         self.reason = None
-        self.blend = RecoverBlend(self.q_frozen, self.params.recover_time_s)
+        self.blend = RecoverBlend(self.q_frozen, self.params.recover_time_s, carry_motion=True)
         self.q_frozen = None
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         # the layers before it hold until the release blend is over: it blends to a still target, and they
         # resume from exactly where the robot then is
         ctx.ports.hold = self.engaged or self.blend is not None
+        ctx.ports.releasing = self.blend is not None
         if self.engaged:
             self.q_out = self.q_frozen
             return ref.with_(q_rad=self.q_frozen)

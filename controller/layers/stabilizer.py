@@ -194,7 +194,7 @@ class Stabilizer(Layer):
         ctx.ports.body_tilt_kin_rad = self._body_tilt_kin(est, gait)
         foot_wrenches = self._foot_wrenches(est)
         contact_act = tuple(w[2] > self.params.contact_threshold_n for w in foot_wrenches)
-        if ctx.hold and self._last_out is not None:
+        if ctx.balance_hold and self._last_out is not None:
             # the hard e-stop freezes the command: estimate only, integrate nothing, raise no flag
             self.emergency = False
             return self._last_out

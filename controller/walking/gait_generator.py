@@ -372,7 +372,7 @@ class GaitGenerator:
         self.replan(steps + stop_in_place(landed.replaced(step_time_s=other.step_time_s), other), k)
 
     def stop_from_rest(self, zmp_world_xy: Sequence[float], swing_foot_loaded: bool = False,
-                       landing_speed_m_s: float = 0.05, min_landing_time_s: float = 0.8) -> None:
+                       landing_speed_m_s: float = 0.05, min_landing_time_s: float = 0.8) -> float:
         """Replace what is left of the walk by a stop that starts from rest where the plan is now: for a
         robot that was held still mid-walk (the hard e-stop), so its COG is at rest above `zmp_world_xy`.
 
@@ -382,9 +382,10 @@ class GaitGenerator:
         `swing_foot_loaded`: the held robot has tipped onto its swing foot; the landing is then a double
         support already, the ZMP moving to the mid-point all along. In double support only that final
         double support remains (the feet stay where they are). Called again before the next tick, it
-        replans from the same pose (e.g. once the robot's measured state is known)."""
+        replans from the same pose (e.g. once the robot's measured state is known). Returns how long the
+        swing foot's landing takes [s] (0 in double support or when there is no walk to stop)."""
         if not self._walking or self._tick == 0:
-            return
+            return 0.0
         self._pending_goal = None
         a = self._arrays
         j = self._tick - 1 - self._origin  # the sample handed out last: where the plan is now
@@ -401,6 +402,7 @@ class GaitGenerator:
                           yaw=float(np.arctan2(R[stand, 1, 0], R[stand, 0, 0])),
                           step_time_s=self.footstep_params.step_time_s)]
         blocks = []
+        landing_s = 0.0
         if support != _BOTH:
             sw = 1 - support
             if dst.leg != legs[sw]:  # (the footstep being stepped is the swing foot's) else land it level
@@ -412,6 +414,7 @@ class GaitGenerator:
             n = self._n_ticks(self.dt_s * max(1, int(np.ceil(max(min_landing_time_s, abs(height) / landing_speed_m_s)
                                                             / self.dt_s))))
             s_mj = min_jerk(np.arange(1, n + 1) / n)
+            landing_s = n * self.dt_s
             q_dst = _q_of(landing)
             rpy_now = np.array([float(np.arctan2(R[sw, 2, 1], R[sw, 2, 2])), float(-np.arcsin(R[sw, 2, 0])), yaw_now])
             rpy_sw = rpy_now[None] + s_mj[:, None] * (q_dst[3:] - rpy_now)[None]
@@ -451,6 +454,7 @@ class GaitGenerator:
         self._stepper = None
         self._checks = {}
         self._stopping_from_rest = True
+        return landing_s
 
     def replan(self, footsteps: Sequence[Footstep], from_index: int) -> None:
         """Replace the plan from footstep `from_index` on (>= the overwritable index) and resample from there."""

@@ -3,19 +3,21 @@ not run on), commands sent meanwhile are refused, and after the release the robo
 down, brings its weight between the feet and stands for 10 s, facing where it faced, its capture-point
 error under the Stabilizer's threshold (40 mm) the whole time.
 
-Measured on this machine (e-stop at 11 instants of one step, 1.80-2.60 s into the walk, at 0.2 m/s and at
-0.1 m/s turning 10 deg/s; 3 s hold; 10 s after the release): the robot stood every time, yaw change 0.44 deg
-at most. Frozen in double support the capture-point error peaks under 5 mm; frozen on one foot at 30-36 mm
-in most instants (the cases below: 30 and 36 mm). Frozen on the right foot 2.22-2.32 s into the walk it
-peaks at 56-149 mm (0.2 m/s; 96 mm at 2.28 s turning), though the robot stands: the issue's "CP error under
-the threshold" does not hold there yet (the xfail case). Why: the hard e-stop freezes the joints after the
-Stabilizer ([MLC]'s chain order), so nothing balances during the hold; frozen late in the right foot's support
-with the COG moving left, the robot tips onto its swing foot (both soles loaded, 273 / 290 N, the COM 42 mm
-left of BODY) and rests there. The error is already 104 mm at the release: the plan still has the COG over
-the right sole. Releasing at once instead of over the 2.5 s blend does not help (111 mm, and the double-support
-cases rise from 4 to 15 mm); seeding the COG plan at the measured COG moves the BODY 95 mm within the blend
-and the robot falls. What would: re-anchoring the plan to the measured soles and BODY roll at the release, then
-levelling both over the final double support."""
+The hard e-stop freezes the joints after the Stabilizer ([MLC]'s chain order), so nothing balances during
+the hold: frozen late in the right foot's support with the COG moving left, the robot tips onto its swing
+foot and rests there, rolled 6-7 deg. At the release the balance layers resume at once (the blend carries
+their motion) and the AutoBalancer sees its plan rotated by the measured tilt about the support sole,
+levelling it as the swing foot lands over 2 s (TiltAnchor); before, the plan still had the COG over the right
+sole and the CP error peaked at 56-149 mm (the release itself 104-117 mm), though the robot stood.
+
+Measured on this machine (e-stop at 11 instants of one step, 1.80-2.60 s into the walk at 0.2 m/s, and at 9
+instants 2.0-3.0 s into a 0.1 m/s walk turning 10 deg/s; 3 s hold; 10 s after the release): the robot stood
+every time, yaw change 0.25 deg at most. Frozen in double support the CP error peaks under 5 mm; on one foot
+at 22-36 mm, but for the instant 2.3 s into each walk: 42 mm (0.2 m/s) and 58 mm (turning), over the
+threshold by a little (xfail below). There the KalmanFilter's attitude lags the levelling robot by 0.5 deg and
+catches up in a jump (the accelerometer is trusted less while BODY turns), which the COG velocity reads as a
+capture-point swing; a landing of 1.5, 2.5 or 3 s, or an anchor that follows the measured tilt, did no better
+(42-62 mm)."""
 
 import math
 
@@ -45,12 +47,17 @@ def yaw_deg(quat_wxyz) -> float:
     (0.2, 0.0, 2.0, "both"),  # frozen in the double support between two steps
     (0.1, 10.0, 2.2, "rleg"),  # turning, frozen on the right foot
     (0.1, 10.0, 3.0, "both"),
+    (0.2, 0.0, 2.25, "rleg"),  # late on the right foot: the robot tips onto its swing foot (32 mm)
     pytest.param(0.2, 0.0, 2.3, "rleg", marks=pytest.mark.xfail(
-        strict=True, raises=AssertionError, reason="frozen on the right foot 2.22-2.32 s into the walk, the robot "
-        "tips onto its swing foot during the hold; the CP error after the release peaks at 56-149 mm (120 mm "
-        "here, 104 mm at the release itself), over the 40 mm threshold (see the module docstring)")),
+        strict=False, raises=AssertionError, reason="tipped onto its swing foot during the hold, the CP error "
+        "peaks at 42 mm 1.5 s after the release as the robot levels (KalmanFilter attitude lag; was 120 mm), "
+        "over the 40 mm threshold (see the module docstring)")),
+    pytest.param(0.1, 10.0, 2.3, "rleg", marks=pytest.mark.xfail(
+        strict=False, raises=AssertionError, reason="tipped onto its swing foot during the hold, the CP error "
+        "peaks at 58 mm 0.25 s after the release (the KalmanFilter's attitude catching up in a jump), over the "
+        "40 mm threshold (see the module docstring)")),
 ], ids=["0.2m_s-single", "0.2m_s-double", "0.1m_s-turning-single", "0.1m_s-turning-double",
-        "0.2m_s-single-late"])
+        "0.2m_s-single-late-tipped", "0.2m_s-single-late", "0.1m_s-turning-single-late"])
 def test_estop_mid_walk_holds_and_after_release_the_robot_stands_where_it_is(vx, vtheta_deg, walk_s, phase):
     robot = LocalRobot()
     service = OperatorService(robot)

@@ -102,3 +102,27 @@ def test_recover_blend_leaves_the_held_value_smoothly_and_ends_exactly_on_the_mo
 def test_a_recover_blend_of_no_duration_gives_the_input_at_once():
     blend = RecoverBlend(np.zeros(3), 0.0)
     assert np.array_equal(blend.step(np.ones(3), DT), np.ones(3)) and blend.done
+
+
+def test_a_recover_blend_carrying_the_motion_passes_the_inputs_motion_unscaled_and_blends_out_the_gap():
+    x0 = np.array([0.0, 1.0])
+    blend = RecoverBlend(x0, 0.5, carry_motion=True)
+    first = np.array([0.2, 0.9])
+    out, targets = [], []
+    for k in range(100):
+        target = first + 0.1 * k * DT  # moving from the first input on
+        targets.append(target)
+        out.append(blend.step(target, DT))
+    out, targets = np.array(out), np.array(targets)
+    np.testing.assert_allclose(out[0], x0, atol=1e-4)  # it starts where it was held
+    assert np.array_equal(out[-1], targets[-1])  # and ends exactly on the input
+    # in between: input + (1 - w) (x0 - first input): the input's motion since the first step passes whole
+    one_minus_w = (out[:-1] - targets[:-1]) / (x0 - first)
+    np.testing.assert_allclose(one_minus_w[:, 0], one_minus_w[:, 1], atol=1e-12)
+    assert np.all(np.diff(one_minus_w[:, 0]) <= 1e-15) and one_minus_w[49, 0] == pytest.approx(0.5, abs=0.1)
+
+
+def test_a_recover_blend_carrying_the_motion_is_the_plain_blend_for_a_still_input():
+    plain, carry = RecoverBlend(np.zeros(3), 0.3), RecoverBlend(np.zeros(3), 0.3, carry_motion=True)
+    for _ in range(70):
+        np.testing.assert_allclose(carry.step(np.ones(3), DT), plain.step(np.ones(3), DT), atol=1e-15)

@@ -56,3 +56,34 @@ def test_release_blends_to_the_live_input_without_a_jump_and_then_passes_through
 def test_release_when_not_engaged_is_an_invalid_state():
     with pytest.raises(InvalidState, match="not engaged"):
         HardEmergencyStopper(np.zeros(30)).release()
+
+
+def test_the_ports_say_held_while_engaged_and_releasing_during_the_blend():
+    hes = HardEmergencyStopper(np.zeros(30), HardEmergencyStopperParams(recover_time_s=0.1))
+    ctx = make_ctx()
+    hes.tick(ctx, ramp(1))
+    assert not ctx.ports.hold and not ctx.ports.releasing
+    hes.engage()
+    ctx = make_ctx()
+    hes.tick(ctx, ramp(2))
+    assert ctx.ports.hold and not ctx.ports.releasing
+    hes.release()
+    for _ in range(int(0.1 / DT)):  # the blend's ticks (the ports are set before each steps it)
+        ctx = make_ctx()
+        hes.tick(ctx, ramp(2))
+        assert ctx.ports.hold and ctx.ports.releasing
+    ctx = make_ctx()
+    hes.tick(ctx, ramp(2))
+    assert not ctx.ports.hold and not ctx.ports.releasing
+
+
+def test_the_release_blend_carries_the_motion_the_balance_layers_resume_with():
+    # the balance layers resume at the release (Ports.releasing): what they move passes unscaled on top of the
+    # gap between the frozen command and the live input, which is blended out
+    hes = HardEmergencyStopper(np.zeros(30), HardEmergencyStopperParams(recover_time_s=1.0))
+    hes.engage(np.zeros(30))
+    hes.release()
+    outs = np.array([hes.tick(make_ctx(), ramp(k)).q_rad[0] for k in range(int(1.0 / DT))])
+    moved = 0.001 * np.arange(int(1.0 / DT))
+    assert outs[0] == pytest.approx(0.0, abs=1e-6)
+    np.testing.assert_allclose(outs, moved, atol=1e-12)  # no gap at the release: the input's motion exactly
