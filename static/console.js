@@ -586,8 +586,9 @@ function bindStick(root, s) {
       target.addEventListener(ev, () => { root.classList.remove("active"); release(); });
     }
   }
-  bind(pad, padAt, () => { onScreen[s][0] = onScreen[s][1] = 0; padKnob.style.transform = ""; });
-  bind(twist, twistAt, () => { onScreen[s][2] = 0; twistKnob.style.transform = ""; });
+  // let go: the zero goes out at once, not at the next 50 Hz send
+  bind(pad, padAt, () => { onScreen[s][0] = onScreen[s][1] = 0; padKnob.style.transform = ""; streamTick(); });
+  bind(twist, twistAt, () => { onScreen[s][2] = 0; twistKnob.style.transform = ""; streamTick(); });
 }
 bindStick($("stick-left"), 0);
 bindStick($("stick-right"), 1);
@@ -596,7 +597,9 @@ bindStick($("stick-right"), 1);
 const GP = {estop: 1, nextPoint: 3, deadman: [4, 5], lt: 6, rt: 7, dpadLeft: 14, dpadRight: 15};
 let gpPrev = [];
 function pollGamepad() {
+  const held = gamepadDeadman;
   readGamepad();
+  if (held && !gamepadDeadman) streamTick();  // the dead-man let go: the zero goes out at once
   requestAnimationFrame(pollGamepad);
 }
 function readGamepad() {

@@ -38,6 +38,16 @@ def setpoint_of(req: OperatorVelocityRequest) -> Setpoint:
                     getattr(req, "max_stride", None), getattr(req, "foot_distance", None))
 
 
+def _stop_points(service, points) -> None:
+    """A zero setpoint for each of `points`: a stream that ends (closed, dropped) stops what it moved at the next
+    tick instead of after the dead-man's 200 ms + 100 ms ramp."""
+    for point in points:
+        try:
+            service.put_setpoint(Setpoint(point, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
+        except ServiceError:
+            pass  # the e-stop or a fall already holds it, or the robot process is gone: nothing moves
+
+
 def ack_body(ack: SetpointAck, seq: int) -> dict[str, Any]:
     return {"ok": True, "point": ack.point, "seq": seq, "applied_seq": ack.seq, "tick": ack.tick,
             "time_s": ack.time_s}
@@ -170,6 +180,7 @@ async def operator_stream(ws: WebSocket) -> None:
             pending[:] = still
 
     task = asyncio.create_task(acker())
+    streamed: set[str] = set()  # the points this stream moved: zeroed at once when it ends
     try:
         while True:
             text = await receive_message(ws)
@@ -201,9 +212,11 @@ async def operator_stream(ws: WebSocket) -> None:
                                   ignored=True if reason in ("hard_stop", "fallen") else None))
                 continue
             pending.append((numbered.point, numbered.seq, time.monotonic()))
+            streamed.add(numbered.point)
     except WebSocketDisconnect:
         pass
     finally:
         task.cancel()
+        _stop_points(service, streamed)
         if client is not None:
             op_lock.disconnected(client)

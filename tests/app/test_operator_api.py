@@ -84,6 +84,20 @@ def test_the_stream_acknowledges_each_setpoint_with_the_tick_it_reached(client, 
     assert _status(client, "lhand")["motion"][1] == pytest.approx(0.02)
 
 
+def test_a_stream_that_ends_stops_what_it_moved_at_the_next_tick(client, runtime):
+    # without it the dead-man would let go after 200 ms and a 100 ms ramp (issue 12: zero within 250 ms)
+    runtime.run_for(0.1)
+    with client.websocket_connect("/ws/operator") as ws:
+        for _ in range(5):
+            ws.send_json({"point": "rhand", "linear": [0.05, 0, 0]})
+            assert ws.receive_json()["ok"]
+            runtime.run_for(0.02)
+        assert _status(client, "rhand")["motion"][0] == pytest.approx(0.05)
+    client.get("/api/health")  # the close has been handled by the server
+    runtime.run_for(0.01)  # two ticks: the zero reached the operation layer at the first
+    assert _status(client, "rhand")["motion"] == [0.0] * 6
+
+
 def test_the_stream_is_refused_to_pages_of_another_origin(client):
     with pytest.raises(WebSocketDisconnect) as err:
         with client.websocket_connect("/ws/operator", headers={"origin": "http://evil.example"}) as ws:

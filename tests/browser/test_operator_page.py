@@ -294,8 +294,6 @@ def test_keys_typed_in_the_command_box_do_not_engage_the_estop(page, hrp2_consol
     box.fill("")
 
 
-@pytest.mark.xfail(strict=False, reason="release -> zero measured 285 ms (bound 250 ms) with the machine at load 5-8 "
-                   "on 2 CPUs: the page's own thread lags (E-STOP pointer-down -> engaged p50 144 ms in the bench)")
 def test_an_on_screen_stick_drives_the_walk_and_releasing_it_zeroes_the_velocity(page, hrp2_console, artifacts):
     released(hrp2_console)
     page.get_by_role("radio", name="walk").click()
@@ -323,8 +321,6 @@ def test_an_on_screen_stick_drives_the_walk_and_releasing_it_zeroes_the_velocity
     wait_until(lambda: not hrp2_console.state()["walking"], 20.0, "standing again")
 
 
-@pytest.mark.xfail(strict=False, reason="the dead-man let go -> zero measured 260 ms and 660 ms (bound 250 ms) "
-                   "with the machine at load 8.5 on 2 CPUs; not yet understood")
 def test_an_injected_gamepad_drives_a_hand_and_letting_go_of_the_deadman_stops_it(page, hrp2_console, artifacts):
     released(hrp2_console)
     page.evaluate("""() => {
