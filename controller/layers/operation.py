@@ -30,12 +30,15 @@ from controller.kinematics.rotations import (
 )
 from controller.operation.deadman import deadman_factor
 from controller.operation.limits import (
+    HAND_STEP_LENGTH_M,
+    JOINT_LIMIT,
     MOTION_STOP,
     REACH,
     VELOCITY,
     clamp_to_achieved,
     limit_twist,
     ramp_twist,
+    share_along,
     speed_scale,
 )
 from controller.operation.points import (
@@ -51,6 +54,7 @@ from controller.operation.points import (
 from controller.operation.targets import GazeAngles, HandPose, WaistPose, feet_frame, yaw_rotation
 from robot.names import JOINT_GROUPS, JOINT_NAMES
 
+_HANDS = ("rhand", "lhand")
 IK_POINTS = ("rhand", "lhand", "head", "waist")  # the points the IK realises ("walk" goes to the AutoBalancer)
 _FRAMES = {"rhand": "rarm_end", "lhand": "larm_end", "head": "HEAD_LINK1", "waist": "BODY"}
 _NECK = "HEAD_LINK0"  # the gaze ray's origin
@@ -357,6 +361,7 @@ class OperationLayer(Layer):
             self._active_since_s = ctx.time_s
         seeded = False
         rates = self._rates
+        stepped_from: dict[str, HandPose] = {}  # a hand's target before this tick's step
         if stopped:
             rates.clear()  # held: a release starts from rest
         else:
@@ -379,6 +384,8 @@ class OperationLayer(Layer):
                     rates.pop(point, None)
                 else:
                     rates[point] = ramped
+                if point in _HANDS:
+                    stepped_from[point] = self._targets[point]
                 self._targets[point] = self._targets[point].integrated(ramped, dt)
                 self._limited[point] = VELOCITY if limited.scale < 1.0 else None
             if self._reset_blend is not None:  # a new motion during a reset: from where the blend is
@@ -397,7 +404,17 @@ class OperationLayer(Layer):
                     self._limited[point] = MOTION_STOP
                 elif r.limited is not None:
                     self._limited[point] = r.limited
-                    self._targets[point] = clamp_to_achieved(self._targets[point], achieved, r.limited)
+                    start = stepped_from.get(point)
+                    if start is not None and r.limited in (REACH, JOINT_LIMIT):
+                        # the hand did part of its step at most: the target advances by the share it made along
+                        # the asked direction (one scale for the whole step), never sideways with the IK's
+                        # best effort, which drifted the hand off the asked line along the workspace's edge
+                        target = self._targets[point]
+                        share = share_along(start.step_to(target, HAND_STEP_LENGTH_M),
+                                            start.step_to(achieved, HAND_STEP_LENGTH_M))
+                        self._targets[point] = start.advanced(target, share)
+                    else:
+                        self._targets[point] = clamp_to_achieved(self._targets[point], achieved, r.limited)
                 elif self._limited.get(point) != VELOCITY:
                     self._limited[point] = None
         else:

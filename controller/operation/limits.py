@@ -5,6 +5,8 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+import numpy as np
+
 from controller.core.errors import InvalidCommand
 from controller.operation.points import Twist
 
@@ -48,6 +50,20 @@ def clamp_to_achieved(target, achieved, limited: str | None):
     if limited not in LIMIT_REASONS:
         raise InvalidCommand(f"limit reason {limited!r}; valid: {list(LIMIT_REASONS)} or None")
     return achieved if limited in (REACH, JOINT_LIMIT, VELOCITY) else target
+
+
+#: [m] the length that weighs a rotation [rad] against a translation [m] in a hand's step (a hand's reach)
+HAND_STEP_LENGTH_M = 0.1
+
+
+def share_along(step: np.ndarray, achieved_step: np.ndarray) -> float:
+    """The share s in [0, 1] of an asked step (n,) that an achieved step (n,) made along it: the projection of
+    the achieved onto the asked, so that a target advanced by s of its step keeps the asked direction (0 for
+    no step asked)."""
+    n2 = float(step @ step)
+    if not n2 > 0.0:
+        return 0.0
+    return min(1.0, max(0.0, float(achieved_step @ step) / n2))
 
 
 def ramp_twist(previous: Twist, goal: Twist, max_linear_step_m_s: float, max_angular_step_rad_s: float) -> Twist:

@@ -60,6 +60,23 @@ class HandPose:
         return HandPose(p, R)  # both read-only float64 arrays of their own (what HandPose.of makes)
 
 
+    def step_to(self, other: HandPose, length_m: float) -> np.ndarray:
+        """(6,) the step from this pose to `other`: translation [m] and rotation (F axes, left) [rad] times
+        `length_m`, so the two weigh alike."""
+        w = pin.log3(other.R_feet_hand @ self.R_feet_hand.T)
+        return np.concatenate((other.p_feet_m - self.p_feet_m, length_m * w))
+
+    def advanced(self, other: HandPose, share: float) -> HandPose:
+        """`share` [0, 1] of the way from this pose to `other`, along the straight line and the geodesic."""
+        if share >= 1.0:
+            return other
+        if share <= 0.0:
+            return self
+        w = pin.log3(other.R_feet_hand @ self.R_feet_hand.T)
+        return HandPose.owned(self.p_feet_m + share * (other.p_feet_m - self.p_feet_m),
+                              pin.exp3(share * w) @ self.R_feet_hand)
+
+
 @dataclass(frozen=True, slots=True)
 class GazeAngles:
     """The gaze in F: pitch [rad] (> 0 looks down) and yaw [rad] (> 0 to the left)."""

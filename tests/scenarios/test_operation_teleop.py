@@ -145,3 +145,31 @@ def test_a_stick_flicked_from_forward_to_up_turns_the_hand_without_raising_the_c
     moved = robot.measured("rarm_end")[0] - before
     # it went on forward while it turned (0.5 * 0.1 m/s * 0.2 s = 10 mm) and then up by about 1 s x 0.05 m/s
     assert 0.035 < moved[2] < 0.06 and 0.0 < moved[0] < 0.02, moved
+
+
+def test_a_hand_driven_past_its_reach_slows_down_on_the_asked_line_and_comes_back_at_once():
+    """The right hand asked 0.5 m forward (0.1 m/s for 5 s) from where it hangs: the arm reaches about 0.38 m.
+    The point reports `reach`, its target never runs ahead of the pose the IK achieved (the integrator does not
+    wind up), and the hand stays on the asked line (measured 0.7 / 1.1 mm across and up; before the target
+    advanced by the share of its step made along the asked direction, the IK's best effort drifted it 20 mm
+    across and 48 mm up along the workspace's edge). Driven back, it moves back at once (68 mm in 1 s)."""
+    robot = Teleop()
+    p0, _ = robot.measured("rarm_end")
+    reasons, worst_gap_m = set(), 0.0
+    for _ in range(round(5.0 / DT)):
+        robot.run(DT, "rhand", Twist.of((0.1, 0.0, 0.0)))
+        ps = robot.snap.layers["op"].points["rhand"]
+        reasons.add(ps.limited)
+        worst_gap_m = max(worst_gap_m, float(np.linalg.norm(np.subtract(ps.target[:3], ps.achieved[:3]))))
+    assert robot.snap.layers["op"].points["rhand"].limited == "reach"
+    assert reasons <= {None, "reach"}
+    p1, _ = robot.measured("rarm_end")
+    d = p1 - p0
+    assert 0.30 < d[0] < 0.45  # measured 0.380 m of the 0.5 m asked
+    assert abs(d[1]) < 0.005 and abs(d[2]) < 0.005  # measured 0.7 mm, 1.1 mm
+    assert worst_gap_m < 0.002  # measured 0.9 mm
+    for _ in range(round(1.0 / DT)):
+        robot.run(DT, "rhand", Twist.of((-0.1, 0.0, 0.0)))
+    p2, _ = robot.measured("rarm_end")
+    assert p2[0] - p1[0] < -0.05  # measured -0.068 m
+    assert robot.min_margin_m >= 0.03 and not robot.snap.layers["es"].stopped  # measured 0.051 m

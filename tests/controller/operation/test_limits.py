@@ -4,7 +4,15 @@ import numpy as np
 import pytest
 
 from controller.core.errors import InvalidCommand
-from controller.operation.limits import JOINT_LIMIT, MOTION_STOP, REACH, VELOCITY, clamp_to_achieved, limit_twist
+from controller.operation.limits import (
+    JOINT_LIMIT,
+    MOTION_STOP,
+    REACH,
+    VELOCITY,
+    clamp_to_achieved,
+    limit_twist,
+    share_along,
+)
 from controller.operation.points import ZERO_TWIST as ZERO
 from controller.operation.points import Twist
 
@@ -63,3 +71,10 @@ def test_a_ramp_moves_the_twist_toward_the_goal_by_at_most_the_step_along_the_st
     assert np.allclose(turn.angular_rad_s, (0.0, 0.0, 0.02)) and np.allclose(turn.linear_m_s, (0.0002, 0.0, 0.0))
     with pytest.raises(InvalidCommand):
         ramp_twist(ZERO, up, 0.0, 1.0)
+
+
+def test_the_share_along_is_the_projection_of_the_achieved_step_on_the_asked_one_within_0_and_1():
+    asked = np.array([0.01, 0.0, 0.0, 0.0, 0.0, 0.0])
+    assert share_along(asked, np.array([0.004, 0.003, -0.002, 0.0, 0.0, 0.0])) == pytest.approx(0.4)
+    assert share_along(asked, 2 * asked) == 1.0 and share_along(asked, -asked) == 0.0
+    assert share_along(np.zeros(6), asked) == 0.0  # nothing asked: nothing to advance

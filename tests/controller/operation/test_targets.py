@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+import pinocchio as pin
 import pytest
 
 from controller.operation.points import Twist
@@ -31,3 +32,14 @@ def test_gaze_and_waist_integrate_their_rates():
     w = WaistPose(0.65, (0.0, 0.0, 0.0)).integrated(Twist.of((0, 0, -0.05), (0.0, 0.1, 0.0)), 2.0)
     assert w.height_m == pytest.approx(0.55) and w.rpy_rad == pytest.approx((0.0, 0.2, 0.0))
     assert math.isclose(GazeAngles(0.3, 0.0).direction_feet()[2], -math.sin(0.3))
+
+
+def test_a_hand_advanced_by_a_share_of_its_step_goes_along_the_line_and_the_geodesic():
+    a = HandPose.of([0.3, -0.2, 0.8], np.eye(3))
+    b = HandPose.of([0.4, -0.2, 0.9], pin.exp3(np.array([0.0, 0.0, 0.4])))
+    step = a.step_to(b, 0.1)
+    np.testing.assert_allclose(step, [0.1, 0.0, 0.1, 0.0, 0.0, 0.04], atol=1e-12)
+    half = a.advanced(b, 0.5)
+    np.testing.assert_allclose(half.p_feet_m, [0.35, -0.2, 0.85], atol=1e-12)
+    np.testing.assert_allclose(pin.log3(half.R_feet_hand), [0.0, 0.0, 0.2], atol=1e-12)
+    assert a.advanced(b, 1.0) is b and a.advanced(b, 0.0) is a
