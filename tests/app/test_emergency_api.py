@@ -200,3 +200,25 @@ def test_the_deprecated_threshold_name_still_sets_the_flag_threshold(client):
     assert r.json()["params"]["cp_threshold_m"] == pytest.approx(0.05)
     r = client.put(URL, json={"threshold": 0.05, "cp_threshold_m": 0.06})
     assert r.status_code == 422 and "deprecated name of 'cp_threshold_m'" in r.text
+
+
+@pytest.mark.slow
+def test_after_a_fall_motion_and_the_release_answer_409_fallen_until_a_reset(client, runtime):
+    # a shove no ankle and no step holds: 300 N forward on BODY for 1 s
+    step(runtime, WARM_UP_S)
+    r = client.post("/api/sim/push", json={"body": "BODY", "force": [300.0, 0.0, 0.0], "duration": 1.0})
+    assert r.status_code == 200, r.text
+    runtime.system.loop.run_until(lambda s: s.safety.fall is not None, timeout_s=3.0)
+    step(runtime, 0.5)
+    state = client.get("/api/state").json()
+    assert state["fallen"] and state["emergency"]["hard_stop_reason"] == "fallen" and state["emergency"]["fall"]
+    for method, url, body in (("POST", "/api/walk/go-pos", {"x": 0.2, "y": 0.0, "theta_deg": 0.0}),
+                              ("POST", "/api/estop/release", {}),
+                              ("PUT", "/api/operator/velocity", {"point": "rhand", "linear": [0.05, 0, 0]})):
+        r = client.request(method, url, json=body)
+        assert r.status_code == 409 and r.json()["reason"] == "fallen", (url, r.text)
+    assert client.post("/api/sim/reset", json={}).status_code == 200
+    step(runtime, WARM_UP_S)
+    state = client.get("/api/state").json()
+    assert not state["fallen"] and not state["emergency"]["hard_stop"]
+    assert client.post("/api/walk/go-pos", json={"x": 0.1, "y": 0.0, "theta_deg": 0.0}).status_code == 200
