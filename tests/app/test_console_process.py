@@ -3,6 +3,7 @@ attacked the way a stranger would: bad requests on a kept-alive connection, fore
 huge bodies, signals, and pollers."""
 
 import signal
+import socket
 import time
 
 import pytest
@@ -109,6 +110,20 @@ def test_a_10_mb_body_is_refused_with_413_and_no_tick_is_late_meanwhile(console)
     status, timing = console.request("GET", f"/api/loop/timing?last_s={elapsed + 0.3:.3f}")
     assert status == 200
     assert timing["lateness_max_ms"] <= 10.0, timing
+
+
+def test_a_chunked_body_without_a_length_is_cut_off_at_the_limit_with_413(console):
+    # no Content-Length to refuse it by: the server counts as it reads and answers before the 10 MB are sent
+    with socket.create_connection(("127.0.0.1", console.port), timeout=30) as sock:
+        sock.sendall(b"PUT /api/stabilizer/params HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                     b"Content-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n")
+        chunk = b" " * 16384
+        for _ in range(8):  # 128 kB of the 10 MB, twice the limit: then the answer is read
+            sock.sendall(f"{len(chunk):x}\r\n".encode() + chunk + b"\r\n")
+        reply = sock.recv(65536).decode(errors="replace")
+    assert reply.startswith("HTTP/1.1 413"), reply[:200]
+    assert "over the limit of 65536 bytes" in reply
+    assert console.request("GET", "/api/health")[0] == 200  # the console serves on
 
 
 def test_unexpected_input_shapes_are_422s_not_500s(console):
