@@ -44,7 +44,7 @@ FEET_TO_EDGE_MIN_M = 0.22
 #: The farthest forward the right hand takes the can (F x) [m], for a can far in from the edge.
 GRASP_CAN_X_MAX_M = 0.52
 #: The reachable box around it [m]: closer or farther, the 30 deg hand would meet the table or its limits (a can
-#: taken 0.57 m out was held; 0.56 m is the farthest a stance kept off a table leg asks, seed-free corner U 0.60, V 0.30).
+#: taken 0.57 m out was held; 0.56 m is the farthest a stance kept off a table leg asks: a can at U 0.60, V 0.30).
 REACH_BOX_M = ((0.38, GRASP_CAN_X_MAX_M + 0.04), (-0.28, -0.16))
 #: The can's F y [m] the stance may choose instead of GRASP_CAN_FEET_M's to keep the legs clear of the table's
 #: legs: the reach box's y less 1 cm each side.
