@@ -65,6 +65,14 @@ class DataLogger:
         """Rows recorded since the last clear."""
         return int(self._written[0])
 
+    def last_row(self) -> np.ndarray:
+        """A copy of the newest row (NaN before the first)."""
+        with self._lock:
+            n = int(self._written[0])
+            if n == 0:
+                return np.full(ROW_LENGTH, np.nan)
+            return self._rows[(n - 1) % len(self._rows)].copy()
+
     def clear(self) -> None:
         with self._lock:
             self._written[0] = 0
