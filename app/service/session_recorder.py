@@ -1,7 +1,7 @@
 """The robot side of a session recording: inputs and ticks are appended to a batch in the loop's thread (a copy
 of the log row the DataLogger just filled, a reference to the simulator's qpos, the inputs as tagged JSON), and
 every BATCH_TICKS ticks the batch goes to the session writer, a process of its own (app.session.writer), through
-a queue whose feeder thread does the pickling. No I/O and no encoding of telemetry on the hot path.
+a pipe a sender thread writes (the pickling is that thread's). No I/O and no encoding of telemetry on the hot path.
 
 What a crash loses: the recording process killed, at most the last BATCH_TICKS ticks (0.1 s at 5 ms) and the
 inputs since them (the writer finishes the file with what it got); the writer killed too, also what it had
@@ -13,6 +13,7 @@ import datetime
 import logging
 import math
 import multiprocessing
+import queue
 import threading
 from collections.abc import Mapping
 from pathlib import Path
@@ -50,12 +51,16 @@ class SessionRecorder:
         self.closed = False
         self._batch_cls = Batch
         ctx = multiprocessing.get_context("spawn")
-        self._queue = ctx.Queue()
-        self._process = ctx.Process(target=writer_main, args=(str(self.path), self.header, self._queue),
+        # the writer holds only the reading end: when this process dies, even in the middle of a batch, it reads
+        # the end of the pipe (a multiprocessing.Queue would give it both ends, and it would wait for ever)
+        reading, self._pipe = ctx.Pipe(duplex=False)
+        self._process = ctx.Process(target=writer_main, args=(str(self.path), self.header, reading),
                                     name="hrp2-session-writer", daemon=True)
-        # the writer's start (a fork and exec, some milliseconds) is not the loop's to wait for: batches queue
-        self._starter = threading.Thread(target=self._process.start, name="session-writer-start", daemon=True)
-        self._starter.start()
+        self._queue: queue.SimpleQueue = queue.SimpleQueue()
+        # the writer's start (a fork and exec, some milliseconds) and the sending are not the loop's to wait for
+        self._sender = threading.Thread(target=self._send_all, args=(reading,), name="session-writer-send",
+                                        daemon=True)
+        self._sender.start()
         self._new_batch()
 
     def __repr__(self) -> str:
@@ -86,22 +91,36 @@ class SessionRecorder:
     def _send(self) -> None:
         if self.error is None:
             n = self._n
-            batch = self._batch_cls(self._first, self._rows[:n], self._qpos, self._events)
-            self._queue.put(batch)
-            self._check_writer()
+            self._queue.put(self._batch_cls(self._first, self._rows[:n], self._qpos, self._events))
+            if self._queue.qsize() > MAX_BACKLOG:
+                self._fail(f"the session writer fell {MAX_BACKLOG} batches behind")
         self._new_batch()
 
-    def _check_writer(self) -> None:
-        """Give up (and say why) when the writer died or falls far behind: the loop never waits for it."""
-        proc = self._process
-        if not self._starter.is_alive() and (proc.pid is None or proc.exitcode is not None):
-            self.error = (f"the session writer could not start or exited (exit code {proc.exitcode}); recording "
-                          f"stopped at tick {self.ticks}")
-        elif self._queue.qsize() > MAX_BACKLOG:
-            self.error = f"the session writer fell {MAX_BACKLOG} batches behind; recording stopped at tick {self.ticks}"
-        if self.error is not None:
-            log.error("%s", self.error)
-            self._queue.cancel_join_thread()
+    def _fail(self, why: str) -> None:
+        """Give up on the writer (the loop never waits for it), saying why."""
+        if self.error is None:
+            self.error = f"{why}; recording stopped at tick {self.ticks}"
+            log.error("%s: %s", self.path, self.error)
+
+    def _send_all(self, reading) -> None:
+        """The sender thread: start the writer, then hand it each batch (None: the end)."""
+        try:
+            self._process.start()
+        except Exception as exc:  # noqa: BLE001 - said in the status; the loop goes on without recording
+            self._fail(f"the session writer could not start: {type(exc).__name__}: {exc}")
+            return
+        finally:
+            reading.close()  # the writer's end only
+        while True:
+            batch = self._queue.get()
+            try:
+                if batch is None:
+                    self._pipe.close()
+                    return
+                self._pipe.send(batch)
+            except (OSError, ValueError) as exc:
+                self._fail(f"the session writer is gone (exit code {self._process.exitcode}): {exc}")
+                return
 
     # ---- inputs --------------------------------------------------------------------------------------------
     def input(self, kind: str, phase: str, name: str, time_s: float, value: Any, outcome: dict) -> None:
@@ -142,22 +161,17 @@ class SessionRecorder:
         if self._n or self._events:
             self._send()
         self.closed = True
-        if self.error is None:
-            self._queue.put(None)
-        self._starter.join(timeout_s)
+        self._queue.put(None)
+        self._sender.join(timeout_s)
         if self._process.pid is None:
-            self.error = self.error or "the session writer could not start"
-            self._queue.cancel_join_thread()
-            self._queue.close()
+            self._fail("the session writer could not start")
             return self.status()
         self._process.join(timeout_s)
         if self._process.is_alive():
-            self.error = self.error or f"the session writer did not finish within {timeout_s:g} s"
+            self._fail(f"the session writer did not finish within {timeout_s:g} s")
             self._process.terminate()
-            self._queue.cancel_join_thread()
-        elif self._process.exitcode not in (0, None) and self.error is None:
-            self.error = f"the session writer exited with code {self._process.exitcode}"
-        self._queue.close()
+        elif self._process.exitcode != 0:
+            self._fail(f"the session writer exited with code {self._process.exitcode}")
         return self.status()
 
 

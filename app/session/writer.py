@@ -8,11 +8,10 @@ from __future__ import annotations
 
 import hashlib
 import logging
-import multiprocessing
-import queue as queue_module
 import signal
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from multiprocessing.connection import Connection
 from typing import Any
 
 import numpy as np
@@ -21,8 +20,6 @@ from app.session.channels import DIGEST_TOPIC, SESSION_METADATA
 from app.session.mcap_log import McapLog, time_ns
 
 log = logging.getLogger(__name__)
-
-PARENT_CHECK_S = 0.5  # [s] how often a writer with nothing to write checks that the recording process lives
 
 
 @dataclass
@@ -75,22 +72,20 @@ class SessionFile:
         self.log.finish()
 
 
-def writer_main(path: str, header: Mapping[str, Any], batches: multiprocessing.Queue) -> None:
-    """The process's main: write batches until the end marker (None), or until the recording process is gone."""
+def writer_main(path: str, header: Mapping[str, Any], batches: Connection) -> None:
+    """The process's main: write batches until the pipe ends (the recorder closed it, or its process died: this
+    process holds only the reading end, so either way the end of the pipe is read)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C reaches the whole group: the recorder decides
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s session-writer %(name)s: %(message)s")
     out = SessionFile(path, header)
-    parent = multiprocessing.parent_process()
     try:
         while True:
             try:
-                batch = batches.get(timeout=PARENT_CHECK_S)
-            except queue_module.Empty:
-                if parent is not None and not parent.is_alive():
-                    log.error("the recording process died: %s finished at tick %d", path, out.ticks)
-                    break
-                continue
-            if batch is None:
+                batch = batches.recv()
+            except EOFError:
+                break
+            except Exception as exc:  # noqa: BLE001 - a batch cut short by the recorder's death
+                log.error("%s: the last batch could not be read (%s); finishing at tick %d", path, exc, out.ticks)
                 break
             out.write(batch)
     finally:
