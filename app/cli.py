@@ -142,13 +142,15 @@ def run_parser() -> argparse.ArgumentParser:
 def bench_parser() -> argparse.ArgumentParser:
     from app.bench import CHAINS, CONSOLE_SCENARIOS, SCENARIOS
     from app.bench_cameras import CAMERA_SCENARIOS
+    from app.bench_recording import RECORDING_SCENARIOS
 
     p = argparse.ArgumentParser(prog="hrp2-console bench",
                                 description="Run the chain synchronously as fast as possible (no servers) "
                                             "and print its timing as JSON.")
-    p.add_argument("--scenario", choices=(*SCENARIOS, *CONSOLE_SCENARIOS, *CAMERA_SCENARIOS), default="stand",
+    others = {**CONSOLE_SCENARIOS, **CAMERA_SCENARIOS, **RECORDING_SCENARIOS}
+    p.add_argument("--scenario", choices=(*SCENARIOS, *others), default="stand",
                    help="; ".join([f"{k}: {v.description}" for k, v in SCENARIOS.items()]
-                                  + [f"{k}: {v}" for k, v in {**CONSOLE_SCENARIOS, **CAMERA_SCENARIOS}.items()]))
+                                  + [f"{k}: {v}" for k, v in others.items()]))
     p.add_argument("--duration", type=_positive_seconds, default=5.0, help="simulated seconds (default 5)")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
     which = p.add_mutually_exclusive_group()

@@ -197,9 +197,7 @@ class RobotHost:
             acks.append(ack)
         recorder = self.recorder
         if recorder is not None and acks and not self._applying_input:
-            recorder.input("setpoints", "hook" if self._in_hook else "boundary", "setpoints", time_s,
-                           tuple(table[a.point] for a in acks),
-                           {"ok": True, "acks": [[a.point, a.seq, a.ignored] for a in acks]})
+            recorder.setpoints("hook" if self._in_hook else "boundary", time_s, [table[a.point] for a in acks], acks)
         return acks
 
     def cached_info(self) -> RobotInfo:

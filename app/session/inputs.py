@@ -112,3 +112,41 @@ def same_outcome(recorded: Mapping, replayed: Mapping) -> bool:
     """Whether a replayed input ended as the recorded one: ok, or the same error and reason."""
     keys = ("ok", "error", "reason")
     return all(recorded.get(k) == replayed.get(k) for k in keys)
+
+
+
+# ---- streamed setpoints as numbers: the recorder packs them into an array (a pickle of tuples cost the loop's
+# thread ~80 us a batch when the operator streams four points every tick) and the writer makes their JSON
+SETPOINT_POINTS = ("rhand", "lhand", "head", "waist", "walk")  # controller.operation.points.POINTS
+IGNORED = (None, "hard_stop", "before_release")  # SetpointAck.ignored
+PHASES = ("boundary", "hook")
+#: one row per setpoint: `order` numbers the recorder's events (the setpoints of one table share it)
+SETPOINT_COLUMNS = ("order", "tick", "phase", "time_s", "point", "lx", "ly", "lz", "ax", "ay", "az", "max_stride",
+                    "foot_distance", "seq", "ignored")
+
+
+def setpoint_row(order: int, tick: int, phase: str, time_s: float, sp, ignored: str | None) -> tuple:
+    """A setpoint (app.service.setpoints.Setpoint) and its acknowledgement as a row of SETPOINT_COLUMNS."""
+    nan = math.nan
+    return (order, tick, PHASES.index(phase), time_s, SETPOINT_POINTS.index(sp.point), *sp.linear_m_s,
+            *sp.angular_rad_s, nan if sp.max_stride_m is None else sp.max_stride_m,
+            nan if sp.foot_distance_m is None else sp.foot_distance_m, sp.seq, IGNORED.index(ignored))
+
+
+def setpoint_inputs(rows: np.ndarray) -> list[tuple[int, int, dict]]:
+    """The /session/inputs messages of setpoint rows: (order, tick, message), one message per table."""
+    out: list[tuple[int, int, dict]] = []
+    current: dict | None = None
+    for r in rows.tolist():
+        order, tick = int(r[0]), int(r[1])
+        if current is None or out[-1][0] != order:
+            current = {"tick": tick, "time_s": r[3], "kind": "setpoints", "phase": PHASES[int(r[2])],
+                       "name": "setpoints", "input": [], "outcome": {"ok": True, "acks": []}, "replayable": True}
+            out.append((order, tick, current))
+        point, seq, ignored = SETPOINT_POINTS[int(r[4])], int(r[13]), IGNORED[int(r[14])]
+        current["input"].append({"$type": "Setpoint", "fields": {
+            "point": point, "linear_m_s": r[5:8], "angular_rad_s": r[8:11],
+            "max_stride_m": None if math.isnan(r[11]) else r[11],
+            "foot_distance_m": None if math.isnan(r[12]) else r[12], "seq": seq}})
+        current["outcome"]["acks"].append([point, seq, ignored])
+    return out

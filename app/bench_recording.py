@@ -1,0 +1,119 @@
+"""Benchmark of the session recording: what it adds to a tick of the loop (the recorder's work in the loop's
+thread, timed directly, and the whole tick with and without it), the writer process's CPU and the file's size,
+on the bench's teleop scenario (walking through the walking point, both hands and the head streamed every tick:
+an input at every tick, the most the recorder sees)."""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from app.bench import SCENARIOS
+from app.service.local import LocalRobot
+
+WARMUP_S = 2.5  # [s] standing while the AutoBalancer and the Stabilizer blend in (not timed)
+RECORDING_SCENARIOS = {"record": "what recording a session adds to a tick: the teleop scenario (an input every tick) "
+                                 "without and with recording; the recorder's work timed where it is called, the "
+                                 "writer process's CPU, the file's bytes per simulated second"}
+
+
+def _timed(fn, samples: list[float]):
+    """`fn` that appends the CPU time of this thread it took [s] (preemption by other processes excluded: this
+    machine's 2 cores are shared; each reading costs a system call, ~0.5 us, counted in)."""
+    clock = time.thread_time
+
+    def wrapper(*args, **kwargs):
+        t0 = clock()
+        try:
+            return fn(*args, **kwargs)
+        finally:
+            samples.append(clock() - t0)
+
+    return wrapper
+
+
+def _stats_us(samples) -> dict[str, float]:
+    a = np.asarray(samples, dtype=float) * 1e6
+    if a.size == 0:
+        return {"p50_us": 0.0, "p99_us": 0.0, "mean_us": 0.0, "n": 0}
+    return {"p50_us": round(float(np.percentile(a, 50)), 2), "p99_us": round(float(np.percentile(a, 99)), 2),
+            "mean_us": round(float(a.mean()), 2), "n": int(a.size)}
+
+
+def _cpu_s(pid: int) -> float:
+    """User + system CPU time of a process [s] (Linux /proc)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _run(duration_s: float, scene: str, record: Path | None) -> dict[str, Any]:
+    spec = SCENARIOS["teleop"]
+    robot = LocalRobot(scene=scene, speed=None, record=record)
+    loop = robot.loop
+    tick_s: list[float] = []
+    tap_s: list[float] = []
+    input_s: list[float] = []
+    recorder = robot.host.recorder
+    if recorder is not None:  # the recorder's own work in the loop's thread, timed where it is called
+        recorder.tick = _timed(recorder.tick, tap_s)
+        recorder.input = _timed(recorder.input, input_s)
+        recorder.setpoints = _timed(recorder.setpoints, input_s)
+        recorder.runs_changed = _timed(recorder.runs_changed, tap_s)
+    loop.run_for(WARMUP_S)
+    tap_s.clear()
+    input_s.clear()
+    n = max(1, int(round(duration_s / loop.dt_control_s)))
+    clock = time.perf_counter
+    cpu = time.thread_time
+    cpu_s: list[float] = []
+    writer_cpu0 = None
+    if recorder is not None and recorder.writer_pid is not None:
+        writer_cpu0 = _cpu_s(recorder.writer_pid)
+    for _ in range(n):
+        t0, c0 = clock(), cpu()
+        spec.stream(robot)  # the operator's setpoints, applied at the boundary (recorded as inputs)
+        loop.step()
+        cpu_s.append(cpu() - c0)
+        tick_s.append(clock() - t0)
+    out: dict[str, Any] = {"tick": _stats_us(tick_s), "tick_cpu": _stats_us(cpu_s),
+                           "fallen": bool(robot.host.observation.fallen)}
+    if recorder is not None:
+        pid = recorder.writer_pid
+        writer_cpu = None if writer_cpu0 is None or pid is None else _cpu_s(pid) - writer_cpu0
+        status = robot.stop_recording()
+        total = np.asarray(tap_s).sum() + np.asarray(input_s).sum()
+        out.update({"recorder_tick": _stats_us(tap_s), "recorder_inputs": _stats_us(input_s),
+                    "recording_per_tick_us": round(float(total) / n * 1e6, 2),
+                    "writer_cpu_s_per_sim_s": None if writer_cpu is None
+                    else round(writer_cpu / (n * loop.dt_control_s), 3),
+                    "bytes_per_sim_s": round(record.stat().st_size / ((n + WARMUP_S / loop.dt_control_s)
+                                                                      * loop.dt_control_s)),
+                    "error": status["error"]})
+    robot.close()
+    return out
+
+
+def run_recording_bench(duration_s: float = 5.0, scene: str = "default") -> dict[str, Any]:
+    """The `record` scenario: the teleop walk as fast as possible without recording, then with it."""
+    with tempfile.TemporaryDirectory() as tmp:
+        off = _run(duration_s, scene, None)
+        on = _run(duration_s, scene, Path(tmp) / "bench.mcap")
+    return {
+        "scenario": "record", "scene": scene, "sim_time_s": duration_s,
+        "recording_per_tick_ms": round(on["recording_per_tick_us"] / 1e3, 5),
+        "recorder_tick_cpu_us": on["recorder_tick"], "recorder_inputs_cpu_us": on["recorder_inputs"],
+        "tick_cpu_without_us": off["tick_cpu"], "tick_cpu_with_us": on["tick_cpu"],
+        "tick_cpu_mean_difference_us": round(on["tick_cpu"]["mean_us"] - off["tick_cpu"]["mean_us"], 2),
+        "tick_wall_without_us": off["tick"], "tick_wall_with_us": on["tick"],
+        "writer_cpu_s_per_sim_s": on["writer_cpu_s_per_sim_s"], "file_bytes_per_sim_s": on["bytes_per_sim_s"],
+        "fallen": off["fallen"] or on["fallen"], "error": on["error"],
+        "note": "recording_per_tick_ms: the CPU time the recorder takes in the loop's thread (row and qpos copies, "
+                "batches pickled and written to the pipe, inputs), timed where it is called, summed and divided by "
+                "the ticks; tick_cpu/tick_wall: the loop thread's CPU and wall time per tick (stream + step), the same "
+                "run without and with recording (wall time includes the other jobs on the 2 cores)",
+    }
