@@ -98,12 +98,13 @@ class SessionRecorder:
 
     def _new_batch(self) -> None:
         self._first = self.ticks
-        self._rows = np.empty((BATCH_TICKS, ROW_LENGTH))
-        self._qpos = np.empty((BATCH_TICKS, self._nq))
         self._events: list[tuple] = []  # (order, tick, topic, message)
-        self._setpoints = np.empty((4 * BATCH_TICKS, len(SETPOINT_COLUMNS)))  # grows when a batch needs more
         self._k = 0  # setpoint rows used
         self._n = 0
+        if self._pending or not hasattr(self, "_rows"):  # the pipe still holds views of the arrays: new ones
+            self._rows = np.empty((BATCH_TICKS, ROW_LENGTH))
+            self._qpos = np.empty((BATCH_TICKS, self._nq))
+            self._setpoints = np.empty((4 * BATCH_TICKS, len(SETPOINT_COLUMNS)))  # grows when a batch needs more
 
     # ---- the hot path --------------------------------------------------------------------------------------
     def tick(self, row: np.ndarray, qpos: np.ndarray) -> None:

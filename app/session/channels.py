@@ -117,50 +117,83 @@ def dumps(message: Mapping) -> bytes:
     return json.dumps(message, separators=(",", ":"), allow_nan=False).encode()
 
 
-# ---- a row to its messages ---------------------------------------------------------------------------------
-def _put(message: dict, key: str, value) -> None:
-    head, _, rest = key.partition(".")
-    while rest:
-        message = message.setdefault(head, {})
-        head, _, rest = rest.partition(".")
-    message[head] = value
+# ---- a row to its messages -----------------------------------------------------------------------------------
+# The writer makes ~9 messages a tick: built as text from the row's values (each float its shortest exact repr,
+# as json.dumps writes it) instead of dicts through json.dumps: the session writer's CPU per tick 0.32 -> 0.21 ms
+# (the rest is mcap's own per-message work).
+def _num(v: float) -> str:
+    """A float as JSON, exactly: NaN is null; infinities are 1e999 / -1e999 (read back as infinities)."""
+    if v != v:
+        return "null"
+    if v in (math.inf, -math.inf):
+        return "1e999" if v > 0 else "-1e999"
+    return repr(v)
 
 
-def _value(s: Signal, values: list[float]):
+def _signal_writer(s: Signal):
+    """values (its columns, floats) -> the signal's JSON value."""
     if s.kind == "bool":
-        return values[0] > 0.5
+        return lambda values: "true" if values[0] > 0.5 else "false"
     if not s.names:
-        v = values[0]
-        return None if math.isnan(v) else v
-    if all(math.isnan(v) for v in values):
-        return None
-    return {n: (None if math.isnan(v) else v) for n, v in zip(s.names, values, strict=True)}
+        return lambda values: _num(values[0])
+    keys = [json.dumps(n) + ":" for n in s.names]
+
+    def write(values) -> str:
+        if all(v != v for v in values):
+            return "null"
+        return "{" + ",".join(k + _num(v) for k, v in zip(keys, values, strict=True)) + "}"
+
+    return write
+
+
+def _topic_writer(topic: str):
+    """(head text, row values) -> the topic's message as JSON text; nested keys ("act.rfsensor") as objects."""
+    tree: dict = {}
+    for s, sl in _BY_TOPIC[topic]:
+        node = tree
+        *parents, last = s.key.split(".")
+        for part in parents:
+            node = node.setdefault(part, {})
+        node[last] = (_signal_writer(s), sl)
+
+    def render(node, values) -> str:
+        parts = []
+        for key, child in node.items():
+            text = "{" + render(child, values) + "}" if isinstance(child, dict) else child[0](values[child[1]])
+            parts.append(json.dumps(key) + ":" + text)
+        return ",".join(parts)
+
+    return lambda head, values: "{" + head + "," + render(tree, values) + "}"
 
 
 _BY_TOPIC: dict[str, list[tuple[Signal, slice]]] = {}
 for _s in SIGNALS:
     _BY_TOPIC.setdefault(_s.topic, []).append((_s, SLICES[_s]))
 _TOPIC_SPANS = {t: slice(sigs[0][1].start, sigs[-1][1].stop) for t, sigs in _BY_TOPIC.items()}
+_WRITERS = {t: _topic_writer(t) for t in _BY_TOPIC if t != _FOOTSTEPS_TOPIC}
 
 
-def row_messages(tick: int, row: np.ndarray, previous: np.ndarray | None) -> list[tuple[str, dict]]:
-    """The messages of one row: every tick topic, and the on-change topics when their columns differ from
-    `previous` (None: the first row, all of them)."""
+def row_payloads(tick: int, row: np.ndarray, previous: np.ndarray | None) -> list[tuple[str, bytes]]:
+    """The messages of one row as JSON bytes: every tick topic, and the on-change topics when their columns
+    differ from `previous` (None: the first row, all of them)."""
     values = row.tolist()
-    head = {"tick": int(tick), "time_s": values[0]}
+    head = f'"tick":{int(tick)},"time_s":{_num(values[0])}'
     out = []
     for topic in (*TICK_TOPICS, *ON_CHANGE_TOPICS):
         span = _TOPIC_SPANS[topic]
         if topic in ON_CHANGE_TOPICS and previous is not None and _same(row[span], previous[span]):
             continue
-        message = dict(head)
         if topic == _FOOTSTEPS_TOPIC:
-            message["footsteps"] = _footsteps(values[span])
+            text = "{" + head + ',"footsteps":' + json.dumps(_footsteps(values[span]), allow_nan=False) + "}"
         else:
-            for s, sl in _BY_TOPIC[topic]:
-                _put(message, s.key, _value(s, values[sl]))
-        out.append((topic, message))
+            text = _WRITERS[topic](head, values)
+        out.append((topic, text.encode()))
     return out
+
+
+def row_messages(tick: int, row: np.ndarray, previous: np.ndarray | None) -> list[tuple[str, dict]]:
+    """row_payloads as dicts (what a reader gets)."""
+    return [(topic, json.loads(data)) for topic, data in row_payloads(tick, row, previous)]
 
 
 def _same(a: np.ndarray, b: np.ndarray) -> bool:
@@ -178,13 +211,17 @@ def _footsteps(values: list[float]) -> list[dict]:
     return out
 
 
-def tf_message(row: np.ndarray, time_ns: int) -> dict:
-    """foxglove.FrameTransform of BODY in the world as simulated."""
-    p = row[SLICES[signal("/base", "pos_sim_m")]].tolist()
-    w, x, y, z = row[SLICES[signal("/base", "quat_sim")]].tolist()
-    return {"timestamp": {"sec": time_ns // 1_000_000_000, "nsec": time_ns % 1_000_000_000},
-            "parent_frame_id": "world", "child_frame_id": "BODY",
-            "translation": dict(zip("xyz", p, strict=True)), "rotation": {"x": x, "y": y, "z": z, "w": w}}
+_SIM_POS = SLICES[signal("/base", "pos_sim_m")]
+_SIM_QUAT = SLICES[signal("/base", "quat_sim")]
+
+
+def tf_payload(row: np.ndarray, time_ns: int) -> bytes:
+    """foxglove.FrameTransform of BODY in the world as simulated, as JSON bytes."""
+    x, y, z = (_num(v) for v in row[_SIM_POS].tolist())
+    qw, qx, qy, qz = (_num(v) for v in row[_SIM_QUAT].tolist())
+    return (f'{{"timestamp":{{"sec":{time_ns // 1_000_000_000},"nsec":{time_ns % 1_000_000_000}}},'
+            f'"parent_frame_id":"world","child_frame_id":"BODY","translation":{{"x":{x},"y":{y},"z":{z}}},'
+            f'"rotation":{{"x":{qx},"y":{qy},"z":{qz},"w":{qw}}}}}').encode()
 
 
 # ---- messages back to a row ----------------------------------------------------------------------------------

@@ -18,10 +18,10 @@ from app.session.channels import (
     SESSION_SCHEMAS,
     TF_TOPIC,
     dumps,
-    row_messages,
+    row_payloads,
     row_topic_schemas,
     schema_name,
-    tf_message,
+    tf_payload,
 )
 
 PROFILE = ""  # no ROS profile: JSON messages with JSON schemas
@@ -57,15 +57,18 @@ class McapLog:
         return tuple(self._channels)
 
     def write(self, topic: str, log_time_ns: int, message: Mapping) -> None:
+        self.write_json(topic, log_time_ns, dumps(message))
+
+    def write_json(self, topic: str, log_time_ns: int, data: bytes) -> None:
         self._sequence += 1
         self._writer.add_message(self._channels[topic], log_time=log_time_ns, publish_time=log_time_ns,
-                                 data=dumps(message), sequence=self._sequence)
+                                 data=data, sequence=self._sequence)
 
     def write_row(self, tick: int, log_time_ns: int, row: np.ndarray) -> None:
         """One tick: every tick topic, the on-change ones when they changed, and BODY's transform."""
-        for topic, message in row_messages(tick, row, self._previous):
-            self.write(topic, log_time_ns, message)
-        self.write(TF_TOPIC, log_time_ns, tf_message(row, log_time_ns))
+        for topic, data in row_payloads(tick, row, self._previous):
+            self.write_json(topic, log_time_ns, data)
+        self.write_json(TF_TOPIC, log_time_ns, tf_payload(row, log_time_ns))
         self._previous = row.copy()
         self.rows += 1
 
