@@ -205,7 +205,7 @@ def _footsteps(values: list[float]) -> list[dict]:
     out = []
     for i in range(ROW_FOOTSTEPS):
         leg, *rest = values[i * n:(i + 1) * n]
-        if math.isnan(leg):
+        if leg not in _LEGS:  # NaN: no more footsteps (a row the filler made has no other value)
             break
         out.append({"leg": _LEGS[leg], **dict(zip(FOOTSTEP[1:], rest, strict=True))})
     return out
