@@ -8,6 +8,7 @@ from fastapi.testclient import TestClient
 
 from app.main import create_app
 from app.session.reader import read_stream
+from app.session.replay import replay
 from app.settings import Settings
 
 
@@ -40,6 +41,24 @@ def test_a_session_is_started_fresh_recorded_stopped_listed_and_downloaded(clien
     assert session.complete and session.ticks == 60 and session.header["start"] == "reset"
     assert [d["name"] for d in session.inputs] == ["go_pos"]
     assert session.inputs[0]["tick"] == 40
+    assert replay(session).identical  # from a fresh robot, though this one had ticked and been reset before
+
+
+def test_a_session_started_after_behaviour_runs_replays_with_their_ids(client, runtime):
+    runtime.loop.run_for(0.05)  # the operation layer has ticked: behaviours may start
+    assert client.post("/api/behaviors/stand", json={"time_s": 0.5}).json()["id"] == 1
+    runtime.loop.run_for(0.2)
+    assert client.post("/api/sessions/start", json={}).status_code == 200
+    runtime.loop.run_for(0.05)
+    assert client.post("/api/behaviors/stand", json={"time_s": 0.5}).json()["id"] == 2
+    runtime.loop.run_for(0.05)
+    assert client.post("/api/behaviors/runs/2/cancel").status_code == 200
+    runtime.loop.run_for(0.05)
+    name = client.post("/api/sessions/stop").json()["recording"]["name"]
+    session = read_stream(io.BytesIO(client.get(f"/api/sessions/{name}").content))
+    assert session.header["next_run_id"] == 2 and [d["name"] for d in session.inputs] == ["run_behavior", "cancel_run"]
+    result = replay(session)
+    assert result.identical, result.summary()
 
 
 @pytest.mark.parametrize("name", ["../x", "a/b", ".hidden", "", "x" * 70, "a..b", "sp ace"])
