@@ -352,8 +352,19 @@ class OperatorService:
         return status
 
     def stop_recording(self, timeout_s: float = 30.0) -> dict:
-        """End the session being recorded; its status once the file is finished (Refused when none is)."""
-        return self.run(StopRecording(), timeout_s=timeout_s)
+        """End the session being recorded; its status once the file is finished (Refused when none is). The robot
+        does not wait for the file: this waits, reading the published status."""
+        import time
+
+        stopped = self.run(StopRecording(), timeout_s=timeout_s)
+        deadline = time.monotonic() + timeout_s
+        while True:
+            last = self.published().last_recording
+            if last is not None and last["path"] == stopped["path"] and last["finished"]:
+                return last
+            if time.monotonic() > deadline:
+                raise Unavailable(f"the session file {stopped['name']} was not finished within {timeout_s:g} s")
+            time.sleep(0.02)
 
     def recording(self) -> dict | None:
         """The session being recorded (path, ticks, inputs, error) as last published, or None."""

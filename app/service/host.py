@@ -101,6 +101,7 @@ class Published:
     setpoint_acks: dict = dataclasses.field(default_factory=dict)  # point -> SetpointAck of its newest setpoint
     recognitions: dict = dataclasses.field(default_factory=dict)  # object -> its latest recognition (as remembered)
     recording: dict | None = None  # the session being recorded (SessionRecorder.status), or None
+    last_recording: dict | None = None  # the last session stopped: its status (`finished` once its file is)
 
 
 #: Owners of parameters: a layer name, or "ic:<limb>" for one hand's impedance.
@@ -142,6 +143,7 @@ class RobotHost:
         self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
         self.start_auto_balancer = start_auto_balancer
         self.recorder: SessionRecorder | None = None  # the session being recorded, if any
+        self.last_recorder: SessionRecorder | None = None  # the last one stopped (its file may still be finishing)
         self._runs_recorded = self.runner.transitions
         self._applying_input = False  # an input verb runs: what it does is recorded as that verb
         self._in_hook = False  # the streamed setpoints are being taken at the start of a tick
@@ -413,8 +415,6 @@ class RobotHost:
     def start_recording(self, path, reset: bool = False) -> dict:
         """Record a session to `path` (MCAP) from now on. A session replays from a fresh simulation, so it
         starts at one: this host's first tick, or a reset (`reset` true: reset now, in the same scene)."""
-        from app.service.session_recorder import SessionRecorder
-
         if self.recorder is not None:
             raise Refused("state", f"a session is already being recorded ({self.recorder.path.name}); stop it "
                                    "first")
@@ -433,15 +433,21 @@ class RobotHost:
         return self.recorder.status()
 
     def stop_recording(self) -> dict:
-        """End the recording; its status once the file is finished."""
+        """End the recording: no more ticks; the writer finishes the file while the loop goes on (nothing here
+        waits for it: `last_recording_status()["finished"]`, or `last_recorder.wait()` off the loop)."""
         recorder = self.recorder
         if recorder is None:
             raise Refused("state", "no session is being recorded")
         self.recorder = None
-        return recorder.close()
+        self.last_recorder = recorder
+        recorder.close_async()
+        return recorder.status()
 
     def recording_status(self) -> dict | None:
         return None if self.recorder is None else self.recorder.status()
+
+    def last_recording_status(self) -> dict | None:
+        return None if self.last_recorder is None else self.last_recorder.status()
 
     def _load_startup_params(self) -> None:
         if self.startup_params:
@@ -497,7 +503,8 @@ class RobotHost:
                          scene=self.scene, speed=loop.speed, stats=self.stats.summary(),
                          chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic(),
                          runs=self.runs(), setpoint_acks=dict(self.setpoint_acks),
-                         recognitions=dict(self.recognitions), recording=self.recording_status())
+                         recognitions=dict(self.recognitions), recording=self.recording_status(),
+                         last_recording=self.last_recording_status())
 
     def runs(self) -> tuple:
         """The runner's runs, the same tuple object until one of them changes (so a reader can compare by

@@ -127,7 +127,8 @@ class LocalRobot:
         if (cached is None or cached.snapshot is not snap or cached.generation != self.host.generation
                 or cached.setpoint_acks != self.host.setpoint_acks or cached.runs is not self.host.runs()
                 or cached.recognitions != self.host.recognitions
-                or cached.recording != self.host.recording_status()):
+                or cached.recording != self.host.recording_status()
+                or cached.last_recording != self.host.last_recording_status()):
             cached = self._published = self.host.publish()
         return cached
 
@@ -144,13 +145,16 @@ class LocalRobot:
         self.submit(Reset(scene)).result(timeout=timeout_s)
         return self.host.info()
 
-    def stop_recording(self) -> dict:
-        """End the session being recorded (the file finished); its status."""
-        return self.submit(StopRecording()).result()
+    def stop_recording(self, timeout_s: float = 30.0) -> dict:
+        """End the session being recorded; its status once the file is finished."""
+        self.submit(StopRecording()).result()
+        return self.host.last_recorder.wait(timeout_s)
 
     def close(self, timeout_s: float = 10.0) -> dict:
         self.stop()
         self.host.close_cameras()
         if self.host.recorder is not None:
             self.host.stop_recording()
+        if self.host.last_recorder is not None:
+            self.host.last_recorder.wait(max(timeout_s, 30.0))
         return self.host.stats.summary()

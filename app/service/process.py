@@ -162,17 +162,23 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     try:
         loop.run_paced(wait, between_ticks)
     except (EOFError, OSError):  # the console went away
-        if host.recorder is not None:
-            host.stop_recording()
+        _finish_recording(host)
         return
-    if host.recorder is not None:
-        host.stop_recording()
+    _finish_recording(host)
     publish(force=True)
     host.close_cameras()
     try:
         cmd.send(("bye", host.stats.summary()))
     except (EOFError, OSError):
         pass
+
+
+def _finish_recording(host: RobotHost) -> None:
+    """At the end of the robot process: stop the session being recorded, wait until its file is finished."""
+    if host.recorder is not None:
+        host.stop_recording()
+    if host.last_recorder is not None:
+        host.last_recorder.wait()
 
 
 # ---- in the console ------------------------------------------------------------------------------------------

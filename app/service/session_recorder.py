@@ -61,6 +61,7 @@ class SessionRecorder:
         self.unreplayable = 0
         self.error: str | None = None
         self.closed = False
+        self._finished = threading.Event()
         self._frame_cls = BatchFrame
         ctx = multiprocessing.get_context("spawn")
         # the writer holds only the reading end: when this process dies, even in the middle of a batch, the writer
@@ -206,38 +207,57 @@ class SessionRecorder:
         return self._process.pid
 
     def status(self) -> dict[str, Any]:
+        """closed: no more ticks are taken; finished: the writer has finished the file (or given up: error)."""
         return {"path": str(self.path), "name": self.path.name, "ticks": self.ticks,
                 "duration_s": round(self.ticks * self.dt_s, 6), "inputs": self.inputs,
-                "unreplayable_inputs": self.unreplayable, "error": self.error, "closed": self.closed}
+                "unreplayable_inputs": self.unreplayable, "error": self.error, "closed": self.closed,
+                "finished": self._finished.is_set()}
 
-    def close(self, timeout_s: float = 30.0) -> dict[str, Any]:
-        """Send what is left, end the writer, wait until the file is finished; the recording's status."""
+    def close_async(self, timeout_s: float = 30.0) -> None:
+        """Take no more ticks, send what is left, and let a thread wait for the writer to finish the file (the
+        loop does not wait: `finished` in the status, or `wait`)."""
         if self.closed:
-            return self.status()
+            return
         if self._n or self._events or self._k:
             self._send()
         self.closed = True
-        deadline = time.monotonic() + timeout_s
-        self._starter.join(timeout_s)
-        while self.error is None and self._pending:  # off the hot path now: the rest, as the writer takes it
-            remaining = deadline - time.monotonic()
-            if remaining <= 0:
-                self._fail(f"the session writer did not take the last {self._pending_bytes >> 10} kB within "
-                           f"{timeout_s:g} s")
-                break
-            select.select((), (self._fd,), (), min(remaining, 0.5))
-            self._write_pending()
-        self._writing.close()  # the end of the pipe: the writer finishes the file
-        if self._process.pid is None:
-            self._fail("the session writer could not start")
-            return self.status()
-        self._process.join(max(1.0, deadline - time.monotonic()))
-        if self._process.is_alive():
+        threading.Thread(target=self._finish, args=(timeout_s,), name="session-writer-finish", daemon=True).start()
+
+    def wait(self, timeout_s: float = 30.0) -> dict[str, Any]:
+        """Wait until the file is finished; the recording's status."""
+        if not self._finished.wait(timeout_s):
             self._fail(f"the session writer did not finish within {timeout_s:g} s")
-            self._process.terminate()
-        elif self._process.exitcode != 0:
-            self._fail(f"the session writer exited with code {self._process.exitcode}")
         return self.status()
+
+    def close(self, timeout_s: float = 30.0) -> dict[str, Any]:
+        """close_async, then wait: the status once the file is finished."""
+        self.close_async(timeout_s)
+        return self.wait(timeout_s + 5.0)
+
+    def _finish(self, timeout_s: float) -> None:
+        try:
+            deadline = time.monotonic() + timeout_s
+            self._starter.join(timeout_s)
+            while self.error is None and self._pending:  # the rest, as the writer takes it
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    self._fail(f"the session writer did not take the last {self._pending_bytes >> 10} kB within "
+                               f"{timeout_s:g} s")
+                    break
+                select.select((), (self._fd,), (), min(remaining, 0.5))
+                self._write_pending()
+            self._writing.close()  # the end of the pipe: the writer finishes the file
+            if self._process.pid is None:
+                self._fail("the session writer could not start")
+                return
+            self._process.join(max(1.0, deadline - time.monotonic()))
+            if self._process.is_alive():
+                self._fail(f"the session writer did not finish within {timeout_s:g} s")
+                self._process.terminate()
+            elif self._process.exitcode != 0:
+                self._fail(f"the session writer exited with code {self._process.exitcode}")
+        finally:
+            self._finished.set()
 
 
 def _plain(value: Any) -> Any:

@@ -31,7 +31,7 @@ def test_a_session_is_started_fresh_recorded_stopped_listed_and_downloaded(clien
     runtime.loop.run_for(0.1)
     assert client.get("/api/sessions").json()["recording"]["ticks"] == 60
     r = client.post("/api/sessions/stop")
-    assert r.status_code == 200 and r.json()["recording"]["closed"] and r.json()["recording"]["error"] is None
+    assert r.status_code == 200 and r.json()["recording"]["finished"] and r.json()["recording"]["error"] is None
     assert client.post("/api/sessions/stop").json()["reason"] == "state"
     listed = client.get("/api/sessions").json()
     assert listed["recording"] is None and [s["name"] for s in listed["sessions"]] == ["walk-test.mcap"]
