@@ -217,6 +217,12 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         if scenario == "recognition-paced":
             return run_recognition_paced_bench(duration_s)
         return run_camera_bench() if scenario == "camera" else run_recognition_bench()
+    if scenario == "record":
+        if layers is not None:
+            raise ValueError("scenario 'record' times the recording on the whole chain; --layers/--chain do not apply")
+        from app.bench_recording import run_recording_bench
+
+        return run_recording_bench(duration_s, scene)
     if scenario in CONSOLE_SCENARIOS:
         if layers is not None:
             raise ValueError(f"scenario {scenario!r} runs the whole console; --layers/--chain do not apply")
@@ -230,7 +236,7 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
             return run_viewers_bench(duration_s, scene=scene)
         return run_load_bench(duration_s, scene)
     if scenario not in SCENARIOS:
-        valid = ", ".join((*SCENARIOS, *CONSOLE_SCENARIOS, *CAMERA_SCENARIOS))
+        valid = ", ".join((*SCENARIOS, *CONSOLE_SCENARIOS, *CAMERA_SCENARIOS, "record"))
         raise ValueError(f"unknown scenario {scenario!r}; valid scenarios: {valid}")
     spec = SCENARIOS[scenario]
     selected = None if layers is None else layer_selection(layers)

@@ -77,12 +77,39 @@ def _params_file(text: str) -> dict[str, dict]:
     return doc
 
 
+#: where sessions go unless a path is given (`--record` without a path, POST /api/sessions/start)
+SESSIONS_DIR = "out/sessions"
+
+
+def _new_session_path(text: str) -> str:
+    """A session file to create: `text` (".mcap" appended when it has no suffix), or, when empty, a new
+    name in SESSIONS_DIR; its folder is made; an existing file is refused (a session is never overwritten)."""
+    from pathlib import Path
+
+    from app.session.files import new_session_name
+
+    path = Path(text) if text else Path(SESSIONS_DIR) / new_session_name()
+    if path.suffix == "":
+        path = path.with_suffix(".mcap")
+    if path.suffix != ".mcap":
+        raise argparse.ArgumentTypeError(f"invalid path {text!r}: a session is an MCAP file (*.mcap)")
+    if path.exists():
+        raise argparse.ArgumentTypeError(f"{str(path)!r} exists: a session is never overwritten; choose another "
+                                         "path")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise argparse.ArgumentTypeError(f"cannot make the folder of {str(path)!r}: {exc.strerror or exc}") from None
+    return str(path)
+
+
 def run_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="hrp2-console",
         description="Operator console for the simulated HRP-2 No.10: simulation + controller loop, "
                     "HTTP API (OpenAPI at /docs, operator page at /) and a viser 3D view.",
-        epilog="Subcommand: `hrp2-console bench --help` times the controller chain.")
+        epilog="Subcommands: `hrp2-console bench --help` times the controller chain; `hrp2-console replay --help` "
+               "replays a recorded session.")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
     p.add_argument("--speed", type=_speed, default=1.0,
                    help="real-time factor (1.0 = real time) or 'max' (as fast as possible)")
@@ -102,6 +129,12 @@ def run_parser() -> argparse.ArgumentParser:
                    help="start with these layer parameters: a JSON document {owner: {field: value}} as "
                         "GET /api/params gives (some owners and fields suffice; checked as PUT /api/params "
                         "checks them; kept across resets)")
+    p.add_argument("--record", nargs="?", const="", default=None, type=_new_session_path, metavar="PATH",
+                   help="record the session (inputs with the tick they took effect, behaviour runs, parameter "
+                        f"changes, telemetry) to an MCAP file from the first tick; default path {SESSIONS_DIR}/"
+                        "session-<time>.mcap; `hrp2-console replay PATH` replays it")
+    p.add_argument("--sessions-dir", default=SESSIONS_DIR, metavar="DIR",
+                   help=f"where POST /api/sessions/start records and GET /api/sessions lists (default {SESSIONS_DIR})")
     p.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     return p
 
@@ -109,13 +142,15 @@ def run_parser() -> argparse.ArgumentParser:
 def bench_parser() -> argparse.ArgumentParser:
     from app.bench import CHAINS, CONSOLE_SCENARIOS, SCENARIOS
     from app.bench_cameras import CAMERA_SCENARIOS
+    from app.bench_recording import RECORDING_SCENARIOS
 
     p = argparse.ArgumentParser(prog="hrp2-console bench",
                                 description="Run the chain synchronously as fast as possible (no servers) "
                                             "and print its timing as JSON.")
-    p.add_argument("--scenario", choices=(*SCENARIOS, *CONSOLE_SCENARIOS, *CAMERA_SCENARIOS), default="stand",
+    others = {**CONSOLE_SCENARIOS, **CAMERA_SCENARIOS, **RECORDING_SCENARIOS}
+    p.add_argument("--scenario", choices=(*SCENARIOS, *others), default="stand",
                    help="; ".join([f"{k}: {v.description}" for k, v in SCENARIOS.items()]
-                                  + [f"{k}: {v}" for k, v in {**CONSOLE_SCENARIOS, **CAMERA_SCENARIOS}.items()]))
+                                  + [f"{k}: {v}" for k, v in others.items()]))
     p.add_argument("--duration", type=_positive_seconds, default=5.0, help="simulated seconds (default 5)")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
     which = p.add_mutually_exclusive_group()
@@ -209,7 +244,7 @@ def run(argv: Sequence[str]) -> int:
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     wall0 = time.perf_counter()
     try:
-        robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed, params=args.params))
+        robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed, params=args.params, record=args.record))
     except ServiceError as exc:
         print(f"hrp2-console: error: {exc}", file=sys.stderr)
         return 2
@@ -228,7 +263,7 @@ def run(argv: Sequence[str]) -> int:
             viewer = Viewer(service, host=viewer_host, port=args.viewer_port)
             viewer_port = viewer.port
         settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
-                            viewer_port=viewer_port, token=token)
+                            viewer_port=viewer_port, token=token, sessions_dir=args.sessions_dir)
         app = create_app(settings, service=service)
         try:
             server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)
@@ -246,6 +281,8 @@ def run(argv: Sequence[str]) -> int:
         if viewer_port is not None:
             note = "" if viewer_host == args.host else "   (this machine only: viser checks no token)"
             print(f"  3D viewer      http://{viewer_host}:{viewer_port}/{note}")
+        if args.record is not None:
+            print(f"  recording      {args.record}   (hrp2-console replay {args.record})")
         sys.stdout.flush()
         dt = robot.info().dt_control_s
         while not stop.event.is_set():
@@ -291,7 +328,69 @@ def run(argv: Sequence[str]) -> int:
               f"{t.lateness_max_ms:.3f}")
     print(f"  hard stop: {str(bool(snap is not None and snap.safety.hard_stop)).lower()}")
     print(f"  faults: {'; '.join(faults) if faults else 'none'}")
+    if args.record is not None:
+        print(f"  session: {args.record}")
     return 1 if (fallen or faults) else 0
+
+
+def replay(argv: Sequence[str]) -> int:
+    """`hrp2-console replay SESSION [--view]`: re-run a session and compare it bit for bit, or play it back."""
+    from app.session.reader import NotASession, read_session
+
+    p = argparse.ArgumentParser(
+        prog="hrp2-console replay",
+        description="Replay a recorded session: its inputs fed again, each at its tick, into a fresh simulation run "
+                    "as fast as possible (--speed max), every tick compared with the recording bit for bit "
+                    "(exit 0: identical; 1: the first difference is printed). --view plays the recorded "
+                    "trajectory in the browser instead (time slider, pause, speed).")
+    p.add_argument("session", help="the session file (.mcap)")
+    p.add_argument("--view", action="store_true", help="play it in the browser (viser) instead of re-running it")
+    p.add_argument("--host", default="127.0.0.1", help="--view: address of the viewer (default this machine only)")
+    p.add_argument("--port", type=_port, default=8080, help="--view: viewer port (0: a free one)")
+    p.add_argument("--speed", type=_speed, default=1.0, help="--view: the playback speed it starts with (1.0 = real "
+                                                               "time); the replay itself always runs at max")
+    args = p.parse_args(argv)
+    try:
+        session = read_session(args.session)
+    except (OSError, NotASession) as exc:
+        print(f"hrp2-console replay: error: {exc}", file=sys.stderr)
+        return 2
+    print(f"session: {args.session}: {session.ticks} ticks ({session.ticks * session.dt_s:.3f} s), "
+          f"{len(session.inputs)} inputs, scene {session.header.get('scene')!r}"
+          + ("" if session.complete else f"; not finished ({session.problem}): read up to its last whole tick"))
+    if args.view:
+        return _view(session, args)
+    from app.session.replay import NotReplayable
+    from app.session.replay import replay as run_replay
+
+    try:
+        result = run_replay(session)
+    except NotReplayable as exc:
+        print(f"hrp2-console replay: error: {exc}", file=sys.stderr)
+        return 2
+    print(json.dumps(result.summary(), indent=2))
+    if result.identical:
+        print(f"identical: {result.ticks} ticks bit for bit (log row and the simulator's qpos digest)")
+        return 0
+    print(f"differs: {result.difference}")
+    return 1
+
+
+def _view(session, args) -> int:
+    from app.replay_viewer import ReplayViewer
+
+    stop = _StopRequested()
+    previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
+    viewer = ReplayViewer(session, host=args.host, port=args.port, speed=args.speed or 1.0)
+    try:
+        print(f"  replay viewer  http://{args.host}:{viewer.port}/   (Ctrl-C ends it)")
+        sys.stdout.flush()
+        stop.event.wait()
+    finally:
+        viewer.stop()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+    return 0
 
 
 def experiment(argv: Sequence[str]) -> int:
@@ -345,6 +444,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = floor_main(argv[2:])
     elif argv and argv[0] == "experiment":
         code = experiment(argv[1:])
+    elif argv and argv[0] == "replay":
+        code = replay(argv[1:])
     else:
         code = run(argv)
     return code

@@ -1,4 +1,5 @@
-"""The viser 3D view (the only module that imports viser): MuJoCo bodies moved from ground truth, E-STOP panel.
+"""The viser 3D view: MuJoCo bodies moved from ground truth, E-STOP panel (with app/replay_viewer.py, which plays a
+recorded session back with the same drawing, the only modules that import viser).
 
 It runs in the console process: the geometry comes from the scene's model file, the poses from the robot's
 published snapshots, and its buttons call the operator service like every other client. Its websocket only
@@ -246,6 +247,56 @@ def _viser_with_origin_check(host: str, port: int, page_origins: set[str], **kwa
     return server
 
 
+def add_model(scene, model: mujoco.MjModel) -> tuple[list, list]:
+    """Draw a MuJoCo model's bodies in a viser scene: one frame per moving body ("/bodies/<name>", placed later
+    from body poses) holding its visual geoms (or its collision geoms when it has no visual one), the world's geoms
+    under "/static". Returns (the frames of bodies 1..nbody-1, every node made)."""
+    names = tuple(model.body(b).name for b in range(model.nbody))
+    has_visual = np.zeros(model.nbody, dtype=bool)
+    for g in range(model.ngeom):
+        if model.geom_group[g] in _VISUAL_GROUPS:
+            has_visual[model.geom_bodyid[g]] = True
+    frames, nodes = [], []
+    for b in range(1, model.nbody):
+        frame = scene.add_frame(f"/bodies/{names[b]}", show_axes=False)
+        frames.append(frame)
+        nodes.append(frame)
+    for g in range(model.ngeom):
+        b = model.geom_bodyid[g]
+        if (model.geom_group[g] in _VISUAL_GROUPS) != bool(has_visual[b]):
+            continue  # draw the visual geoms, or the collision ones of bodies that have no visual
+        parent = "/static" if b == 0 else f"/bodies/{names[b]}"
+        node = add_geom(scene, model, g, f"{parent}/geom{g}")
+        if node is not None:
+            nodes.append(node)
+    return frames, nodes
+
+
+def add_geom(scene, model: mujoco.MjModel, g: int, name: str):
+    """One geom in a viser scene (grid for a plane, box, or a triangle mesh), in its body's frame."""
+    pos = np.asarray(model.geom_pos[g], dtype=float)
+    wxyz = np.asarray(model.geom_quat[g], dtype=float)
+    rgb, opacity = _rgb_opacity(_geom_color(model, g))
+    typ = model.geom_type[g]
+    if typ == mujoco.mjtGeom.mjGEOM_PLANE:
+        size = model.geom_size[g]
+        width = float(2 * size[0]) if size[0] > 0 else 10.0
+        height = float(2 * size[1]) if size[1] > 0 else 10.0
+        return scene.add_grid(name, width=width, height=height, cell_size=0.25, section_size=1.0,
+                              plane_color=(200, 205, 215), plane_opacity=1.0, shadow_opacity=0.0,
+                              position=pos, wxyz=wxyz)
+    if typ == mujoco.mjtGeom.mjGEOM_BOX:
+        return scene.add_box(name, color=rgb, dimensions=2.0 * np.asarray(model.geom_size[g], dtype=float),
+                             opacity=opacity, cast_shadow=False, receive_shadow=False, position=pos, wxyz=wxyz)
+    mesh = geom_mesh(model, g)
+    if mesh is None:
+        log.debug("geom %d of type %d not drawn", g, typ)
+        return None
+    return scene.add_mesh_simple(name, vertices=np.asarray(mesh.vertices), faces=np.asarray(mesh.faces),
+                                 color=rgb, opacity=opacity, cast_shadow=False, receive_shadow=False,
+                                 position=pos, wxyz=wxyz)
+
+
 class Viewer:
     """viser server showing the robot; body poses are pushed in one atomic batch at `rate_hz`."""
 
@@ -282,57 +333,15 @@ class Viewer:
     def _build_scene(self) -> None:
         for node in self._scene_nodes:
             node.remove()
-        self._frames, self._scene_nodes = [], []
         model = mujoco.MjModel.from_xml_path(str(scene_path(self.service.info.scene)))
         self._model = model
         self._scene = self.service.info.scene
-        names = tuple(model.body(b).name for b in range(model.nbody))
-        self._model_key = names
-        has_visual = np.zeros(model.nbody, dtype=bool)
-        for g in range(model.ngeom):
-            if model.geom_group[g] in _VISUAL_GROUPS:
-                has_visual[model.geom_bodyid[g]] = True
-        for b in range(1, model.nbody):
-            frame = self.server.scene.add_frame(f"/bodies/{names[b]}", show_axes=False)
-            self._frames.append(frame)
-            self._scene_nodes.append(frame)
-        for g in range(model.ngeom):
-            b = model.geom_bodyid[g]
-            if (model.geom_group[g] in _VISUAL_GROUPS) != bool(has_visual[b]):
-                continue  # draw the visual geoms, or the collision ones of bodies that have no visual
-            parent = "/static" if b == 0 else f"/bodies/{names[b]}"
-            node = self._add_geom(model, g, f"{parent}/geom{g}")
-            if node is not None:
-                self._scene_nodes.append(node)
+        self._model_key = tuple(model.body(b).name for b in range(model.nbody))
+        self._frames, self._scene_nodes = add_model(self.server.scene, model)
         try:
             self._apply_poses(self.service.observation().truth)
         except ServiceError:
             pass
-
-    def _add_geom(self, model: mujoco.MjModel, g: int, name: str):
-        pos = np.asarray(model.geom_pos[g], dtype=float)
-        wxyz = np.asarray(model.geom_quat[g], dtype=float)
-        rgb, opacity = _rgb_opacity(_geom_color(model, g))
-        typ = model.geom_type[g]
-        scene = self.server.scene
-        if typ == mujoco.mjtGeom.mjGEOM_PLANE:
-            size = model.geom_size[g]
-            width = float(2 * size[0]) if size[0] > 0 else 10.0
-            height = float(2 * size[1]) if size[1] > 0 else 10.0
-            return scene.add_grid(name, width=width, height=height, cell_size=0.25, section_size=1.0,
-                                  plane_color=(200, 205, 215), plane_opacity=1.0, shadow_opacity=0.0,
-                                  position=pos, wxyz=wxyz)
-        if typ == mujoco.mjtGeom.mjGEOM_BOX:
-            return scene.add_box(name, color=rgb, dimensions=2.0 * np.asarray(model.geom_size[g], dtype=float),
-                                 opacity=opacity, cast_shadow=False, receive_shadow=False,
-                                 position=pos, wxyz=wxyz)
-        mesh = geom_mesh(model, g)
-        if mesh is None:
-            log.debug("geom %d of type %d not drawn", g, typ)
-            return None
-        return scene.add_mesh_simple(name, vertices=np.asarray(mesh.vertices), faces=np.asarray(mesh.faces),
-                                     color=rgb, opacity=opacity, cast_shadow=False, receive_shadow=False,
-                                     position=pos, wxyz=wxyz)
 
     def _apply_poses(self, truth) -> None:
         with self.server.atomic():

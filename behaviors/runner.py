@@ -99,6 +99,7 @@ class BehaviorRunner:
         self._time_s = 0.0
         self._zero_walk = False  # an interrupted run was walking by velocity: send one zero walk command
         self.version = 0  # changes whenever a run starts, ends, or its progress is updated
+        self.transitions = 0  # changes whenever a run starts or ends (not with its progress)
 
     def __repr__(self) -> str:
         return f"BehaviorRunner(running={[r.behavior.name for r in self._running.values()]})"
@@ -123,7 +124,20 @@ class BehaviorRunner:
         self._next_id += 1
         self._running[run.id] = run
         self.version += 1
+        self.transitions += 1
         return run.id
+
+    @property
+    def next_id(self) -> int:
+        """The id the next run will get."""
+        return self._next_id
+
+    def continue_ids_from(self, next_id: int) -> None:
+        """Number the next runs from `next_id` on (a replay of a session that began after a reset, when the
+        runs before it had taken the ids below)."""
+        if self._running or self._finished:
+            raise InvalidState("run ids can only be set before the first run")
+        self._next_id = int(next_id)
 
     def cancel(self, run_id: int) -> RunStatus:
         run = self._running.get(run_id)
@@ -137,6 +151,12 @@ class BehaviorRunner:
     def cancel_all(self, message: str) -> None:
         for run in list(self._running.values()):
             self._end(run, "cancelled", message, interrupted=True)
+
+    def reset(self, message: str) -> None:
+        """The chain was rebuilt (a simulation reset): cancel every run; the zero walk command an interrupted
+        velocity walk leaves is dropped, the walk it was for is gone with the old chain."""
+        self.cancel_all(message)
+        self._zero_walk = False
 
     def get(self, run_id: int) -> RunStatus:
         run = self._running.get(run_id) or self._finished.get(run_id)
@@ -235,4 +255,5 @@ class BehaviorRunner:
         self._finished[run.id] = run
         while len(self._finished) > KEEP_FINISHED:
             self._finished.popitem(last=False)
+        self.transitions += 1
         self.version += 1

@@ -70,3 +70,19 @@ def get_log_csv(service: ServiceDep) -> PlainTextResponse:
         w.writerow([f"{v:.6g}" for v in row])
     return Response(out.getvalue(), media_type="text/csv; charset=utf-8",
                              headers={"Content-Disposition": 'attachment; filename="hrp2_log.csv"'})
+
+
+
+@router.get("/log.mcap", summary="DataLogger ring buffer as MCAP (Foxglove, PlotJuggler): JSON channels with "
+                                 "their schemas, stamped with the control time",
+            responses={**errors(), 200: {"content": {"application/octet-stream": {}}, "description": "the MCAP"}})
+def get_log_mcap(service: ServiceDep) -> Response:
+    from app.session.mcap_log import rows_to_mcap
+
+    rows = service.log_rows()
+    dt = service.info.dt_control_s
+    out = io.BytesIO()
+    rows_to_mcap(rows, out, [round(t / dt) for t in rows[:, 0].tolist()], {"source": "DataLogger",
+                                                                          "scene": service.info.scene})
+    return Response(out.getvalue(), media_type="application/octet-stream",
+                    headers={"Content-Disposition": 'attachment; filename="hrp2_log.mcap"'})

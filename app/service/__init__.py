@@ -46,9 +46,11 @@ from app.service.verbs import (
     SetTargetPose,
     StartImpedance,
     StartLayer,
+    StartRecording,
     StopImpedance,
     StopLayer,
     StopMotion,
+    StopRecording,
     Verb,
     WalkEmergencyStop,
     WalkStop,
@@ -338,6 +340,35 @@ class OperatorService:
         with self._state_lock:
             self._state_cache = None
         return f"simulation reset (scene {self._info.scene!r})"
+
+    # ---- sessions ----------------------------------------------------------------------------------------
+    def start_recording(self, path: str, timeout_s: float = 30.0) -> dict:
+        """Reset the simulation (same scene) and record a session to `path` (an MCAP file the robot writes) from
+        its first tick; the recording's status. Refused (state) while a session is being recorded."""
+        status = self.run(StartRecording(str(path), reset=True), timeout_s=timeout_s)
+        self._info = self.robot.refresh_info()  # the reset put the start parameters back
+        with self._state_lock:
+            self._state_cache = None
+        return status
+
+    def stop_recording(self, timeout_s: float = 30.0) -> dict:
+        """End the session being recorded; its status once the file is finished (Refused when none is). The robot
+        does not wait for the file: this waits, reading the published status."""
+        import time
+
+        stopped = self.run(StopRecording(), timeout_s=timeout_s)
+        deadline = time.monotonic() + timeout_s
+        while True:
+            last = self.published().last_recording
+            if last is not None and last["path"] == stopped["path"] and last["finished"]:
+                return last
+            if time.monotonic() > deadline:
+                raise Unavailable(f"the session file {stopped['name']} was not finished within {timeout_s:g} s")
+            time.sleep(0.02)
+
+    def recording(self) -> dict | None:
+        """The session being recorded (path, ticks, inputs, error) as last published, or None."""
+        return self.published().recording
 
     # ---- reading -------------------------------------------------------------------------------------------
     def published(self) -> Published:

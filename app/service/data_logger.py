@@ -1,4 +1,5 @@
-"""DataLogger: a ring buffer of the snapshots' CSV rows (PlotJuggler and Foxglove open the CSV)."""
+"""DataLogger: a ring buffer of the ticks' log rows (app.service.log_row), exported as MCAP (Foxglove and
+PlotJuggler open it: JSON channels with their schemas) or CSV."""
 
 from __future__ import annotations
 
@@ -9,54 +10,18 @@ from pathlib import Path
 
 import numpy as np
 
-from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES, NUM_JOINTS
+from app.service.log_row import COLUMNS, ROW_LENGTH, RowFiller
 
-
-def snapshot_row(snap) -> list[float]:
-    """One CSV row: time, commanded and measured joints [rad], attitude, COG, ZMP, wrenches, flags."""
-    return snapshot_row_array(snap).tolist()
-
-
-def snapshot_row_array(snap) -> np.ndarray:
-    """snapshot_row as a float array."""
-    row = np.empty(ROW_LENGTH)
-    _fill_row(row, snap)
-    return row
-
-
-def _fill_row(row: np.ndarray, snap) -> None:
-    """Write snapshot_row(snap) into `row` (ROW_LENGTH,)."""
-    n, k = NUM_JOINTS, 6 * len(FORCE_SENSOR_NAMES)
-    row[0] = snap.time_s
-    row[1:1 + n] = snap.q_cmd_rad
-    row[1 + n:1 + 2 * n] = snap.q_meas_rad
-    i = 1 + 2 * n
-    row[i:i + 3] = snap.base_rpy_est_rad
-    row[i + 3:i + 6] = snap.cog_world
-    row[i + 6:i + 9] = snap.zmp_world
-    row[i + 9:i + 9 + k] = np.asarray(snap.wrenches_ext).reshape(-1)
-    i += 9 + k
-    row[i] = float(snap.safety.hard_stop)
-    row[i + 1:i + 4] = snap.truth.base_pos_world
-    row[i + 4] = float(snap.fallen)
+__all__ = ["ROW_LENGTH", "DataLogger", "csv_header"]
 
 
 def csv_header() -> list[str]:
-    h = ["time_s"]
-    h += [f"q_cmd/{n}" for n in JOINT_NAMES] + [f"q_meas/{n}" for n in JOINT_NAMES]
-    h += [f"rpy_est/{a}" for a in ("roll", "pitch", "yaw")]
-    h += [f"cog/{a}" for a in "xyz"] + [f"zmp/{a}" for a in "xyz"]
-    h += [f"wrench/{s}/{c}" for s in FORCE_SENSOR_NAMES for c in ("fx", "fy", "fz", "tx", "ty", "tz")]
-    h += ["emergency/hard_stop", "truth/base_x", "truth/base_y", "truth/base_z", "truth/fallen"]
-    return h
-
-
-#: the width of a CSV row (snapshot_row)
-ROW_LENGTH = len(csv_header())
+    """The CSV columns: the log row's (time_s, then topic/field/component, e.g. joints/q_cmd_rad/RLEG_JOINT0)."""
+    return list(COLUMNS)
 
 
 class DataLogger:
-    """Keeps the CSV rows of the last `max_length` snapshots (hrpsys DataLogger's ring buffer); thread-safe.
+    """Keeps the log rows of the last `max_length` ticks (hrpsys DataLogger's ring buffer); thread-safe.
 
     `record` copies the row's numbers into a preallocated array: no I/O on the hot path, and no snapshot
     kept alive (thousands of retained snapshots would be thousands of objects for the garbage collector
@@ -74,6 +39,7 @@ class DataLogger:
         self._rows = storage[1:]
         self._written = storage[0]  # [0]: rows written since the last clear (a float holds 2^53 exactly)
         self._lock = threading.Lock()
+        self._filler = RowFiller()
 
     @staticmethod
     def storage_shape(max_length: int) -> tuple[int, int]:
@@ -84,12 +50,28 @@ class DataLogger:
         """A view of a log another process writes into `storage`."""
         return cls(storage.shape[0] - 1, storage)
 
-    def record(self, snap) -> None:
-        """Store snapshot_row(snap)."""
+    def record(self, obs) -> np.ndarray:
+        """Store the row of one Observation (a snapshot with the simulator's truth beside it); returns the
+        ring's row it was written to (valid until max_length more rows are recorded)."""
         with self._lock:
             n = int(self._written[0])
-            _fill_row(self._rows[n % len(self._rows)], snap)
+            row = self._rows[n % len(self._rows)]
+            self._filler.fill(row, obs)
             self._written[0] = n + 1
+        return row
+
+    @property
+    def written(self) -> int:
+        """Rows recorded since the last clear."""
+        return int(self._written[0])
+
+    def last_row(self) -> np.ndarray:
+        """A copy of the newest row (NaN before the first)."""
+        with self._lock:
+            n = int(self._written[0])
+            if n == 0:
+                return np.full(ROW_LENGTH, np.nan)
+            return self._rows[(n - 1) % len(self._rows)].copy()
 
     def clear(self) -> None:
         with self._lock:
@@ -114,8 +96,19 @@ class DataLogger:
         overwritten = min(len(out), max(0, n1 - max(n0, size)))
         return out[overwritten:]
 
+    def to_mcap(self, out) -> int:
+        """Write the buffer as MCAP to `out` (a path or a binary stream); returns the number of rows. The row's
+        channels (joints, base, balance, flags, wrenches, footsteps, operation targets) and BODY's transform,
+        stamped with the control time; `tick` counts the rows recorded since the last reset."""
+        from app.session.mcap_log import rows_to_mcap
+
+        with self._lock:
+            total = int(self._written[0])
+        rows = self.rows()
+        return rows_to_mcap(rows, out, range(total - len(rows), total), {"source": "DataLogger"})
+
     def to_csv(self, path: str | Path | None = None) -> str:
-        """Write the buffer as CSV to `path` (if given) and return the text."""
+        """Write the buffer as CSV to `path` (if given) and return the text (an export: MCAP is the log)."""
         out = io.StringIO()
         w = csv.writer(out, lineterminator="\n")
         w.writerow(csv_header())

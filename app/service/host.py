@@ -16,6 +16,7 @@ import numpy as np
 from app.service.commands import HostCommands
 from app.service.data_logger import DataLogger
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
+from app.service.session_recorder import SessionRecorder
 from app.service.setpoints import LocalSource, Setpoint, SetpointAck
 from app.service.verbs import RobotInfo, SetParams, Verb
 from behaviors.runner import BehaviorRunner
@@ -99,6 +100,8 @@ class Published:
     runs: tuple = ()  # behaviors.runner.RunStatus of the runs kept, oldest first
     setpoint_acks: dict = dataclasses.field(default_factory=dict)  # point -> SetpointAck of its newest setpoint
     recognitions: dict = dataclasses.field(default_factory=dict)  # object -> its latest recognition (as remembered)
+    recording: dict | None = None  # the session being recorded (SessionRecorder.status), or None
+    last_recording: dict | None = None  # the last session stopped: its status (`finished` once its file is)
 
 
 #: Owners of parameters: a layer name, or "ic:<limb>" for one hand's impedance.
@@ -138,6 +141,12 @@ class RobotHost:
         self._cameras = None  # robot.camera.CameraProcess of `_cameras_scene`, made on the first capture
         self._cameras_scene: str | None = None
         self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
+        self.start_auto_balancer = start_auto_balancer
+        self.recorder: SessionRecorder | None = None  # the session being recorded, if any
+        self.last_recorder: SessionRecorder | None = None  # the last one stopped (its file may still be finishing)
+        self._runs_recorded = self.runner.transitions
+        self._applying_input = False  # an input verb runs: what it does is recorded as that verb
+        self._in_hook = False  # the streamed setpoints are being taken at the start of a tick
         self._install_before_tick()
         self._load_startup_params()
 
@@ -158,7 +167,11 @@ class RobotHost:
                 self.runner.cancel_all("cancelled: the hard e-stop was engaged")
         table = self.setpoints.poll()
         if table:
-            self.apply_setpoints(table, time_s)
+            self._in_hook = True
+            try:
+                self.apply_setpoints(table, time_s)
+            finally:
+                self._in_hook = False
         self.runner.step(time_s)
 
     def apply_setpoints(self, table: Mapping[str, Setpoint], time_s: float | None = None) -> list[SetpointAck]:
@@ -184,6 +197,9 @@ class RobotHost:
                 op.set_motion(point, sp.twist(), time_s, sp.walk())
             self.setpoint_acks[point] = ack = SetpointAck(point, sp.seq, tick, time_s, ignored)
             acks.append(ack)
+        recorder = self.recorder
+        if recorder is not None and acks and not self._applying_input:
+            recorder.setpoints("hook" if self._in_hook else "boundary", time_s, [table[a.point] for a in acks], acks)
         return acks
 
     def cached_info(self) -> RobotInfo:
@@ -201,8 +217,14 @@ class RobotHost:
 
     def _on_snapshot(self, snap: Snapshot) -> None:
         self.observation = obs = Observation(snap, self.plant.ground_truth())
-        self.logger.record(obs)
+        row = self.logger.record(obs)
         self.stats.update(obs)
+        recorder = self.recorder
+        if recorder is not None:
+            recorder.tick(row, obs.truth.qpos)
+            if self.runner.transitions != self._runs_recorded:
+                self._runs_recorded = self.runner.transitions
+                recorder.runs_changed(snap.time_s, self.runner.runs())
 
     # ---- the head cameras ----------------------------------------------------------------------------------
     def cameras(self):
@@ -248,6 +270,31 @@ class RobotHost:
         return new
 
     # ---- verbs ---------------------------------------------------------------------------------------
+    def apply_input(self, verb: Verb) -> Any:
+        """`apply` for a verb from outside the loop (the operator service, a script): the one place a session
+        records verbs, with the tick they took effect at and their outcome. (Behaviours call `apply`: their
+        commands follow from the recorded RunBehavior and are not inputs.)"""
+        recorder = self.recorder
+        if recorder is None or not verb.recorded:
+            return self.apply(verb)
+        from app.session.inputs import outcome_of
+
+        time_s = float(self.loop.plant.time_s)
+        self._applying_input = True
+        try:
+            result = self.apply(verb)
+        except Exception as exc:
+            if self.recorder is recorder:
+                recorder.input("verb", "boundary", verb.name, time_s, verb, outcome_of(error=exc))
+            raise
+        finally:
+            self._applying_input = False
+        if self.recorder is recorder:
+            recorder.input("verb", "boundary", verb.name, time_s, verb, outcome_of(result))
+            if verb.name == "set_params":
+                recorder.params_changed(time_s, {o: dict(f) for o, f in verb.changes})
+        return result
+
     def apply(self, verb: Verb) -> Any:
         """Run `verb` now (the caller is at a tick boundary); refuse it when it cannot take effect."""
         if verb.motion:
@@ -295,6 +342,9 @@ class RobotHost:
         already = loop.hard_stop_engaged
         if not already:
             loop.safe_stop("operator")
+        if self.recorder is not None:
+            self.recorder.input("estop", "boundary", "estop", loop.plant.time_s, None,
+                                {"ok": True, "result": "already engaged" if already else "engaged"})
         return EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s),
                         engaged_at_monotonic_s=time.monotonic(), already_engaged=already)
 
@@ -346,7 +396,7 @@ class RobotHost:
             raise InvalidArgument("scene", f"unknown scene {scene!r}; available scenes: "
                                            f"{', '.join(available_scenes())}")
         plant = MujocoPlant(scene)
-        self.runner.cancel_all("cancelled: the simulation was reset")
+        self.runner.reset("cancelled: the simulation was reset")
         if scene != self._cameras_scene:
             self.close_cameras()
         self.recognitions.clear()
@@ -360,6 +410,44 @@ class RobotHost:
         self.logger.clear()
         self.loop.lateness.clear()
         self._load_startup_params()
+
+    # ---- sessions ----------------------------------------------------------------------------------------
+    def start_recording(self, path, reset: bool = False) -> dict:
+        """Record a session to `path` (MCAP) from now on. A session replays from a fresh simulation, so it
+        starts at one: this host's first tick, or a reset (`reset` true: reset now, in the same scene)."""
+        if self.recorder is not None:
+            raise Refused("state", f"a session is already being recorded ({self.recorder.path.name}); stop it "
+                                   "first")
+        if reset:
+            self.reset()
+        if self.loop.tick_count != 0:
+            raise Refused("state", "a session starts at a fresh simulation (tick 0): reset first, or start it "
+                                   "with the reset")
+        header = {"scene": self.scene, "dt_control_s": self.dt_control_s,
+                  "start_auto_balancer": self.start_auto_balancer, "startup_params": self.startup_params,
+                  "start": "fresh" if self.generation == 0 else "reset", "next_run_id": self.runner.next_id,
+                  "params": {o: self.params(o).to_dict() for o in self.param_owners()},
+                  "chain": list(self.loop.chain.order())}
+        self.recorder = SessionRecorder(path, header)
+        self._runs_recorded = self.runner.transitions
+        return self.recorder.status()
+
+    def stop_recording(self) -> dict:
+        """End the recording: no more ticks; the writer finishes the file while the loop goes on (nothing here
+        waits for it: `last_recording_status()["finished"]`, or `last_recorder.wait()` off the loop)."""
+        recorder = self.recorder
+        if recorder is None:
+            raise Refused("state", "no session is being recorded")
+        self.recorder = None
+        self.last_recorder = recorder
+        recorder.close_async()
+        return recorder.status()
+
+    def recording_status(self) -> dict | None:
+        return None if self.recorder is None else self.recorder.status()
+
+    def last_recording_status(self) -> dict | None:
+        return None if self.last_recorder is None else self.last_recorder.status()
 
     def _load_startup_params(self) -> None:
         if self.startup_params:
@@ -415,7 +503,8 @@ class RobotHost:
                          scene=self.scene, speed=loop.speed, stats=self.stats.summary(),
                          chain=loop.chain.describe(), published_at_monotonic_s=time.monotonic(),
                          runs=self.runs(), setpoint_acks=dict(self.setpoint_acks),
-                         recognitions=dict(self.recognitions))
+                         recognitions=dict(self.recognitions), recording=self.recording_status(),
+                         last_recording=self.last_recording_status())
 
     def runs(self) -> tuple:
         """The runner's runs, the same tuple object until one of them changes (so a reader can compare by

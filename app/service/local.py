@@ -10,7 +10,7 @@ import numpy as np
 from app.service.errors import ServiceError
 from app.service.host import EstopAck, Published, RobotHost
 from app.service.setpoints import Setpoint, SetpointTable
-from app.service.verbs import Reset, RobotInfo, Verb
+from app.service.verbs import Reset, RobotInfo, StopRecording, Verb
 
 
 class LocalRobot:
@@ -18,12 +18,16 @@ class LocalRobot:
     with it, they queue for the loop thread's next tick boundary."""
 
     def __init__(self, scene: str = "default", speed: float | None = None, dt_control_s: float = 0.005,
-                 start_auto_balancer: bool = True, params: dict | None = None) -> None:
+                 start_auto_balancer: bool = True, params: dict | None = None, record=None) -> None:
+        """`record`: a path (.mcap) to record the session to, from the first tick (`stop_recording` or `close`
+        finishes the file)."""
         self.host = RobotHost(scene, dt_control_s, speed, start_auto_balancer=start_auto_balancer, params=params)
         self.exit_reason: str | None = None
         self.priority = "default"
         self._published: Published | None = None
         self._setpoints = SetpointTable(self.host.setpoints.put)
+        if record is not None:
+            self.host.start_recording(str(record))
 
     def __repr__(self) -> str:
         return f"LocalRobot({self.host!r}, running={self.loop.running})"
@@ -91,10 +95,10 @@ class LocalRobot:
     # ---- channels -----------------------------------------------------------------------------------------
     def submit(self, verb: Verb) -> Future:
         if self.loop.running:
-            return self.loop.submit(lambda: self.host.apply(verb))
+            return self.loop.submit(lambda: self.host.apply_input(verb))
         fut: Future = Future()
         try:
-            fut.set_result(self.host.apply(verb))
+            fut.set_result(self.host.apply_input(verb))
         except ServiceError as exc:
             fut.set_exception(exc)
         return fut
@@ -122,7 +126,9 @@ class LocalRobot:
         cached = self._published
         if (cached is None or cached.snapshot is not snap or cached.generation != self.host.generation
                 or cached.setpoint_acks != self.host.setpoint_acks or cached.runs is not self.host.runs()
-                or cached.recognitions != self.host.recognitions):
+                or cached.recognitions != self.host.recognitions
+                or cached.recording != self.host.recording_status()
+                or cached.last_recording != self.host.last_recording_status()):
             cached = self._published = self.host.publish()
         return cached
 
@@ -139,7 +145,16 @@ class LocalRobot:
         self.submit(Reset(scene)).result(timeout=timeout_s)
         return self.host.info()
 
+    def stop_recording(self, timeout_s: float = 30.0) -> dict:
+        """End the session being recorded; its status once the file is finished."""
+        self.submit(StopRecording()).result()
+        return self.host.last_recorder.wait(timeout_s)
+
     def close(self, timeout_s: float = 10.0) -> dict:
         self.stop()
         self.host.close_cameras()
+        if self.host.recorder is not None:
+            self.host.stop_recording()
+        if self.host.last_recorder is not None:
+            self.host.last_recorder.wait(max(timeout_s, 30.0))
         return self.host.stats.summary()

@@ -54,6 +54,7 @@ class RobotConfig:
     nap_s: float = 1e-4
     # a parameter document {owner: {field: value}} the chain starts with (and again after each reset)
     params: dict[str, dict[str, Any]] | None = None
+    record: str | None = None  # record a session to this MCAP file from the first tick
 
 
 class UnexpectedError(ServiceError):
@@ -94,6 +95,12 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     except Exception as exc:  # noqa: BLE001 - tell the console why, then give up
         cmd.send(("failed", f"{type(exc).__name__}: {exc}"))
         return
+    if cfg.record is not None:
+        try:
+            host.start_recording(cfg.record)
+        except (ServiceError, OSError) as exc:
+            cmd.send(("failed", f"cannot record to {cfg.record}: {exc}"))
+            return
     # a paced loop sleeps most of each tick and deserves the CPU when it wakes; one running as fast as it can
     # never sleeps, and with SCHED_FIFO it would starve the HTTP process (and everything else) of a core
     priority = _raise_priority() if cfg.realtime_priority and cfg.speed is not None else "default"
@@ -117,7 +124,7 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             handle_estop()  # an e-stop sent before a command takes effect before it
             request, verb = cmd.recv()
             try:
-                reply = ("ok", host.apply(verb))
+                reply = ("ok", host.apply_input(verb))
             except ServiceError as exc:
                 reply = ("err", exc)
             except Exception as exc:  # noqa: BLE001 - a verb never kills the loop
@@ -155,13 +162,23 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     try:
         loop.run_paced(wait, between_ticks)
     except (EOFError, OSError):  # the console went away
+        _finish_recording(host)
         return
+    _finish_recording(host)
     publish(force=True)
     host.close_cameras()
     try:
         cmd.send(("bye", host.stats.summary()))
     except (EOFError, OSError):
         pass
+
+
+def _finish_recording(host: RobotHost) -> None:
+    """At the end of the robot process: stop the session being recorded, wait until its file is finished."""
+    if host.recorder is not None:
+        host.stop_recording()
+    if host.last_recorder is not None:
+        host.last_recorder.wait()
 
 
 # ---- in the console ------------------------------------------------------------------------------------------

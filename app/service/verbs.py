@@ -89,11 +89,13 @@ def _deg(v: float) -> float:
 class Verb:
     """An operation of the operator service. `motion` verbs move the robot: they are refused while the
     hard e-stop is engaged or the robot has fallen; `sequence` verbs also while the CollisionDetector
-    holds the posture or the EmergencyStopper holds the motion."""
+    holds the posture or the EmergencyStopper holds the motion. `recorded` verbs are inputs of a session
+    (a replay applies them again at the same tick); the others only read, or manage the recording."""
 
     name: ClassVar[str] = "verb"
     motion: ClassVar[bool] = False
     sequence: ClassVar[bool] = False
+    recorded: ClassVar[bool] = True
 
     def check(self, info: RobotInfo) -> None:  # noqa: B027 - optional hook
         """Checks that need the robot's model (joint limits, names); raises InvalidArgument."""
@@ -257,6 +259,7 @@ class SetFootsteps(Verb):
 @dataclass(frozen=True)
 class GetFootsteps(Verb):
     name = "get_footsteps"
+    recorded = False
 
     def run(self, host: RobotHost) -> tuple[bool, tuple]:
         abc = host.layer("abc")
@@ -419,6 +422,7 @@ class ClearSequence(Verb):
 @dataclass(frozen=True)
 class SequenceStatus(Verb):
     name = "sequence_status"
+    recorded = False
 
     def run(self, host: RobotHost) -> bool:
         return bool(host.layer("seq").is_interpolating())
@@ -577,6 +581,7 @@ class SetParams(Verb):
 @dataclass(frozen=True)
 class GetParams(Verb):
     name = "get_params"
+    recorded = False
     owners: tuple[str, ...] = ()  # empty: all
 
     def run(self, host: RobotHost) -> dict[str, Params]:
@@ -690,6 +695,7 @@ class InjectFault(Verb):
 @dataclass(frozen=True)
 class GetInfo(Verb):
     name = "get_info"
+    recorded = False
 
     def run(self, host: RobotHost) -> RobotInfo:
         return host.info()
@@ -700,6 +706,7 @@ class ChainTiming(Verb):
     """The layer order and the per-layer, whole-tick and physics p50/p99 times [ms]."""
 
     name = "chain_timing"
+    recorded = False
 
     def run(self, host: RobotHost) -> dict:
         loop = host.loop
@@ -713,6 +720,7 @@ class GetLoopTiming(Verb):
     """The loop's lateness figures over the last `last_s` seconds of ticks (and whole 1-s windows)."""
 
     name = "get_loop_timing"
+    recorded = False
     last_s: float = 60.0
 
     def __post_init__(self) -> None:
@@ -724,11 +732,42 @@ class GetLoopTiming(Verb):
         return loop.lateness.summary(last_ticks=ticks, last_windows=int(self.last_s))
 
 
+# ---- sessions ------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class StartRecording(Verb):
+    """Record a session to `path` (an MCAP file the robot process writes) from a fresh simulation: with
+    `reset`, the simulation is reset first (same scene); without, the robot must be at its first tick."""
+
+    name = "start_recording"
+    recorded = False
+    path: str
+    reset: bool = True
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.path, str) or not self.path.endswith(".mcap"):
+            raise InvalidArgument("path", f"must be a path ending in .mcap (got {self.path!r})")
+
+    def run(self, host: RobotHost) -> dict:
+        return host.start_recording(self.path, reset=self.reset)
+
+
+@dataclass(frozen=True)
+class StopRecording(Verb):
+    """End the session being recorded; the result is its status once the file is finished."""
+
+    name = "stop_recording"
+    recorded = False
+
+    def run(self, host: RobotHost) -> dict:
+        return host.stop_recording()
+
+
 @dataclass(frozen=True)
 class Shutdown(Verb):
     """Stop the loop after this boundary; the result is the run's summary."""
 
     name = "shutdown"
+    recorded = False
 
     def run(self, host: RobotHost) -> dict:
         host.stop_loop()
@@ -817,6 +856,7 @@ class CancelRun(Verb):
 @dataclass(frozen=True)
 class GetRun(Verb):
     name = "get_run"
+    recorded = False
     run_id: int
 
     def run(self, host: RobotHost):
@@ -826,6 +866,7 @@ class GetRun(Verb):
 @dataclass(frozen=True)
 class ListRuns(Verb):
     name = "list_runs"
+    recorded = False
 
     def run(self, host: RobotHost):
         return host.runner.runs()
@@ -836,6 +877,7 @@ class ListBehaviors(Verb):
     """Every behaviour with its parameters' types, units and ranges (from each behaviour's Params class)."""
 
     name = "list_behaviors"
+    recorded = False
 
     def run(self, host: RobotHost) -> list[dict]:
         return list_behaviors()

@@ -292,9 +292,23 @@ def test_log_csv_has_a_header_and_one_row_per_tick(client, runtime):
     r = client.get("/api/log.csv")
     assert r.status_code == 200 and r.headers["content-type"].startswith("text/csv")
     lines = r.text.strip().splitlines()
-    assert lines[0].startswith("time_s,q_cmd/RLEG_JOINT0")
+    assert lines[0].startswith("time_s,joints/q_cmd_rad/RLEG_JOINT0")
     assert len(lines) == 1 + 10
     assert math.isclose(float(lines[-1].split(",")[0]), 0.05)
+
+
+def test_log_mcap_holds_the_same_ticks_as_the_csv(client, runtime):
+    import io
+    import json
+
+    from mcap.reader import make_reader
+
+    step(runtime, 0.05)
+    r = client.get("/api/log.mcap")
+    assert r.status_code == 200 and r.headers["content-disposition"].endswith('filename="hrp2_log.mcap"')
+    joints = [json.loads(m.data) for _, _, m in make_reader(io.BytesIO(r.content)).iter_messages(topics=["/joints"])]
+    assert [m["tick"] for m in joints] == list(range(1, 11))
+    assert joints[-1]["time_s"] == runtime.loop.snapshot.time_s
 
 
 def test_docs_the_operator_page_and_config_are_served(client):

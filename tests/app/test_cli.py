@@ -122,3 +122,52 @@ def test_the_console_starts_with_a_parameter_file_and_refuses_a_bad_one(tmp_path
     assert r.returncode == 2 and "st.k1: must be a number" in r.stderr
     r = run("--headless", "--params", str(broken))
     assert r.returncode == 2 and "--params" in r.stderr and "is not JSON" in r.stderr
+
+
+def test_an_operator_session_over_http_on_the_real_console_replays_identical(tmp_path):
+    """`hrp2-console --record` (the robot in its own process, paced at real time): goVelocity, a hand streamed as
+    the page streams it, an e-stop and its release, all over HTTP; then `hrp2-console replay` finds every tick
+    identical at --speed max."""
+    import time
+
+    from app.console_process import Console
+
+    path = tmp_path / "http-session.mcap"
+    with Console("--speed", "1.0", "--record", str(path)) as c:
+        conn = c.connection()
+        deadline = time.monotonic() + 60.0
+        while c.request("GET", "/api/state", conn=conn)[1]["time"] < 2.2:  # the AutoBalancer has blended in
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        walk = {"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0}
+        assert c.request("POST", "/api/walk/go-velocity", walk, conn=conn)[0] == 200
+        for _ in range(40):  # 0.8 s of a stick at 50 Hz
+            status, _ = c.request("PUT", "/api/operator/velocity", {"point": "rhand", "linear": [0, 0, 0.03],
+                                                                    "angular": [0, 0, 0]}, conn=conn)
+            assert status == 200
+            time.sleep(0.02)
+        assert c.request("POST", "/api/estop", conn=conn)[0] == 200
+        time.sleep(0.3)
+        assert c.request("POST", "/api/estop/release", {}, conn=conn)[0] == 200
+        time.sleep(0.5)
+        code, out = c.stop()
+    assert code == 0 and f"session: {path}" in out, out
+    r = run("replay", str(path), timeout=120.0)
+    assert r.returncode == 0, r.stdout + r.stderr
+    assert "identical:" in r.stdout
+    report = json.loads(r.stdout[r.stdout.index("{"):r.stdout.rindex("}") + 1])
+    assert report["identical"] and report["inputs"] >= 40 and report["ticks"] > 700
+
+
+def test_replay_refuses_a_file_that_is_not_a_session(tmp_path):
+    bogus = tmp_path / "x.mcap"
+    bogus.write_bytes(b"not an mcap file")
+    r = run("replay", str(bogus))
+    assert r.returncode == 2 and "not a session" in r.stderr
+
+
+def test_record_refuses_to_overwrite_a_session(tmp_path):
+    existing = tmp_path / "s.mcap"
+    existing.write_bytes(b"")
+    r = run("--headless", "--record", str(existing))
+    assert r.returncode == 2 and "--record" in r.stderr and "never overwritten" in r.stderr

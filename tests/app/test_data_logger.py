@@ -23,7 +23,7 @@ def test_logger_keeps_only_the_newest_rows_and_exports_csv(tmp_path):
     assert np.all(np.diff(times) > 0)
     assert times[-1] == np.float64(0.5)
     assert (tmp_path / "log.csv").read_text() == text
-    base_z = float(rows[-1][csv_header().index("truth/base_z")])
+    base_z = float(rows[-1][csv_header().index("base/pos_sim_m/z")])
     assert 0.6 < base_z < 0.7  # the simulator's BODY height, logged beside the controller's data
 
 

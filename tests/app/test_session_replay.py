@@ -1,0 +1,79 @@
+"""Record and replay: a short operator session, paced at real time in the loop's own thread (walking by
+goVelocity, a hand streamed like a joystick, a behaviour, a parameter change, an e-stop and its release), replays
+bit for bit through a fresh simulation as fast as possible; an input left out is found at its tick."""
+
+import dataclasses
+import time
+
+import pytest
+
+from app.service import OperatorService
+from app.service.local import LocalRobot
+from app.service.setpoints import Setpoint
+from app.session.reader import read_session
+from app.session.replay import replay
+
+STREAM_HZ = 50.0
+
+
+def _wait_sim(robot, t_s, timeout_s=30.0):
+    deadline = time.monotonic() + timeout_s
+    while robot.latest().snapshot.time_s < t_s:
+        assert time.monotonic() < deadline, f"the paced loop did not reach t = {t_s} s"
+        time.sleep(0.005)
+
+
+def _stream(service, seconds, linear):
+    """The operator's stick on the right hand, as the page streams it (PUT-like setpoints at 50 Hz)."""
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        service.put_setpoint(Setpoint("rhand", linear, (0.0, 0.0, 0.0)))
+        time.sleep(1.0 / STREAM_HZ)
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory):
+    path = tmp_path_factory.mktemp("session") / "operator.mcap"
+    robot = LocalRobot(speed=1.0, record=path)
+    service = OperatorService(robot)
+    robot.start()
+    try:
+        _wait_sim(robot, 2.1)  # the AutoBalancer and the Stabilizer have blended in
+        service.set_params({"op": {"deadman_timeout_s": 0.25}})
+        service.go_velocity(0.1, 0.0, 0.0)
+        _stream(service, 1.0, (0.0, 0.0, 0.03))
+        service.walk_stop()
+        service.run_behavior("squat", {"depth_m": 0.03})
+        _stream(service, 0.4, (0.02, 0.0, 0.0))
+        service.estop()
+        time.sleep(0.3)
+        service.release_estop()
+        time.sleep(0.6)
+        status = robot.stop_recording()
+    finally:
+        robot.close()
+    assert status["error"] is None
+    return read_session(path)
+
+
+def test_an_operator_session_replays_bit_for_bit_at_max_speed(recorded):
+    session = recorded
+    assert session.complete and session.ticks > 800  # > 4 s at 5 ms
+    kinds = {(d["kind"], d["phase"]) for d in session.inputs}
+    assert {("verb", "boundary"), ("estop", "boundary"), ("setpoints", "hook")} <= kinds
+    names = [d["name"] for d in session.inputs if d["kind"] == "verb"]
+    assert names == ["set_params", "go_velocity", "walk_stop", "run_behavior", "release_estop"]
+    assert session.params[0]["changes"] == {"op": {"deadman_timeout_s": 0.25}}
+    assert [r["state"] for r in session.behaviors[-1]["runs"]] == ["cancelled"]  # the e-stop cancelled the squat
+    result = replay(session)
+    assert result.identical, result.summary()
+    assert result.ticks == session.ticks and result.inputs == len(session.inputs)
+
+
+def test_a_replay_without_the_estop_differs_from_its_tick_on(recorded):
+    estop = next(d for d in recorded.inputs if d["kind"] == "estop")
+    tampered = dataclasses.replace(recorded, inputs=[d for d in recorded.inputs if d is not estop])
+    result = replay(tampered)
+    assert not result.identical
+    assert result.difference.tick == estop["tick"], str(result.difference)
+    assert result.difference.what == "row" and "flags/hard_stop" in result.difference.columns
