@@ -16,6 +16,7 @@ import threading
 import time
 import urllib.request
 from pathlib import Path
+from urllib.parse import parse_qs, urlsplit
 
 import playwright.sync_api as playwright_api  # pinned in the `test` extra; drives Debian's chromium, no download
 import pytest
@@ -138,11 +139,19 @@ def start_console(args: list[str]) -> Console:
 
 
 @pytest.fixture(scope="module")
-def page(hrp2_console):
+def page_urls() -> list[str]:
+    """Every URL the module's page (and its 3D view's iframe) asked for: requests and WebSockets."""
+    return []
+
+
+@pytest.fixture(scope="module")
+def page(hrp2_console, page_urls):
     with playwright_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
         try:
             pg = browser.new_page(viewport={"width": 1280, "height": 800})
+            pg.on("request", lambda r: page_urls.append(r.url))
+            pg.on("websocket", lambda ws: page_urls.append(ws.url))
             # Software WebGL (SwiftShader) renders the viser iframe in the same renderer and GPU process: while
             # it builds the scene, input events can stall for ~20 s on a 2-CPU machine, so actions wait longer.
             pg.set_default_timeout(40_000)
@@ -234,6 +243,78 @@ def test_the_page_loads_and_the_robot_is_drawn(page, hrp2_console, artifacts):
     shot(page, artifacts, "page")
 
 
+LOOPBACK_NAMES = {"127.0.0.1", "localhost", "::1"}
+
+
+def leaving(urls: list[str], ports: set[int]) -> list[str]:
+    """The URLs that go anywhere but this machine's console: another host, or a port not in `ports` (blob: URLs
+    are judged by the origin that made them; data: and about: load nothing)."""
+    out = []
+    for url in urls:
+        u = urlsplit(url)
+        if u.scheme in ("data", "about"):
+            continue
+        if u.scheme == "blob":
+            u = urlsplit(url[len("blob:"):])
+        if u.hostname not in LOOPBACK_NAMES or u.port not in ports:
+            out.append(url)
+    return out
+
+
+def test_every_request_of_the_page_and_its_3d_view_stays_on_this_machine(page, hrp2_console, page_urls, artifacts):
+    """What the page and its 3D view asked for: the page's requests and WebSockets (Playwright's events), and
+    every resource each frame fetched (its Resource Timing entries: the 3D view's iframe runs in another
+    process, whose requests Playwright does not report) and the 3D view's websocket address."""
+    http_port = int(hrp2_console.base.rsplit(":", 1)[1])
+    ports = {http_port, hrp2_console.viewer_port}
+    frame = page.frame_locator("#view iframe")
+    playwright_api.expect(frame.locator("canvas[data-engine]").first).to_be_visible(timeout=30_000)
+    urls = list(page_urls)
+    for f in page.frames:
+        urls += [f.url, *f.evaluate("performance.getEntriesByType('resource').map((e) => e.name)")]
+    src = page.locator("#view iframe").get_attribute("src")
+    viewer_ws = parse_qs(urlsplit(src).query)["websocket"][0]
+    urls.append(viewer_ws)
+    paths = {urlsplit(u).path for u in urls}
+    assert {"/", "/static/console.js", "/api/config", "/ws/telemetry", "/viewer/"} <= paths, sorted(paths)
+    assert urlsplit(viewer_ws).port == hrp2_console.viewer_port
+    assert not leaving(urls, ports), leaving(urls, ports)
+    shot(page, artifacts, "page_local_requests")
+
+
+def test_the_api_docs_render_offline_from_the_console_alone(page, hrp2_console, artifacts):
+    port = int(hrp2_console.base.rsplit(":", 1)[1])
+    seen: list[str] = []
+    refused: list[str] = []
+
+    def only_here(route) -> None:  # anything for elsewhere is refused, and the test says what it was
+        url = route.request.url
+        seen.append(url)
+        if leaving([url], {port}):
+            refused.append(url)
+            route.abort()
+        else:
+            route.continue_()
+
+    ctx = page.context.browser.new_context(viewport={"width": 1280, "height": 800})
+    try:
+        ctx.route("**/*", only_here)
+        docs = ctx.new_page()
+        docs.set_default_timeout(40_000)
+        docs.goto(f"{hrp2_console.base}/docs", wait_until="domcontentloaded")
+        playwright_api.expect(docs.locator(".swagger-ui .info .title")).to_contain_text("HRP-2 operator console")
+        estop = docs.locator(".opblock-post", has=docs.locator(".opblock-summary-path", has_text=re.compile(
+            r"^/api/estop$")))
+        playwright_api.expect(estop).to_be_visible()
+        assert docs.locator(".opblock").count() >= 40  # every route of the API, not an empty shell
+        shot(docs, artifacts, "api_docs")
+    finally:
+        ctx.close()
+    assert not refused, f"/docs asked for something off this machine: {refused}"
+    paths = {urlsplit(u).path for u in seen}
+    assert {"/docs", "/openapi.json", "/static/swagger-ui/swagger-ui-bundle.js"} <= paths, sorted(paths)
+
+
 def test_the_estop_stays_visible_after_scrolling_to_the_bottom(page, artifacts):
     page.locator("#controls").evaluate("e => e.scrollTop = e.scrollHeight")
     page.evaluate("window.scrollTo(0, document.body.scrollHeight)")
@@ -282,7 +363,7 @@ def test_space_and_esc_engage_the_hard_stop_from_anywhere(page, hrp2_console, ar
     released(hrp2_console)
 
 
-def test_keys_typed_in_the_command_box_do_not_engage_the_estop(page, hrp2_console):
+def test_keys_typed_in_the_command_box_do_not_engage_the_estop(page, hrp2_console, artifacts):
     released(hrp2_console)
     box = page.get_by_role("textbox", name="command")
     box.fill("")
@@ -291,6 +372,7 @@ def test_keys_typed_in_the_command_box_do_not_engage_the_estop(page, hrp2_consol
     time.sleep(0.3)
     assert not hrp2_console.state()["emergency"]["hard_stop"]
     assert box.input_value() == "a b"
+    shot(page, artifacts, "keys_in_command_box")
     box.fill("")
 
 
