@@ -31,6 +31,8 @@ CHROMIUM_ARGS = [
     "--disable-component-update", "--disable-sync",
 ]  # headless and a fresh temporary --user-data-dir are playwright's defaults for launch()
 SCREENSHOT = ROOT / "docs" / "img" / "operator_page.png"
+# [m] BODY travel from the walking stop to standing, walking at 0.1 m/s (a step ~0.08 m): measured 0.04-0.06 m
+WALK_STOP_TRAVEL_M = 0.10
 ZERO_WITHIN_S = 0.25  # [s] of control time: a released stick or a stopped stream zeroes the velocity by then
 
 
@@ -343,6 +345,109 @@ def test_estop_click_engages_the_hard_stop_the_banner_shows_and_release_works(pa
         raise AssertionError("the release did not reach the loop; the page says: "
                              + page.locator("#history").inner_text()[-600:]) from None
     playwright_api.expect(page.locator("#banner")).to_be_hidden()
+
+
+def joint_deg(c: Console, name: str) -> float:
+    return c.state()["joints"][name]["meas_deg"]
+
+
+def motion_released(c: Console) -> None:
+    """No motion stop (released through the API if a test left one) and its blend back over."""
+    if c.state()["emergency"]["motion_stop"]:
+        post_json(f"{c.base}/api/motion/release")
+    wait_until(lambda: not c.state()["emergency"]["motion_stop"], 5.0, "motion_stop == false")
+    wait_until(lambda: not c.state()["layers"]["es"]["recovering"], 10.0, "es recovering == false")
+
+
+def test_stop_motion_holds_a_joint_motion_and_release_motion_lets_it_finish(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    motion_released(hrp2_console)
+    joint = "RARM_JOINT0"
+    start = joint_deg(hrp2_console, joint)
+    post_json(f"{hrp2_console.base}/api/sequence/joint-angles", {"angles_deg": {joint: start - 30.0}, "time": 4.0})
+    wait_until(lambda: joint_deg(hrp2_console, joint) < start - 5.0, 10.0, f"{joint} on its way")
+    page.get_by_role("button", name="Stop motion", exact=True).click()
+    em = wait_until(lambda: (e := hrp2_console.state()["emergency"])["motion_stop"] and e, 5.0, "motion_stop")
+    assert em["motion_stop_reason"] == "operator" and not em["hard_stop"]
+    playwright_api.expect(page.locator("#s-motion")).to_have_text("STOPPED (operator)")
+    playwright_api.expect(page.locator("#stop-motion")).to_have_class(re.compile(r"\bon\b"))
+    playwright_api.expect(page.locator("#latched")).to_be_hidden()  # the operator's own stop is not an alarm
+    # Eq. 15: the plan reverts T1 back and holds there: the joint ends nearer its start than where it stopped
+    es = hrp2_console.state()["layers"]["es"]
+    wait_until(lambda: hrp2_console.state()["time"] > em["motion_stop_time"] + es["t2_s"] + 0.2, 5.0,
+               "the revert over (T2)")
+    held = joint_deg(hrp2_console, joint)
+    time.sleep(1.0)
+    assert joint_deg(hrp2_console, joint) == pytest.approx(held, abs=0.5), "the joint did not hold"
+    assert held > start - 25.0, f"{joint} at {held:.1f} deg: the motion ran on to its target under the stop"
+    shot(page, artifacts, "motion_stopped")
+    page.get_by_role("button", name="Release motion", exact=True).click()
+    wait_until(lambda: not hrp2_console.state()["emergency"]["motion_stop"], 5.0, "motion_stop released")
+    playwright_api.expect(page.locator("#s-motion")).to_have_text("off")
+    # blended back to the live plan: the joint reaches the target the sequence was going to
+    wait_until(lambda: abs(joint_deg(hrp2_console, joint) - (start - 30.0)) < 1.0, 15.0, f"{joint} at its target")
+    post_json(f"{hrp2_console.base}/api/sequence/joint-angles", {"angles_deg": {joint: start}, "time": 1.5})
+    wait_until(lambda: abs(joint_deg(hrp2_console, joint) - start) < 1.0, 10.0, f"{joint} back")
+
+
+def test_stop_walking_ends_a_walk_in_place(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    motion_released(hrp2_console)
+    post_json(f"{hrp2_console.base}/api/walk/go-velocity", {"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0})
+    wait_until(lambda: hrp2_console.state()["walking"], 10.0, "walking")
+    time.sleep(2.0)  # well into the walk
+    page.get_by_role("button", name="Stop walking", exact=True).click()
+    stopping = wait_until(lambda: (s := hrp2_console.state())["emergency"]["walking_stop"] and s, 5.0,
+                          "walking_stop in /api/state")
+    x0 = stopping["base"]["pos"][0]
+    playwright_api.expect(page.locator("#s-walkstop")).to_have_text("STOPPING in place")
+    playwright_api.expect(page.locator("#stop-walking")).to_have_class(re.compile(r"\bon\b"))
+    shot(page, artifacts, "walking_stop")
+    s = wait_until(lambda: (s := hrp2_console.state()) and not s["walking"] and s, 15.0, "standing again")
+    # in place: the foot in the air lands, no further step (bound: the measured travel + 0.04 m)
+    assert s["base"]["pos"][0] - x0 < WALK_STOP_TRAVEL_M, s["base"]["pos"][0] - x0
+    wait_until(lambda: not hrp2_console.state()["emergency"]["walking_stop"], 5.0, "the walking stop ends itself")
+    playwright_api.expect(page.locator("#s-walkstop")).to_have_text("off")
+    assert not s["fallen"]
+
+
+def test_stop_and_release_the_stabilizer_from_their_buttons(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    page.get_by_role("button", name="Stop stabilizer", exact=True).click()
+    s = wait_until(lambda: (s := hrp2_console.state())["emergency"]["stabilizer_stop"] and s, 5.0, "stabilizer_stop")
+    assert not s["layers"]["st"]["active"]
+    playwright_api.expect(page.locator("#s-ststop")).to_have_text("STOPPED")
+    playwright_api.expect(page.locator("#stop-stabilizer")).to_have_class(re.compile(r"\bon\b"))
+    shot(page, artifacts, "stabilizer_stopped")
+    page.get_by_role("button", name="Release stabilizer", exact=True).click()
+    s = wait_until(lambda: (s := hrp2_console.state()) and not s["emergency"]["stabilizer_stop"] and s, 5.0,
+                   "the Stabilizer running again")
+    assert s["layers"]["st"]["active"] and not s["fallen"]
+    playwright_api.expect(page.locator("#s-ststop")).to_have_text("running")
+    wait_until(lambda: hrp2_console.state()["layers"]["st"]["weight"] == 1.0, 10.0, "blended in again")
+
+
+def test_a_push_that_raises_the_cp_flag_latches_a_motion_stop_shown_as_an_alert(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    motion_released(hrp2_console)
+    wait_until(lambda: hrp2_console.state()["layers"]["st"]["weight"] == 1.0, 10.0, "the Stabilizer fully on")
+    post_json(f"{hrp2_console.base}/api/sim/push", {"body": "BODY", "force": [200.0, 0.0, 0.0], "duration": 0.1})
+    em = wait_until(lambda: (e := hrp2_console.state()["emergency"])["motion_stop"] and e, 5.0,
+                    "a motion stop from the CP flag")
+    assert em["motion_stop_reason"] == "capture_point" and em["flag_rose_at"] is not None
+    alert = page.get_by_role("alertdialog")
+    playwright_api.expect(alert).to_be_visible()
+    playwright_api.expect(alert).to_contain_text("motion stop latched by capture_point")
+    shot(page, artifacts, "latched_alert")
+    alert.get_by_role("button", name="Acknowledge").click()
+    playwright_api.expect(alert).to_be_hidden()
+    s = hrp2_console.state()
+    assert s["emergency"]["motion_stop"] and not s["fallen"]  # acknowledged, still latched
+    playwright_api.expect(page.locator("#s-motion")).to_have_text("STOPPED (capture_point)")
+    page.get_by_role("button", name="Release motion", exact=True).click()
+    wait_until(lambda: not hrp2_console.state()["emergency"]["motion_stop"], 5.0, "released")
+    playwright_api.expect(page.locator("#s-motion")).to_have_text("off")
+    motion_released(hrp2_console)
 
 
 @pytest.mark.parametrize("key, where", [("Space", "page"), ("Escape", "page"), ("Escape", "3D view"),
