@@ -67,6 +67,8 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
     api.include_router(camera.router)
     api.include_router(emergency.motion_router)
     api.include_router(emergency.params_router)
+    if settings.test_hooks:
+        api.include_router(sim.hooks_router)
     _publish_error_schema(api)
 
     @api.get("/", include_in_schema=False)

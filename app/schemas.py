@@ -97,6 +97,13 @@ class PushRequest(StrictBody):
                             ge=MIN_MOTION_TIME_S, le=MAX_PUSH_DURATION_S)
 
 
+class FaultRequest(StrictBody):
+    kind: Literal["layer", "nan"] = Field(description="'layer': the layer's tick raises from now on (until a "
+                                                      "reset); 'nan': the next physics step starts from a NaN "
+                                                      "velocity")
+    layer: str = Field(default="st", max_length=16, description="the layer that raises (kind 'layer')")
+
+
 class GoPosRequest(StrictBody):
     x: float = Field(description=f"forward [m], |x| <= {MAX_GO_POS_M:g}, relative to the feet's mid-coords",
                      ge=-MAX_GO_POS_M, le=MAX_GO_POS_M, examples=[0.3])

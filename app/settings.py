@@ -17,3 +17,4 @@ class Settings:
     token: str | None = None  # required on /api/ and /ws/ when set; a host beyond loopback needs one
     lock_lease_s: float = 5.0  # [s] the operator lock of a holder without a WebSocket, after its last request
     lock_grace_s: float = 2.0  # [s] the operator lock after its holder's last WebSocket closed
+    test_hooks: bool = False  # POST /api/sim/fault (a layer that raises, a NaN in the physics): tests only

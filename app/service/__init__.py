@@ -28,6 +28,7 @@ from app.service.verbs import (
     GetRun,
     GoPos,
     GoVelocity,
+    InjectFault,
     ListRuns,
     PlaceObject,
     Push,
@@ -319,6 +320,10 @@ class OperatorService:
     # ---- the simulation --------------------------------------------------------------------------------
     def push(self, body: str, force_n: Sequence[float], duration_s: float) -> str:
         return self.run(Push(body, tuple(map(float, force_n)), float(duration_s)))
+
+    def inject_fault(self, kind: str, layer: str = "st") -> str:
+        """Test hook: `layer`'s tick raises from now on ("layer"), or a NaN in the physics ("nan")."""
+        return self.run(InjectFault(kind, layer))
 
     @property
     def objects(self) -> tuple[str, ...]:

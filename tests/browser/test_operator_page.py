@@ -99,7 +99,7 @@ def start_console(args: list[str]) -> Console:
     proc = subprocess.Popen(
         [*console(), *args, "--speed", "1.0"],
         cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, bufsize=1,
-        env={**os.environ, "PYTHONUNBUFFERED": "1"})
+        env={**os.environ, "PYTHONUNBUFFERED": "1", "HRP2_TEST_HOOKS": "1"})  # POST /api/sim/fault
     output: list[str] = []
     lines: queue.Queue[str] = queue.Queue()
 
@@ -448,6 +448,33 @@ def test_a_push_that_raises_the_cp_flag_latches_a_motion_stop_shown_as_an_alert(
     wait_until(lambda: not hrp2_console.state()["emergency"]["motion_stop"], 5.0, "released")
     playwright_api.expect(page.locator("#s-motion")).to_have_text("off")
     motion_released(hrp2_console)
+
+
+@pytest.mark.parametrize("kind, fault", [("layer", "RuntimeError: injected fault in layer 'st'"),
+                                         ("nan", "PhysicsDiverged: the simulation diverged")])
+def test_a_fault_is_shown_on_the_page_and_its_reset_control_recovers(page, hrp2_console, artifacts, kind, fault):
+    released(hrp2_console)
+    post_json(f"{hrp2_console.base}/api/sim/fault", {"kind": kind, "layer": "st"})
+    em = wait_until(lambda: (e := hrp2_console.state()["emergency"])["fault"] and e, 5.0, "the fault in /api/state")
+    assert em["hard_stop"] and em["hard_stop_reason"] == "fault" and em["fault"].startswith(fault)
+    playwright_api.expect(page.locator("#banner")).to_contain_text(f"fault: {fault}")
+    playwright_api.expect(page.locator("#s-fault")).to_contain_text(fault)
+    playwright_api.expect(page.get_by_role("alertdialog")).to_contain_text(f"fault: {fault}")
+    playwright_api.expect(page.locator("#history")).to_contain_text(f"FAULT: {fault}")
+    shot(page, artifacts, f"fault_{kind}")
+    page.get_by_role("alertdialog").get_by_role("button", name="Acknowledge").click()
+    page.locator("#scene").select_option(hrp2_console.state()["scene"])
+    page.get_by_role("button", name="Reset simulation").click()
+    s = wait_until(lambda: (s := hrp2_console.state()) and not s["emergency"]["hard_stop"] and s, 30.0,
+                   "the hard stop gone after the reset")
+    assert s["emergency"]["fault"] is None and not s["fallen"]
+    playwright_api.expect(page.locator("#banner")).to_be_hidden()
+    playwright_api.expect(page.locator("#s-fault")).to_have_text("none")
+    playwright_api.expect(page.locator("#s-hard")).to_have_text("off")
+    playwright_api.expect(page.locator("#conn")).to_contain_text("live")
+    t = hrp2_console.state()["time"]
+    wait_until(lambda: hrp2_console.state()["time"] > t + 0.5, 5.0, "the simulation running on")
+    shot(page, artifacts, f"fault_{kind}_recovered")
 
 
 @pytest.mark.parametrize("key, where", [("Space", "page"), ("Escape", "page"), ("Escape", "3D view"),
