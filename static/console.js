@@ -125,7 +125,10 @@ function onKeyDown(e) {
   }
   if (KEY_AXES[e.code]) { heldKeys.add(e.code); e.preventDefault(); }
 }
-function onKeyUp(e) { heldKeys.delete(e.code); }
+function onKeyUp(e) {
+  // a teleoperation key let go: the zero goes out at once, not at the next 50 Hz send (as a stick's)
+  if (heldKeys.delete(e.code)) streamTick();
+}
 window.addEventListener("keydown", onKeyDown, true);
 window.addEventListener("keyup", onKeyUp, true);
 window.addEventListener("blur", () => heldKeys.clear());
