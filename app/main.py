@@ -10,6 +10,7 @@ from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
+from app.command_journal import CommandJournal, JournalingLayer
 from app.errors import COMMON_ERRORS, CONTROL_ERRORS, ErrorBody, install_error_handlers
 from app.hot_paths import HotPaths
 from app.operator_lock import OperatorLock
@@ -55,6 +56,7 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
     api.state.settings = settings
     api.state.service = service
     lock = api.state.lock = OperatorLock(settings.lock_lease_s, settings.lock_grace_s)
+    journal = api.state.journal = CommandJournal()
     install_error_handlers(api)
     from starlette.exceptions import HTTPException as StarletteHTTPException
 
@@ -84,8 +86,9 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
 
     _serve_docs(api)
     api.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
-    guarded = ConsoleGuard(HotPaths(api), allowed_hosts_for(settings.host, settings.extra_hosts),
-                           token=settings.token, lock=lock)
+    # the front door, then the journal of what passed it (app.command_journal), then the hot paths
+    guarded = ConsoleGuard(JournalingLayer(HotPaths(api), journal),
+                           allowed_hosts_for(settings.host, settings.extra_hosts), token=settings.token, lock=lock)
     guarded.fastapi = api
     return guarded
 

@@ -400,3 +400,18 @@ class OperatorLockState(BaseModel):
                                                    "WebSocket open, or when free")
     connected: bool = Field(description="the holder has a WebSocket open (/ws/operator or /ws/telemetry with "
                                         "?client=)")
+
+
+class CommandRecord(BaseModel):
+    """A control request as the console's journal keeps it (app.command_journal)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    seq: int = Field(description="numbered in arrival order, from 1 (a restarted console starts again)")
+    client: str = Field(description="the sender's X-Client-Id; 'anonymous@<address>' without one")
+    request: str = Field(description="method and path, e.g. 'POST /api/walk/go-pos'")
+    body: str = Field(description="the request's JSON, cut to 160 characters ('' without a body)")
+    status: int = Field(description="the HTTP status it was answered with")
+    answer: str = Field(description="the answer's message, or the error's detail (cut to 160 characters)")
+    count: int = Field(description="how many times in a row the client sent it, each within 0.5 s of the last "
+                                   "(a stream of setpoints is one entry)")

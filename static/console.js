@@ -273,10 +273,25 @@ function onState(s) {
     if (s.scene !== prev.scene) log(`scene is now ${s.scene}`, "other");
   }
   updateRuns(s.runs || []);
+  updateCommands(s.commands || []);
   updateLock(s.operator_lock);
   plotSample(s);
 }
 $("latched-ack").addEventListener("click", () => { acknowledged = $("latched").dataset.key; $("latched").hidden = true; });
+
+// what the other clients asked (the console's journal of control requests, `commands` in the state): into the
+// history as they come; what was there before this page opened is not replayed
+let lastCommandSeq = null;
+function updateCommands(commands) {
+  const newest = commands.length ? commands[commands.length - 1].seq : 0;
+  if (lastCommandSeq === null || newest < lastCommandSeq) { lastCommandSeq = newest; return; }  // (re)started
+  for (const c of commands) {
+    if (c.seq <= lastCommandSeq || c.client === CLIENT_ID) continue;
+    const answer = c.status < 300 ? (c.answer || "ok") : `${c.status} ${c.answer}`;
+    log(`${c.client}: ${c.request}${c.body ? " " + c.body : ""} -> ${answer}`, c.status < 300 ? "other" : "bad");
+  }
+  lastCommandSeq = newest;
+}
 
 // ---- behaviours: a button and a generated form per registered behaviour; runs with progress and cancel ------
 let behaviors = [];

@@ -582,8 +582,8 @@ def test_a_touch_on_a_stick_drives_a_hand_to_its_reach_limit_and_the_readouts_sa
     playwright_api.expect(page.locator("#sel-point")).to_have_text("rhand")
     page.locator("#stick-left").scroll_into_view_if_needed()
     page.evaluate("""() => { window.__pointerTypes = [];
-        document.querySelector('#stick-left .pad').addEventListener('pointerdown',
-                                                                    (e) => window.__pointerTypes.push(e.pointerType)); }""")
+        document.querySelector('#stick-left .pad').addEventListener(
+            'pointerdown', (e) => window.__pointerTypes.push(e.pointerType)); }""")
     pad = page.locator("#stick-left .pad").bounding_box()
     cx, cy = pad["x"] + pad["width"] / 2, pad["y"] + pad["height"] / 2
     cdp = page.context.new_cdp_session(page)
@@ -692,6 +692,25 @@ def test_the_command_box_runs_walk_to_and_the_history_shows_the_result(page, hrp
     playwright_api.expect(page.locator("#history")).to_contain_text(f"run {run['id']} walk_to succeeded",
                                                                   timeout=40_000)
     shot(page, artifacts, "command_walk_to")
+
+
+def test_a_command_a_script_sends_appears_in_the_pages_history(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    motion_released(hrp2_console)
+    joint = "LARM_JOINT0"
+    angle = round(joint_deg(hrp2_console, joint) - 10.0, 1)
+    body = {"angles_deg": {joint: angle}, "time": 1.0}
+    answer = post_json(f"{hrp2_console.base}/api/sequence/joint-angles", body, client="script-7")
+    entry = hrp2_console.state()["commands"][-1]
+    assert entry["client"] == "script-7" and entry["request"] == "POST /api/sequence/joint-angles"
+    sent = json.dumps(body, separators=(",", ":"))
+    shown = f"script-7: POST /api/sequence/joint-angles {sent} -> {answer['message']}"
+    line = page.locator("#history li").filter(has_text=shown)
+    playwright_api.expect(line).to_have_count(1)
+    wait_until(lambda: abs(joint_deg(hrp2_console, joint) - angle) < 1.0, 10.0, f"{joint} moved by the script")
+    line.scroll_into_view_if_needed()
+    shot(page, artifacts, "history_other_client")
+    post_json(f"{hrp2_console.base}/api/sequence/joint-angles", {"angles_deg": {joint: angle + 10.0}, "time": 1.0})
 
 
 def test_the_cp_error_plot_data_grows(page, artifacts):
