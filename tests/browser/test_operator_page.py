@@ -800,6 +800,88 @@ def test_take_and_release_control_with_two_pages(page, hrp2_console, artifacts):
     released(hrp2_console)
 
 
+def put_json(url: str, body: dict, timeout: float = 5.0) -> dict:
+    req = urllib.request.Request(url, data=json.dumps(body).encode(), method="PUT",
+                                 headers={"Content-Type": "application/json"})
+    with urllib.request.urlopen(req, timeout=timeout) as r:
+        return json.loads(r.read())
+
+
+@pytest.mark.parametrize("label, layer", [("auto-balancer", "abc"), ("impedance rarm", "ic.rarm")])
+def test_start_and_stop_buttons_from_the_openapi_drive_the_layer(page, hrp2_console, artifacts, label, layer):
+    released(hrp2_console)
+
+    def status() -> dict:
+        d = hrp2_console.state()["layers"]
+        for part in layer.split("."):
+            d = d[part]
+        return d
+
+    was_active = status()["active"]
+    first, then = ("stop", "start") if was_active else ("start", "stop")
+    box = page.locator("#layer-buttons")
+    box.get_by_role("button", name=f"{first} {label}", exact=True).click()
+    wait_until(lambda: status()["active"] is not was_active, 5.0, f"{label} {first}ped in /api/state")
+    wait_until(lambda: status()["weight"] == (0.0 if was_active else 1.0), 10.0, f"{label}'s blend over")
+    playwright_api.expect(page.locator("#history")).to_contain_text(re.compile(rf"{first}", re.IGNORECASE))
+    shot(page, artifacts, f"layer_{label.replace(' ', '_')}_{first}")
+    box.get_by_role("button", name=f"{then} {label}", exact=True).click()
+    wait_until(lambda: status()["active"] is was_active, 5.0, f"{label} {then}ed again")
+    wait_until(lambda: status()["weight"] == (1.0 if was_active else 0.0), 10.0, f"{label}'s blend back")
+    assert not hrp2_console.state()["fallen"]
+
+
+def test_a_parameter_panel_generated_from_a_layer_applies_one_field(page, hrp2_console, artifacts):
+    before = get_json(f"{hrp2_console.base}/api/params")["es"]
+    panel = page.locator("#params details", has=page.locator("summary", has_text=re.compile(r"^es parameters$")))
+    panel.locator("summary").click()
+    field = panel.get_by_label("t1_s", exact=True)
+    playwright_api.expect(field).to_have_value(str(before["t1_s"]).removesuffix(".0"))
+    assert field.get_attribute("min") == "0" and field.get_attribute("max") == "10"  # from the dataclass
+    field.fill("0.75")
+    panel.get_by_role("button", name="Apply es").click()
+    wait_until(lambda: get_json(f"{hrp2_console.base}/api/params")["es"]["t1_s"] == 0.75, 5.0, "es.t1_s 0.75")
+    after = get_json(f"{hrp2_console.base}/api/params")["es"]
+    assert {k: v for k, v in after.items() if k != "t1_s"} == {k: v for k, v in before.items() if k != "t1_s"}
+    playwright_api.expect(page.locator("#history")).to_contain_text('es parameters set: {"t1_s":0.75}')
+    shot(page, artifacts, "params_panel")
+    field.fill(str(before["t1_s"]))
+    panel.get_by_role("button", name="Apply es").click()
+    wait_until(lambda: get_json(f"{hrp2_console.base}/api/params")["es"]["t1_s"] == before["t1_s"], 5.0, "back")
+    panel.locator("summary").click()
+
+
+def test_parameters_dump_to_a_json_file_and_load_from_one(page, hrp2_console, artifacts, tmp_path):
+    with page.expect_download() as got:
+        page.get_by_role("button", name="Dump parameters (JSON)").click()
+    download = got.value
+    assert download.suggested_filename == "hrp2_params.json"
+    dumped = json.loads(Path(download.path()).read_text())
+    assert dumped == get_json(f"{hrp2_console.base}/api/params")
+    changed = json.loads(json.dumps(dumped))
+    changed["es"]["t2_s"] = round(dumped["es"]["t2_s"] + 0.1, 3)
+    changed["st"]["cp_threshold_m"] = round(dumped["st"]["cp_threshold_m"] + 0.005, 4)
+    path = tmp_path / "tuned.json"
+    path.write_text(json.dumps(changed))
+    page.locator("#params-load").set_input_files(str(path))
+    wait_until(lambda: get_json(f"{hrp2_console.base}/api/params") == changed, 5.0, "the file's parameters loaded")
+    playwright_api.expect(page.locator("#history")).to_contain_text("parameters loaded from tuned.json")
+    shot(page, artifacts, "params_loaded")
+    put_json(f"{hrp2_console.base}/api/params", dumped)
+    assert get_json(f"{hrp2_console.base}/api/params") == dumped
+
+
+def test_reset_to_a_chosen_scene(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    page.locator("#scene").select_option("expo")
+    page.get_by_role("button", name="Reset simulation").click()
+    s = wait_until(lambda: (s := hrp2_console.state())["scene"] == "expo" and s, 60.0, "the expo scene")
+    assert s["time"] < 30.0 and not s["fallen"]  # a new simulation, from the start
+    playwright_api.expect(page.locator("#history")).to_contain_text("scene is now expo")
+    assert get_json(f"{hrp2_console.base}/api/sim/objects")["objects"]  # the expo scene's table, can, box
+    shot(page, artifacts, "reset_expo")
+
+
 def test_a_recognition_popup_appears_after_locate_can_and_confirm_and_correct_reach_the_robot(page, hrp2_console,
                                                                                             artifacts):
     post_json(f"{hrp2_console.base}/api/sim/reset", {"scene": "expo"}, timeout=60.0)
