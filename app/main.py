@@ -24,6 +24,7 @@ from app.routers import (
     layers,
     operator,
     params,
+    places,
     sequence,
     sim,
     state,
@@ -62,7 +63,7 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
 
     api.add_exception_handler(StarletteHTTPException, behaviors.unknown_behavior_handler)
     for module in (state, emergency, sequence, sim, chain, layers, params, walk, impedance, experiments, operator,
-                   behaviors):
+                   behaviors, places):
         api.include_router(module.router)
     api.include_router(operator.ws_router)
     api.include_router(telemetry.router)

@@ -374,6 +374,9 @@ class BehaviorParamDoc(BaseModel):
     max: float | None = None
     choices: list[Any] | None = None
     doc: str | None = None
+    place: Literal["x", "y", "z"] | None = Field(
+        default=None, description="this parameter is that coordinate of a point (world [m]) that a named place "
+                                  "(GET /api/places) may give")
 
 
 class BehaviorDoc(BaseModel):

@@ -383,7 +383,8 @@ function updateRuns(runs) {
 // ---- the command box: `name v1 v2 ...` (the behaviour's parameters in declaration order) or `name k=v` ------
 const BUILTINS = {
   help: () => log("commands: " + behaviors.map((b) => `${b.name} ${b.params.filter((p) => p.type !== "array")
-    .map((p) => p.name).join(" ")}`).join("; ") + "; estop; release; stop (motion); cancel [run]", "ok"),
+    .map((p) => p.name).join(" ")}`).join("; ") + "; estop; release; stop (motion); cancel [run]. A place's name " +
+    "(GET /api/places, e.g. table) stands for the x y z of a point where a behaviour takes one (look_at table)", "ok"),
   estop: () => estop("command"),
   release: () => post("/api/estop/release").then((d) => d && log(d.message, "ok")),
   stop: () => post("/api/motion/stop").then((d) => d && log(d.message, "ok")),
@@ -416,7 +417,16 @@ function convert(p, text) {
   return text;
 }
 
-function parseCommand(text) {
+// a named place (GET /api/places/{name}: the scene's known ones, the located objects) for the parameters that say
+// which coordinate of a point a place gives (`place`: x, y, z); the error lists the valid names
+async function resolvePlace(name) {
+  const r = await fetch(`/api/places/${encodeURIComponent(name)}`, {headers: headers(false)});
+  const d = await r.json().catch(() => ({}));
+  if (!r.ok) throw new Error(typeof d.detail === "string" ? d.detail : `place ${name}: ${r.status}`);
+  return d;
+}
+
+async function parseCommand(text) {
   const words = text.trim().split(/\s+/).filter(Boolean);
   if (!words.length) throw new Error("type a command (help lists them)");
   const [name, ...args] = words;
@@ -426,6 +436,7 @@ function parseCommand(text) {
   }
   const params = b.params.filter((p) => p.type !== "array");
   const body = {};
+  const places = [];  // what each place name stood for, said in the history
   let k = 0;
   for (const a of args) {
     const eq = a.indexOf("=");
@@ -437,10 +448,20 @@ function parseCommand(text) {
       continue;
     }
     if (k >= params.length) throw new Error(`${name} takes at most ${params.length} values (${params.map((p) => p.name).join(" ")})`);
+    if (params[k].place && !Number.isFinite(Number(a))) {  // a place's name gives the point's coordinates
+      const place = await resolvePlace(a);
+      const given = [];
+      for (; k < params.length && params[k].place; k += 1) {
+        body[params[k].name] = place.position_m["xyz".indexOf(params[k].place)];
+        given.push(`${params[k].name} ${fmt(body[params[k].name], 3)}`);
+      }
+      places.push(`${a}: ${place.name} at ${xyz(place.position_m)} m (${place.source}): ${given.join(", ")}`);
+      continue;
+    }
     body[params[k].name] = convert(params[k], a);
     k += 1;
   }
-  return {name, body};
+  return {name, body, places};
 }
 
 $("command-form").addEventListener("submit", async (e) => {
@@ -450,8 +471,9 @@ $("command-form").addEventListener("submit", async (e) => {
   try {
     if (BUILTINS[word]) { log(`> ${text}`, "cmd"); await BUILTINS[word](args); }
     else {
-      const {name, body} = parseCommand(text);
-      await startBehavior(name, body, text);
+      const {name, body, places} = await parseCommand(text);
+      if (places.length) { log(`> ${text}`, "cmd"); for (const p of places) log(p, "ok"); }
+      await startBehavior(name, body, places.length ? `${name} ${JSON.stringify(body)}` : text);
     }
     $("command").value = "";
   } catch (err) {

@@ -882,11 +882,44 @@ def test_reset_to_a_chosen_scene(page, hrp2_console, artifacts):
     shot(page, artifacts, "reset_expo")
 
 
+def in_scene(c: Console, scene: str) -> None:
+    """The simulation in `scene` (reset into it when it is in another)."""
+    if c.state()["scene"] != scene:
+        post_json(f"{c.base}/api/sim/reset", {"scene": scene}, timeout=60.0)
+    wait_until(lambda: c.state()["scene"] == scene, 30.0, f"the {scene} scene")
+
+
+def run_command(page, text: str) -> None:
+    box = page.get_by_role("textbox", name="command")
+    box.fill(text)
+    box.press("Enter")
+
+
+def last_run(c: Console, behavior: str) -> dict:
+    return [r for r in c.state()["runs"] if r["behavior"] == behavior][-1]
+
+
+def test_the_command_box_looks_at_a_named_place(page, hrp2_console, artifacts):
+    released(hrp2_console)
+    in_scene(hrp2_console, "expo")
+    history = page.locator("#history")
+    run_command(page, "look_at sofa")
+    playwright_api.expect(history).to_contain_text("unknown place 'sofa'; valid: table, trash_box")
+    run_command(page, "look_at table")
+    playwright_api.expect(history).to_contain_text("table: table at (2.150, 0.000, 0.750) m (known)")
+    playwright_api.expect(history).to_contain_text("look_at started")
+    run = last_run(hrp2_console, "look_at")
+    assert (run["params"]["x_m"], run["params"]["y_m"], run["params"]["z_m"]) == pytest.approx((2.15, 0.0, 0.75))
+    playwright_api.expect(history).to_contain_text(f"run {run['id']} look_at succeeded", timeout=40_000)
+    assert last_run(hrp2_console, "look_at")["result"]["error_deg"] < 1.0  # the gaze on the table's point
+    page.locator("#history li").last.scroll_into_view_if_needed()
+    shot(page, artifacts, "look_at_table")
+
+
 def test_a_recognition_popup_appears_after_locate_can_and_confirm_and_correct_reach_the_robot(page, hrp2_console,
                                                                                             artifacts):
-    post_json(f"{hrp2_console.base}/api/sim/reset", {"scene": "expo"}, timeout=60.0)
+    in_scene(hrp2_console, "expo")
     try:
-        wait_until(lambda: hrp2_console.state()["scene"] == "expo", 30.0, "the expo scene")
         run = post_json(f"{hrp2_console.base}/api/behaviors/locate_can", {})
         done = wait_until(lambda: next((r for r in hrp2_console.state()["runs"] if r["id"] == run["id"]
                                         and r["state"] != "running"), None), 90.0, "locate_can to end")
@@ -910,6 +943,14 @@ def test_a_recognition_popup_appears_after_locate_can_and_confirm_and_correct_re
         assert rec["estimated_position_m"][1] != pytest.approx(0.05)
         playwright_api.expect(pop).to_contain_text("corrected")
         shot(page, artifacts, "recognition_corrected")
+        # the located can is a place now: look at it (where the operator said it is)
+        before = max((r["id"] for r in hrp2_console.state()["runs"]), default=0)
+        run_command(page, "look_at can")
+        playwright_api.expect(page.locator("#history")).to_contain_text("can: can at (")
+        look = wait_until(lambda: (r := last_run(hrp2_console, "look_at"))["id"] > before
+                          and r["state"] != "running" and r, 30.0, "look_at can to end")
+        assert [look["params"][k] for k in ("x_m", "y_m", "z_m")] == pytest.approx(rec["position_m"])
+        assert look["state"] == "succeeded", look
     finally:
         post_json(f"{hrp2_console.base}/api/sim/reset", {"scene": "default"}, timeout=60.0)
         wait_until(lambda: hrp2_console.state()["scene"] == "default", 30.0, "back to the default scene")
