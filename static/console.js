@@ -142,8 +142,8 @@ $("walk-release").addEventListener("click", () => post("/api/walk/stop").then((d
 $("st-stop").addEventListener("click", () => post("/api/stabilizer/stop").then((d) => d && log(d.message, "ok")));
 $("st-start").addEventListener("click", () => post("/api/stabilizer/start").then((d) => d && log(d.message, "ok")));
 
-// ---- telemetry: WS /ws/telemetry when the console has it, else GET /api/state at 20 Hz; staleness watch -------
-const RATE_HZ = 20;
+// ---- telemetry: WS /ws/telemetry when the console has it, else GET /api/state at 25 Hz; staleness watch -------
+const RATE_HZ = 25;  // asked of the telemetry: a little over the 20 Hz the plots must be updated at
 const STALE_MS = 1000;
 let lastState = null;
 let lastFreshAt = performance.now();
@@ -917,11 +917,13 @@ class TimePlot {
     this.canvas = canvas; this.legend = legend; this.series = series; this.unit = unit; this.digits = digits;
     this.t = []; this.v = series.map(() => []);
     this.draws = 0;  // redraws (the browser test reads it)
+    this.samples = 0;  // samples received
   }
   push(t, values) {
     if (this.t.length && t < this.t[this.t.length - 1]) { this.t = []; this.v = this.series.map(() => []); }  // a reset
     if (this.t.length && t === this.t[this.t.length - 1]) return;
     this.t.push(t);
+    this.samples += 1;
     values.forEach((x, i) => this.v[i].push(x));
     while (this.t.length && this.t[0] < t - PLOT_WINDOW_S) { this.t.shift(); this.v.forEach((a) => a.shift()); }
     this.dirty = true;
