@@ -174,6 +174,17 @@ def artifacts(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(autouse=True)
+def saves_a_screenshot(request, artifacts):
+    """Every browser test that passes has saved at least one screenshot in `artifacts`."""
+    started = time.time()
+    yield
+    report = getattr(request.node, "rep_call", None)
+    if report is not None and report.passed:
+        saved = [p.name for p in artifacts.glob("*.png") if p.stat().st_mtime >= started]
+        assert saved, f"{request.node.name} saved no screenshot in {artifacts}"
+
+
 def shot(pg, artifacts: Path, name: str) -> Path:
     path = artifacts / f"{name}.png"
     pg.screenshot(path=str(path))
