@@ -380,32 +380,38 @@ def motion_released(c: Console) -> None:
 
 
 def test_stop_motion_holds_a_joint_motion_and_release_motion_lets_it_finish(page, hrp2_console, artifacts):
+    """A 30 deg joint motion over 8 s (long enough that a click delayed by a busy software-GL browser still
+    lands in it); Stop motion: Eq. 15 reverts the plan T1 back and holds it there, short of the target;
+    Release motion blends back to the live plan, which reaches the target."""
     released(hrp2_console)
     motion_released(hrp2_console)
     joint = "RARM_JOINT0"
     start = joint_deg(hrp2_console, joint)
-    post_json(f"{hrp2_console.base}/api/sequence/joint-angles", {"angles_deg": {joint: start - 30.0}, "time": 4.0})
-    wait_until(lambda: joint_deg(hrp2_console, joint) < start - 5.0, 10.0, f"{joint} on its way")
+    target = start - 30.0
+    post_json(f"{hrp2_console.base}/api/sequence/joint-angles", {"angles_deg": {joint: target}, "time": 8.0})
+    wait_until(lambda: joint_deg(hrp2_console, joint) < start - 3.0, 10.0, f"{joint} on its way")
     page.get_by_role("button", name="Stop motion", exact=True).click()
     em = wait_until(lambda: (e := hrp2_console.state()["emergency"])["motion_stop"] and e, 5.0, "motion_stop")
+    at_stop = joint_deg(hrp2_console, joint)
+    assert at_stop > target + 3.0, f"the stop came after the motion had ended ({at_stop:.1f} deg)"
     assert em["motion_stop_reason"] == "operator" and not em["hard_stop"]
     playwright_api.expect(page.locator("#s-motion")).to_have_text("STOPPED (operator)")
     playwright_api.expect(page.locator("#stop-motion")).to_have_class(re.compile(r"\bon\b"))
     playwright_api.expect(page.locator("#latched")).to_be_hidden()  # the operator's own stop is not an alarm
-    # Eq. 15: the plan reverts T1 back and holds there: the joint ends nearer its start than where it stopped
     es = hrp2_console.state()["layers"]["es"]
     wait_until(lambda: hrp2_console.state()["time"] > em["motion_stop_time"] + es["t2_s"] + 0.2, 5.0,
                "the revert over (T2)")
     held = joint_deg(hrp2_console, joint)
     time.sleep(1.0)
     assert joint_deg(hrp2_console, joint) == pytest.approx(held, abs=0.5), "the joint did not hold"
-    assert held > start - 25.0, f"{joint} at {held:.1f} deg: the motion ran on to its target under the stop"
+    # reverted (back toward the start, 0.5 deg of tracking allowed), not gone on to the target
+    assert held >= at_stop - 0.5 and held > target + 3.0, (start, at_stop, held)
     shot(page, artifacts, "motion_stopped")
     page.get_by_role("button", name="Release motion", exact=True).click()
     wait_until(lambda: not hrp2_console.state()["emergency"]["motion_stop"], 5.0, "motion_stop released")
     playwright_api.expect(page.locator("#s-motion")).to_have_text("off")
     # blended back to the live plan: the joint reaches the target the sequence was going to
-    wait_until(lambda: abs(joint_deg(hrp2_console, joint) - (start - 30.0)) < 1.0, 15.0, f"{joint} at its target")
+    wait_until(lambda: abs(joint_deg(hrp2_console, joint) - target) < 1.0, 20.0, f"{joint} at its target")
     post_json(f"{hrp2_console.base}/api/sequence/joint-angles", {"angles_deg": {joint: start}, "time": 1.5})
     wait_until(lambda: abs(joint_deg(hrp2_console, joint) - start) < 1.0, 10.0, f"{joint} back")
 
@@ -579,6 +585,7 @@ def test_held_keys_drive_the_selected_point_and_letting_go_stops_it(page, hrp2_c
         page.keyboard.up("KeyW")
     dt = zeroed_within(hrp2_console, "rhand", t_release)
     assert dt <= ZERO_WITHIN_S, f"the hand velocity went to zero {dt * 1e3:.0f} ms after the key was let go"
+    time.sleep(0.2)  # the hands' 0.5 m/s^2 limit brings 0.05 m/s to rest in 0.1 s (2.5 mm)
     x1 = target(hrp2_console, "rhand")[0]
     time.sleep(0.5)
     assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=1e-3), "the hand moved on after the keys"
@@ -626,11 +633,12 @@ def test_a_touch_on_a_stick_drives_a_hand_to_its_reach_limit_and_the_readouts_sa
         cdp.send("Emulation.setTouchEmulationEnabled", {"enabled": False})
         cdp.detach()
     zeroed_within(hrp2_console, "rhand", t_release)  # (how soon: the mouse test's bound, same handler)
+    time.sleep(0.3)  # the hands' 0.5 m/s^2 limit brings 0.1 m/s to rest in 0.2 s
     x1 = target(hrp2_console, "rhand")[0]
     time.sleep(0.5)
-    # at the reach limit the target is the achieved pose, which settles by up to 1.4 mm (measured); going on at
+    # at the reach limit the target is the achieved pose, which settled by up to 1.4 mm (measured); going on at
     # 0.1 m/s would be 50 mm
-    assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=5e-3), "the hand moved on after the touch"
+    assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=3e-3), "the hand moved on after the touch"
     playwright_api.expect(page.locator("#limited")).to_have_text("no")
     latency = re.fullmatch(r"(\d+\.\d) ms \(median of (\d+)\)", page.locator("#latency").inner_text())
     assert latency and 0.0 < float(latency.group(1)) < 1000.0 and int(latency.group(2)) >= 1, latency
