@@ -5,6 +5,8 @@ PYTHON ?= python3.11
 VENV ?= .venv
 PY := $(VENV)/bin/python
 ARGS ?=
+# the browser tests' screenshots go here (git-ignored: out/); a CI run keeps the folder as its artifacts
+HRP2_ARTIFACTS ?= out/artifacts
 
 .PHONY: console test setup browser bench
 
@@ -26,7 +28,7 @@ console: setup
 	$(VENV)/bin/hrp2-console $(ARGS)
 
 test: setup browser
-	MUJOCO_GL=egl $(PY) -m pytest $(ARGS); rc=$$?; \
+	MUJOCO_GL=egl HRP2_ARTIFACTS=$(abspath $(HRP2_ARTIFACTS)) $(PY) -m pytest $(ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
 
 bench: setup

@@ -219,6 +219,13 @@ class _StopRequested:
         self.event.set()
 
 
+def test_hooks_from_env() -> bool:
+    """HRP2_TEST_HOOKS=1 (the browser tests set it) adds the fault-injection route POST /api/sim/fault."""
+    import os
+
+    return os.environ.get("HRP2_TEST_HOOKS") == "1"
+
+
 def run(argv: Sequence[str]) -> int:
     args = run_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
@@ -263,7 +270,8 @@ def run(argv: Sequence[str]) -> int:
             viewer = Viewer(service, host=viewer_host, port=args.viewer_port)
             viewer_port = viewer.port
         settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
-                            viewer_port=viewer_port, token=token, sessions_dir=args.sessions_dir)
+                            viewer_port=viewer_port, token=token, sessions_dir=args.sessions_dir,
+                            test_hooks=test_hooks_from_env())
         app = create_app(settings, service=service)
         try:
             server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)

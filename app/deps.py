@@ -6,6 +6,7 @@ from typing import Annotated
 
 from fastapi import Depends, Request
 
+from app.command_journal import CommandJournal
 from app.operator_lock import OperatorLock
 from app.service import OperatorService, Unavailable
 from app.settings import Settings
@@ -29,6 +30,12 @@ def get_lock(request: Request) -> OperatorLock:
     return lock
 
 
+def get_journal(request: Request) -> CommandJournal | None:
+    """The console's journal of control requests (None when the app was built without one)."""
+    return getattr(request.app.state, "journal", None)
+
+
 ServiceDep = Annotated[OperatorService, Depends(get_service)]
 SettingsDep = Annotated[Settings, Depends(get_settings)]
 LockDep = Annotated[OperatorLock, Depends(get_lock)]
+JournalDep = Annotated[CommandJournal | None, Depends(get_journal)]

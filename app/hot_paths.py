@@ -9,7 +9,7 @@ import json
 import re
 
 from app.service import OperatorService, ServiceError
-from app.state import with_operator_lock
+from app.state import with_console_state
 
 _JSON = [(b"content-type", b"application/json")]
 
@@ -61,7 +61,8 @@ class HotPaths:
             key = (scope["method"], scope["path"])
             if service is not None and key == ("GET", "/api/state"):
                 try:
-                    body = with_operator_lock(service.state_json(), getattr(self.api.state, "lock", None))
+                    body = with_console_state(service.state_json(), getattr(self.api.state, "lock", None),
+                                              getattr(self.api.state, "journal", None))
                 except ServiceError:
                     pass  # FastAPI's route answers with the error
                 else:

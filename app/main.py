@@ -10,6 +10,7 @@ from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
+from app.command_journal import CommandJournal, JournalingLayer
 from app.errors import COMMON_ERRORS, CONTROL_ERRORS, ErrorBody, install_error_handlers
 from app.hot_paths import HotPaths
 from app.operator_lock import OperatorLock
@@ -23,6 +24,7 @@ from app.routers import (
     layers,
     operator,
     params,
+    places,
     sequence,
     sessions,
     sim,
@@ -56,18 +58,21 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
     api.state.settings = settings
     api.state.service = service
     lock = api.state.lock = OperatorLock(settings.lock_lease_s, settings.lock_grace_s)
+    journal = api.state.journal = CommandJournal()
     install_error_handlers(api)
     from starlette.exceptions import HTTPException as StarletteHTTPException
 
     api.add_exception_handler(StarletteHTTPException, behaviors.unknown_behavior_handler)
     for module in (state, emergency, sequence, sim, chain, layers, params, walk, impedance, experiments, operator,
-                   behaviors, sessions):
+                   behaviors, sessions, places):
         api.include_router(module.router)
     api.include_router(operator.ws_router)
     api.include_router(telemetry.router)
     api.include_router(camera.router)
     api.include_router(emergency.motion_router)
     api.include_router(emergency.params_router)
+    if settings.test_hooks:
+        api.include_router(sim.hooks_router)
     _publish_error_schema(api)
 
     @api.get("/", include_in_schema=False)
@@ -83,8 +88,9 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
 
     _serve_docs(api)
     api.mount("/static", StaticFiles(directory=STATIC_DIR), name="static")
-    guarded = ConsoleGuard(HotPaths(api), allowed_hosts_for(settings.host, settings.extra_hosts),
-                           token=settings.token, lock=lock)
+    # the front door, then the journal of what passed it (app.command_journal), then the hot paths
+    guarded = ConsoleGuard(JournalingLayer(HotPaths(api), journal),
+                           allowed_hosts_for(settings.host, settings.extra_hosts), token=settings.token, lock=lock)
     guarded.fastapi = api
     return guarded
 

@@ -97,6 +97,13 @@ class PushRequest(StrictBody):
                             ge=MIN_MOTION_TIME_S, le=MAX_PUSH_DURATION_S)
 
 
+class FaultRequest(StrictBody):
+    kind: Literal["layer", "nan"] = Field(description="'layer': the layer's tick raises from now on (until a "
+                                                      "reset); 'nan': the next physics step starts from a NaN "
+                                                      "velocity")
+    layer: str = Field(default="st", max_length=16, description="the layer that raises (kind 'layer')")
+
+
 class GoPosRequest(StrictBody):
     x: float = Field(description=f"forward [m], |x| <= {MAX_GO_POS_M:g}, relative to the feet's mid-coords",
                      ge=-MAX_GO_POS_M, le=MAX_GO_POS_M, examples=[0.3])
@@ -367,6 +374,9 @@ class BehaviorParamDoc(BaseModel):
     max: float | None = None
     choices: list[Any] | None = None
     doc: str | None = None
+    place: Literal["x", "y", "z"] | None = Field(
+        default=None, description="this parameter is that coordinate of a point (world [m]) that a named place "
+                                  "(GET /api/places) may give")
 
 
 class BehaviorDoc(BaseModel):
@@ -393,3 +403,18 @@ class OperatorLockState(BaseModel):
                                                    "WebSocket open, or when free")
     connected: bool = Field(description="the holder has a WebSocket open (/ws/operator or /ws/telemetry with "
                                         "?client=)")
+
+
+class CommandRecord(BaseModel):
+    """A control request as the console's journal keeps it (app.command_journal)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    seq: int = Field(description="numbered in arrival order, from 1 (a restarted console starts again)")
+    client: str = Field(description="the sender's X-Client-Id; 'anonymous@<address>' without one")
+    request: str = Field(description="method and path, e.g. 'POST /api/walk/go-pos'")
+    body: str = Field(description="the request's JSON, cut to 160 characters ('' without a body)")
+    status: int = Field(description="the HTTP status it was answered with")
+    answer: str = Field(description="the answer's message, or the error's detail (cut to 160 characters)")
+    count: int = Field(description="how many times in a row the client sent it, each within 0.5 s of the last "
+                                   "(a stream of setpoints is one entry)")

@@ -18,3 +18,4 @@ class Settings:
     lock_lease_s: float = 5.0  # [s] the operator lock of a holder without a WebSocket, after its last request
     lock_grace_s: float = 2.0  # [s] the operator lock after its holder's last WebSocket closed
     sessions_dir: str = "out/sessions"  # where POST /api/sessions/start records and GET /api/sessions lists
+    test_hooks: bool = False  # POST /api/sim/fault (a layer that raises, a NaN in the physics): tests only

@@ -13,7 +13,7 @@ from typing import Any, Literal, Union
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from app.schemas import OperatorLockState
+from app.schemas import CommandRecord, OperatorLockState
 from app.service.host import Published
 from controller.core.layer import Status, plain
 from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
@@ -139,11 +139,15 @@ def state_json(pub: Published) -> tuple[dict[str, Any], bytes]:
     return doc, body.encode()
 
 
-def with_operator_lock(body: bytes, lock) -> bytes:
-    """The encoded state document with the console's `lock` state (app.operator_lock) added as operator_lock."""
-    if lock is None:
-        return body
-    return b"".join((body[:-1], b',"operator_lock":', json.dumps(lock.state().to_dict()).encode(), b"}"))
+def with_console_state(body: bytes, lock, journal=None) -> bytes:
+    """The encoded state document with what the console adds beside the robot's snapshot: its `lock` state
+    (app.operator_lock) as operator_lock, its `journal` (app.command_journal) as commands."""
+    parts = [body[:-1]]
+    if lock is not None:
+        parts += [b',"operator_lock":', json.dumps(lock.state().to_dict()).encode()]
+    if journal is not None:
+        parts += [b',"commands":', journal.encoded()]
+    return body if len(parts) == 1 else b"".join((*parts, b"}"))
 
 
 # ---- the response schema ------------------------------------------------------------------------------------
@@ -282,6 +286,9 @@ def state_model() -> type[BaseModel]:
             description="per operational point, the operator's newest setpoint the robot applied")),
         operator_lock=(OperatorLockState | None, Field(
             default=None, description="who holds the operator lock (the console's, beside the robot's snapshot)")),
+        commands=(list[CommandRecord] | None, Field(
+            default=None, description="the last control requests of every client (POST, PUT, DELETE under /api/), "
+                                      "oldest first: who sent what and how it was answered (the console's)")),
     )
 
 

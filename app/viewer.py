@@ -37,6 +37,8 @@ PLOT_RANGE_MM = 100.0  # the plot's fixed y range +-[mm]: the default 40 mm thre
 OP_TARGET_POINTS = ("rhand", "lhand")  # operational points whose target position is drawn (x, y, z in F)
 MAX_FOOTSTEPS = 16  # planned footsteps drawn (fixed buffer: the handles are only updated, never rebuilt)
 _FLOOR_LIFT_M = 0.002  # floor markers drawn this far above the sole plane so they are not hidden
+FOLLOWED_BODY = "BODY"  # the body the 3D view's camera follows
+FOLLOW_STEP_M = 0.002  # [m] the camera is moved once the body has gone this far (not at every sway)
 _SOLES = {"rleg": HRP2_RIGHT_SOLE, "lleg": HRP2_LEFT_SOLE}
 
 
@@ -180,6 +182,47 @@ class CpErrorHistory:
                 band)
 
 
+class CameraFollower:
+    """Keeps each client's orbit camera on the robot: on first sight (or when following starts) the camera is
+    moved so that it looks at the followed body, then it is moved by the body's horizontal travel, so the
+    operator's own orbit, zoom and height stay as they set them. `cameras` are viser CameraHandles (or anything
+    with `position` and `look_at` in the world [m]; a camera the client has not reported yet is skipped)."""
+
+    def __init__(self, step_m: float = FOLLOW_STEP_M) -> None:
+        self.step_m = float(step_m)
+        self._anchor_xy: dict[int, np.ndarray] = {}  # client id -> body x, y [m] the camera was last put on
+
+    def restart(self) -> None:
+        """Following (re)starts: each camera is put on the body again at the next update."""
+        self._anchor_xy.clear()
+
+    def update(self, cameras: dict, body_xy_m, atomic=None) -> int:
+        """Move the cameras for the body at `body_xy_m` (world x, y [m]); how many moved. `atomic(client id)`, when
+        given, is a context in which one camera's position and look-at change together."""
+        body = np.asarray(body_xy_m, dtype=float)[:2]
+        for gone in set(self._anchor_xy) - set(cameras):
+            del self._anchor_xy[gone]
+        moved = 0
+        for cid, cam in cameras.items():
+            try:
+                look_at = np.asarray(cam.look_at, dtype=float)
+                position = np.asarray(cam.position, dtype=float)
+            except AssertionError:  # viser: the client has not reported its camera yet
+                continue
+            anchor = self._anchor_xy.get(cid)
+            shift = body - (look_at[:2] if anchor is None else anchor)
+            if anchor is not None and math.hypot(*shift) < self.step_m:
+                continue
+            if atomic is None:
+                cam.position = position + (shift[0], shift[1], 0.0)  # viser moves the look-at point with it
+            else:
+                with atomic(cid):
+                    cam.position = position + (shift[0], shift[1], 0.0)
+            self._anchor_xy[cid] = body.copy()
+            moved += 1
+        return moved
+
+
 def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
     mat = model.geom_matid[g]
     if mat >= 0 and np.allclose(model.geom_rgba[g], [0.5, 0.5, 0.5, 1.0]):
@@ -316,6 +359,7 @@ class Viewer:
         self._cp_history = CpErrorHistory()
         self._recognition_markers: dict[str, tuple] = {}  # object -> (sphere, label, position shown)
         self._plot_updates = 0
+        self._follower = CameraFollower()
         self._build_markers()
         self._build_scene()
         self._build_gui()
@@ -336,7 +380,9 @@ class Viewer:
         model = mujoco.MjModel.from_xml_path(str(scene_path(self.service.info.scene)))
         self._model = model
         self._scene = self.service.info.scene
-        self._model_key = tuple(model.body(b).name for b in range(model.nbody))
+        names = tuple(model.body(b).name for b in range(model.nbody))
+        self._model_key = names
+        self._followed = names.index(FOLLOWED_BODY) if FOLLOWED_BODY in names else None
         self._frames, self._scene_nodes = add_model(self.server.scene, model)
         try:
             self._apply_poses(self.service.observation().truth)
@@ -488,6 +534,12 @@ class Viewer:
         gui.add_markdown("**HRP-2 No.10**: operator e-stop")
         self._estop = gui.add_button("E-STOP", color="red", icon=None, hint="Freeze the joint command now")
         self._release = gui.add_button("Release", color="gray", hint="Release the hard e-stop")
+        self._follow = gui.add_checkbox("follow the robot", True, hint="keep the view on the robot (BODY) as it "
+                                        "walks; your orbit and zoom are kept")
+
+        @self._follow.on_update
+        def _(_event) -> None:
+            self._follower.restart()
         self._time = gui.add_text("time [s]", "0.000", disabled=True)
         self._hard_stop = gui.add_checkbox("hard stop", False, disabled=True)
         self._fallen = gui.add_checkbox("fallen", False, disabled=True)
@@ -577,6 +629,14 @@ class Viewer:
         if self._fault.value != fault:
             self._fault.value = fault
 
+    def follow(self, truth) -> int:
+        """The clients' cameras kept on the followed body (when the toggle is on); how many moved."""
+        if not self._follow.value or self._followed is None:
+            return 0
+        clients = self.server.get_clients()
+        return self._follower.update({cid: c.camera for cid, c in clients.items()},
+                                     truth.body_pos_world[self._followed][:2], atomic=lambda cid: clients[cid].atomic())
+
     def _cp_legend(self) -> str:
         """The plot's current values, as a line under it (uPlot's own legend shows them under the cursor)."""
         row = self._cp_history.latest()
@@ -608,6 +668,7 @@ class Viewer:
                 snap = self.service.observation()
                 if snap.tick != last_tick:
                     self.apply_snapshot(snap)
+                    self.follow(snap.truth)
                     last_tick = snap.tick
                 n += 1
                 if n % max(1, int(self.rate_hz / 5)) == 0:

@@ -264,7 +264,7 @@ def describe(cls: type[Behavior]) -> dict[str, Any]:
     params = []
     for f in dataclasses.fields(cls.Params):
         entry = {"name": f.name, "type": types.get(type(f.default), "string"), "default": f.default}
-        for key in ("unit", "min", "max", "choices", "doc"):
+        for key in ("unit", "min", "max", "choices", "doc", "place"):
             if f.metadata.get(key) is not None:
                 entry[key] = list(f.metadata[key]) if key == "choices" else f.metadata[key]
         params.append(entry)

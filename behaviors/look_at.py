@@ -19,9 +19,13 @@ SETTLE_S = 0.2  # [s] after the plan, for the IK to follow before the check
 
 @dataclass(frozen=True)
 class LookAtParams(BehaviorParams):
-    x_m: float = field(default=1.0, metadata={"unit": "m", "min": -20.0, "max": 20.0, "doc": "target, world x"})
-    y_m: float = field(default=0.0, metadata={"unit": "m", "min": -20.0, "max": 20.0, "doc": "target, world y"})
-    z_m: float = field(default=1.0, metadata={"unit": "m", "min": -5.0, "max": 10.0, "doc": "target, world z"})
+    # "place": a named place (behaviors.places) may give these three, e.g. `look_at table` in the command box
+    x_m: float = field(default=1.0, metadata={"unit": "m", "min": -20.0, "max": 20.0, "doc": "target, world x",
+                                              "place": "x"})
+    y_m: float = field(default=0.0, metadata={"unit": "m", "min": -20.0, "max": 20.0, "doc": "target, world y",
+                                              "place": "y"})
+    z_m: float = field(default=1.0, metadata={"unit": "m", "min": -5.0, "max": 10.0, "doc": "target, world z",
+                                              "place": "z"})
     rate_deg_s: float = field(default=30.0, metadata={"unit": "deg/s", "min": 1.0, "max": 90.0,
                                                       "doc": "peak gaze rate"})
     tolerance_deg: float = field(default=1.0, metadata={"unit": "deg", "min": 0.05, "max": 10.0,

@@ -125,7 +125,10 @@ function onKeyDown(e) {
   }
   if (KEY_AXES[e.code]) { heldKeys.add(e.code); e.preventDefault(); }
 }
-function onKeyUp(e) { heldKeys.delete(e.code); }
+function onKeyUp(e) {
+  // a teleoperation key let go: the zero goes out at once, not at the next 50 Hz send (as a stick's)
+  if (heldKeys.delete(e.code)) streamTick();
+}
 window.addEventListener("keydown", onKeyDown, true);
 window.addEventListener("keyup", onKeyUp, true);
 window.addEventListener("blur", () => heldKeys.clear());
@@ -139,8 +142,8 @@ $("walk-release").addEventListener("click", () => post("/api/walk/stop").then((d
 $("st-stop").addEventListener("click", () => post("/api/stabilizer/stop").then((d) => d && log(d.message, "ok")));
 $("st-start").addEventListener("click", () => post("/api/stabilizer/start").then((d) => d && log(d.message, "ok")));
 
-// ---- telemetry: WS /ws/telemetry when the console has it, else GET /api/state at 20 Hz; staleness watch -------
-const RATE_HZ = 20;
+// ---- telemetry: WS /ws/telemetry when the console has it, else GET /api/state at 25 Hz; staleness watch -------
+const RATE_HZ = 25;  // asked of the telemetry: a little over the 20 Hz the plots must be updated at
 const STALE_MS = 1000;
 let lastState = null;
 let lastFreshAt = performance.now();
@@ -270,10 +273,25 @@ function onState(s) {
     if (s.scene !== prev.scene) log(`scene is now ${s.scene}`, "other");
   }
   updateRuns(s.runs || []);
+  updateCommands(s.commands || []);
   updateLock(s.operator_lock);
   plotSample(s);
 }
 $("latched-ack").addEventListener("click", () => { acknowledged = $("latched").dataset.key; $("latched").hidden = true; });
+
+// what the other clients asked (the console's journal of control requests, `commands` in the state): into the
+// history as they come; what was there before this page opened is not replayed
+let lastCommandSeq = null;
+function updateCommands(commands) {
+  const newest = commands.length ? commands[commands.length - 1].seq : 0;
+  if (lastCommandSeq === null || newest < lastCommandSeq) { lastCommandSeq = newest; return; }  // (re)started
+  for (const c of commands) {
+    if (c.seq <= lastCommandSeq || c.client === CLIENT_ID) continue;
+    const answer = c.status < 300 ? (c.answer || "ok") : `${c.status} ${c.answer}`;
+    log(`${c.client}: ${c.request}${c.body ? " " + c.body : ""} -> ${answer}`, c.status < 300 ? "other" : "bad");
+  }
+  lastCommandSeq = newest;
+}
 
 // ---- behaviours: a button and a generated form per registered behaviour; runs with progress and cancel ------
 let behaviors = [];
@@ -365,7 +383,8 @@ function updateRuns(runs) {
 // ---- the command box: `name v1 v2 ...` (the behaviour's parameters in declaration order) or `name k=v` ------
 const BUILTINS = {
   help: () => log("commands: " + behaviors.map((b) => `${b.name} ${b.params.filter((p) => p.type !== "array")
-    .map((p) => p.name).join(" ")}`).join("; ") + "; estop; release; stop (motion); cancel [run]", "ok"),
+    .map((p) => p.name).join(" ")}`).join("; ") + "; estop; release; stop (motion); cancel [run]. A place's name " +
+    "(GET /api/places, e.g. table) stands for the x y z of a point where a behaviour takes one (look_at table)", "ok"),
   estop: () => estop("command"),
   release: () => post("/api/estop/release").then((d) => d && log(d.message, "ok")),
   stop: () => post("/api/motion/stop").then((d) => d && log(d.message, "ok")),
@@ -398,7 +417,16 @@ function convert(p, text) {
   return text;
 }
 
-function parseCommand(text) {
+// a named place (GET /api/places/{name}: the scene's known ones, the located objects) for the parameters that say
+// which coordinate of a point a place gives (`place`: x, y, z); the error lists the valid names
+async function resolvePlace(name) {
+  const r = await fetch(`/api/places/${encodeURIComponent(name)}`, {headers: headers(false)});
+  const d = await r.json().catch(() => ({}));
+  if (!r.ok) throw new Error(typeof d.detail === "string" ? d.detail : `place ${name}: ${r.status}`);
+  return d;
+}
+
+async function parseCommand(text) {
   const words = text.trim().split(/\s+/).filter(Boolean);
   if (!words.length) throw new Error("type a command (help lists them)");
   const [name, ...args] = words;
@@ -408,6 +436,7 @@ function parseCommand(text) {
   }
   const params = b.params.filter((p) => p.type !== "array");
   const body = {};
+  const places = [];  // what each place name stood for, said in the history
   let k = 0;
   for (const a of args) {
     const eq = a.indexOf("=");
@@ -419,10 +448,20 @@ function parseCommand(text) {
       continue;
     }
     if (k >= params.length) throw new Error(`${name} takes at most ${params.length} values (${params.map((p) => p.name).join(" ")})`);
+    if (params[k].place && !Number.isFinite(Number(a))) {  // a place's name gives the point's coordinates
+      const place = await resolvePlace(a);
+      const given = [];
+      for (; k < params.length && params[k].place; k += 1) {
+        body[params[k].name] = place.position_m["xyz".indexOf(params[k].place)];
+        given.push(`${params[k].name} ${fmt(body[params[k].name], 3)}`);
+      }
+      places.push(`${a}: ${place.name} at ${xyz(place.position_m)} m (${place.source}): ${given.join(", ")}`);
+      continue;
+    }
     body[params[k].name] = convert(params[k], a);
     k += 1;
   }
-  return {name, body};
+  return {name, body, places};
 }
 
 $("command-form").addEventListener("submit", async (e) => {
@@ -432,8 +471,9 @@ $("command-form").addEventListener("submit", async (e) => {
   try {
     if (BUILTINS[word]) { log(`> ${text}`, "cmd"); await BUILTINS[word](args); }
     else {
-      const {name, body} = parseCommand(text);
-      await startBehavior(name, body, text);
+      const {name, body, places} = await parseCommand(text);
+      if (places.length) { log(`> ${text}`, "cmd"); for (const p of places) log(p, "ok"); }
+      await startBehavior(name, body, places.length ? `${name} ${JSON.stringify(body)}` : text);
     }
     $("command").value = "";
   } catch (err) {
@@ -877,11 +917,13 @@ class TimePlot {
     this.canvas = canvas; this.legend = legend; this.series = series; this.unit = unit; this.digits = digits;
     this.t = []; this.v = series.map(() => []);
     this.draws = 0;  // redraws (the browser test reads it)
+    this.samples = 0;  // samples received
   }
   push(t, values) {
     if (this.t.length && t < this.t[this.t.length - 1]) { this.t = []; this.v = this.series.map(() => []); }  // a reset
     if (this.t.length && t === this.t[this.t.length - 1]) return;
     this.t.push(t);
+    this.samples += 1;
     values.forEach((x, i) => this.v[i].push(x));
     while (this.t.length && this.t[0] < t - PLOT_WINDOW_S) { this.t.shift(); this.v.forEach((a) => a.shift()); }
     this.dirty = true;

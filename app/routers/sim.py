@@ -10,9 +10,11 @@ from fastapi import APIRouter, Body, Path
 
 from app.deps import ServiceDep
 from app.errors import errors
-from app.schemas import ObjectPlaced, Ok, PlaceObjectRequest, PushRequest, ResetRequest
+from app.schemas import FaultRequest, ObjectPlaced, Ok, PlaceObjectRequest, PushRequest, ResetRequest
 
 router = APIRouter(prefix="/api/sim", tags=["simulation"])
+#: only on a console started with HRP2_TEST_HOOKS=1 (Settings.test_hooks): the browser tests' way to a fault
+hooks_router = APIRouter(prefix="/api/sim", tags=["simulation"])
 
 
 @router.get("/scenes", summary="Scenes the simulation can be reset to")
@@ -46,3 +48,11 @@ def place_object(name: Annotated[str, Path(max_length=64)], req: PlaceObjectRequ
     where = ", ".join(f"{v:.3f}" for v in placed)
     return ObjectPlaced(message=f"{name} placed at ({where}) m, yaw {req.yaw_deg:g} deg", name=name,
                         position=list(placed))
+
+
+@hooks_router.post("/fault", response_model=Ok, responses=errors(404, 422, e404="no such layer (the valid ones "
+                                                                              "are listed)"),
+                   summary="Test hook (HRP2_TEST_HOOKS=1 only): make a layer raise, or put a NaN in the physics; "
+                           "the hard stop engages with the fault, POST /api/sim/reset recovers")
+def inject_fault(req: FaultRequest, service: ServiceDep) -> Ok:
+    return Ok(message=service.inject_fault(req.kind, req.layer))

@@ -10,11 +10,11 @@ from typing import Annotated
 from fastapi import APIRouter, Query
 from fastapi.responses import PlainTextResponse, Response
 
-from app.deps import LockDep, ServiceDep, SettingsDep
+from app.deps import JournalDep, LockDep, ServiceDep, SettingsDep
 from app.errors import errors
 from app.schemas import ConsoleConfig, Health, LoopTimingResponse, RunCounters
 from app.service.data_logger import csv_header
-from app.state import state_model, with_operator_lock
+from app.state import state_model, with_console_state
 
 router = APIRouter(prefix="/api", tags=["state"])
 
@@ -23,10 +23,10 @@ StateDocument = state_model()
 
 @router.get("/state", summary="Latest snapshot: time, base, joints, COG/ZMP, every stop, each layer's status",
             response_model=StateDocument, responses=errors())
-async def get_state(service: ServiceDep, lock: LockDep) -> Response:
+async def get_state(service: ServiceDep, lock: LockDep, journal: JournalDep) -> Response:
     # (app.hot_paths answers this path before FastAPI does; this route documents it and answers its errors)
     # the document is built and encoded once per snapshot (0.6 ms, 50 times a second at most)
-    return Response(content=with_operator_lock(service.state_json(), lock), media_type="application/json")
+    return Response(content=with_console_state(service.state_json(), lock, journal), media_type="application/json")
 
 
 @router.get("/loop/timing", response_model=LoopTimingResponse, responses=errors(),

@@ -9,9 +9,9 @@ import time
 
 from fastapi import APIRouter, WebSocket
 
-from app.deps import get_service
+from app.deps import get_journal, get_service
 from app.service import ServiceError
-from app.state import with_operator_lock
+from app.state import with_console_state
 from app.ws import RateStream, error_text
 from app.ws import check_rate as check_stream_rate
 
@@ -39,6 +39,7 @@ async def telemetry_stream(ws: WebSocket) -> None:
     if stream is None:
         return
     lock = stream.lock
+    journal = get_journal(ws)
     try:
         last = None
         due = time.monotonic()
@@ -53,7 +54,7 @@ async def telemetry_stream(ws: WebSocket) -> None:
                 continue
             if body is not last:
                 last = body
-                await stream.send(with_operator_lock(body, lock).decode())
+                await stream.send(with_console_state(body, lock, journal).decode())
             due += stream.period_s
             now = time.monotonic()
             if due < now - stream.period_s:  # fell behind (a slow client): no burst to catch up

@@ -28,6 +28,7 @@ from app.service.verbs import (
     GetRun,
     GoPos,
     GoVelocity,
+    InjectFault,
     ListRuns,
     PlaceObject,
     Push,
@@ -321,6 +322,25 @@ class OperatorService:
     # ---- the simulation --------------------------------------------------------------------------------
     def push(self, body: str, force_n: Sequence[float], duration_s: float) -> str:
         return self.run(Push(body, tuple(map(float, force_n)), float(duration_s)))
+
+    def inject_fault(self, kind: str, layer: str = "st") -> str:
+        """Test hook: `layer`'s tick raises from now on ("layer"), or a NaN in the physics ("nan")."""
+        return self.run(InjectFault(kind, layer))
+
+    def places(self) -> dict:
+        """The named places the robot knows (behaviors.places): the scene's known ones, the located objects."""
+        from behaviors.places import places
+
+        return places(self.objects, self.recognitions())
+
+    def place(self, name: str):
+        """The place called `name` (behaviors.places.Place); NotFound listing the valid names."""
+        from behaviors.places import UnknownPlace, resolve
+
+        try:
+            return resolve(name, self.objects, self.recognitions())
+        except UnknownPlace as exc:
+            raise NotFound(str(exc)) from None
 
     @property
     def objects(self) -> tuple[str, ...]:

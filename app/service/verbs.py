@@ -681,8 +681,9 @@ class Reset(Verb):
 
 @dataclass(frozen=True)
 class InjectFault(Verb):
-    """Test hook, reachable from Python only (no HTTP route): `kind` "layer" makes `layer`'s tick raise from
-    now on (until a reset builds a new chain); "nan" starts the next physics step from a NaN velocity."""
+    """Test hook, reachable from Python, and over HTTP (POST /api/sim/fault) only on a console started with
+    HRP2_TEST_HOOKS=1: `kind` "layer" makes `layer`'s tick raise from now on (until a reset builds a new chain);
+    "nan" starts the next physics step from a NaN velocity."""
 
     kind: str
     layer: str = "st"

@@ -35,6 +35,11 @@ REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this f
 FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
 #: [N] a swing foot reading more has touched down (the Stabilizer's contact threshold)
 SWING_FOOT_LOADED_N = 25.0
+#: the AutoBalancer stops only this close to where its input reference places BODY (x, y [m]; yaw [rad]):
+#: stopped, it passes that reference on, and the Stabilizer then balances the robot toward that place (a stop
+#: 0.3 m from it after a walk tipped the robot over). Standing where it started, BODY is 3 mm from it.
+STOP_PLACE_TOLERANCE_M = 0.02
+STOP_YAW_TOLERANCE_RAD = math.radians(2.0)
 #: [s] a robot that tipped onto its swing foot under the hard e-stop lands it (and so levels) over this long
 TIPPED_LANDING_TIME_S = 2.0
 #: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it
@@ -195,6 +200,7 @@ class AutoBalancer(Layer):
         self._footsteps_cache: tuple[int, int, tuple] | None = None
         self._walking_stop_requested = False  # emergency walking stop asked for since the last walk command
         self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
+        self._last_in: Reference | None = None  # that tick's input reference
         self._holding = False  # the hard e-stop holds the chain
         #: the plan seen from a robot that tipped onto its swing foot while the e-stop held it (None: level)
         self._tilt: TiltAnchor | None = None
@@ -215,8 +221,27 @@ class AutoBalancer(Layer):
     def stop(self) -> None:
         if not self.active:
             raise InvalidState("AutoBalancer is not active")
+        if self.gait.walking:
+            raise InvalidState("AutoBalancer cannot stop while walking: stop the walk (goStop) and let it end first")
+        away = self.away_from_reference()
+        if away is not None and (away[0] > STOP_PLACE_TOLERANCE_M or abs(away[1]) > STOP_YAW_TOLERANCE_RAD):
+            raise InvalidState(
+                f"AutoBalancer cannot stop {away[0]:.3f} m and {math.degrees(away[1]):.1f} deg away from where its "
+                "input reference places BODY (the SequencePlayer's base: where the robot started or was reset): "
+                "stopped, it would hand that reference on and the Stabilizer would pull the robot back there; walk "
+                f"back to within {STOP_PLACE_TOLERANCE_M:g} m and {math.degrees(STOP_YAW_TOLERANCE_RAD):g} deg of "
+                "it (goPos), or reset the simulation")
         self.active = False
         self._blend = Transition(self._weight, 0.0, self.params.transition_time_s, "min_jerk")
+
+    def away_from_reference(self) -> tuple[float, float] | None:
+        """How far BODY as the AutoBalancer places it is from where its input reference does: (horizontal distance
+        [m], yaw [rad]); None before its first working tick."""
+        if self._last_out is None or self._last_in is None:
+            return None
+        d = self._last_out.base_pos_world[:2] - self._last_in.base_pos_world[:2]
+        yaw = float(self._last_out.base_rpy_rad[2] - self._last_in.base_rpy_rad[2])
+        return float(math.hypot(d[0], d[1])), math.atan2(math.sin(yaw), math.cos(yaw))
 
     def set_params(self, params: AutoBalancerParams) -> None:
         """New parameters; the gait's apply to the footsteps planned from now on (hrpsys setGaitGeneratorParam)."""
@@ -454,6 +479,7 @@ class AutoBalancer(Layer):
         # all fresh arrays of this tick: frozen in place rather than copied
         self._last_out = ref.with_owned(q_rad=q, base_pos_world=base, base_rpy_rad=base_rpy, zmp_base=zmp_base,
                                          gait=gait)
+        self._last_in = ref
         ctx.ports.cog_acc_world = gait.cog_acc_world
         ctx.ports.gait = gait
         return self._last_out

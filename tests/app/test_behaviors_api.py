@@ -17,7 +17,7 @@ def test_the_list_gives_every_behaviour_with_its_parameters_types_units_and_rang
                                "recognise", "release", "sequence", "squat", "stand", "take_can", "throw_can", "walk_to"]
     force = next(p for p in by_name["grasp"]["params"] if p["name"] == "force_n")
     assert force == {"name": "force_n", "type": "number", "default": 10.0, "unit": "N", "min": 1.0, "max": 14.0,
-                     "choices": None, "doc": "fingertip force to hold with (JRL-hand: 14 N at most)"}
+                     "choices": None, "doc": "fingertip force to hold with (JRL-hand: 14 N at most)", "place": None}
     hand = next(p for p in by_name["reach"]["params"] if p["name"] == "hand")
     assert hand["choices"] == ["rhand", "lhand"] and hand["type"] == "string"
 

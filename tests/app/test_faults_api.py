@@ -64,6 +64,32 @@ def test_a_nan_in_the_physics_engages_the_hard_stop_halts_the_plant_and_reset_re
     assert not em["hard_stop"] and em["fault"] is None and _standing(client)
 
 
+def test_the_fault_route_exists_only_with_the_test_hooks_and_its_fault_is_recovered_by_reset(service, runtime):
+    assert "/api/sim/fault" not in create_app(Settings(), service=service).fastapi.openapi()["paths"]
+    app = create_app(Settings(extra_hosts=("testserver",), test_hooks=True), service=service)
+    with TestClient(app, headers={"content-type": "application/json"}) as hooked:
+        runtime.run_for(0.2)
+        r = hooked.post("/api/sim/fault", json={"kind": "gremlin"})
+        assert r.status_code == 422 and "'layer'" in r.json()["detail"] and "'nan'" in r.json()["detail"]
+        r = hooked.post("/api/sim/fault", json={"kind": "layer", "layer": "nope"})
+        assert r.status_code == 404 and "st" in r.json()["detail"]
+        assert not _emergency(hooked)["hard_stop"]
+        r = hooked.post("/api/sim/fault", json={"kind": "layer", "layer": "abc"})
+        assert r.status_code == 200, r.text
+        runtime.run_for(0.05)
+        em = _emergency(hooked)
+        assert em["hard_stop"] and em["fault"] == "RuntimeError: injected fault in layer 'abc'"
+        assert hooked.post("/api/sim/reset").status_code == 200
+        runtime.run_for(0.5)
+        em = _emergency(hooked)
+        assert not em["hard_stop"] and em["fault"] is None and _standing(hooked)
+
+
+def test_without_the_test_hooks_the_fault_route_is_not_there(client):
+    assert client.post("/api/sim/fault", json={"kind": "nan"}).status_code in (404, 405)
+    assert not _emergency(client)["hard_stop"]
+
+
 def test_an_unknown_fault_kind_is_refused_naming_the_valid_ones(runtime):
     from app.service import InvalidArgument
 

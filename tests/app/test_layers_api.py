@@ -1,5 +1,7 @@
 """Balance state in /api/state, generic layer parameter endpoints, layer start/stop."""
 
+import re
+
 import pytest
 
 from controller.layers.auto_balancer import AutoBalancerParams
@@ -115,6 +117,33 @@ def test_auto_balancer_stop_then_start_and_double_stop_is_a_conflict(client, run
     assert r.status_code == 409 and "not active" in r.json()["detail"]
     assert client.post("/api/auto-balancer/start").status_code == 200 and abc.active
     assert client.post("/api/auto-balancer/start").status_code == 409
+
+
+def test_the_auto_balancer_does_not_stop_while_walking_nor_away_from_its_references_place(client, runtime):
+    """Stopped, the AutoBalancer hands on its input reference, whose BODY stands where the robot started: after a
+    0.3 m walk the Stabilizer then balanced the robot toward that place and it fell (found from the page). So the
+    stop is refused while walking and away from that place, saying why; back there it is allowed."""
+    runtime.loop.run_for(2.5)  # blended in
+    assert client.post("/api/walk/go-pos", json={"x": 0.3, "y": 0.0, "theta_deg": 0.0}).status_code == 200
+    runtime.loop.run_for(0.5)
+    r = client.post("/api/auto-balancer/stop")
+    assert r.status_code == 409 and "while walking" in r.json()["detail"]
+    runtime.loop.run_for(5.0)
+    assert not runtime.loop.chain["abc"].gait.walking
+    r = client.post("/api/auto-balancer/stop")
+    assert r.status_code == 409, r.text
+    assert re.match(r"AutoBalancer cannot stop 0\.(29|30)\d m and 0\.0 deg away", r.json()["detail"]), r.text
+    assert "reset" in r.json()["detail"]
+    assert runtime.loop.chain["abc"].active
+    assert client.post("/api/walk/go-pos", json={"x": -0.3, "y": 0.0, "theta_deg": 0.0}).status_code == 200
+    runtime.loop.run_for(1.0)
+    while runtime.loop.chain["abc"].gait.walking:  # backward strides are shorter
+        runtime.loop.run_for(0.5)
+    runtime.loop.run_for(1.0)
+    r = client.post("/api/auto-balancer/stop")
+    assert r.status_code == 200, r.text
+    runtime.loop.run_for(3.0)
+    assert not client.get("/api/state").json()["fallen"]
 
 
 def test_the_layer_endpoints_are_documented(client):
