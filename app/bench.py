@@ -182,6 +182,9 @@ CONSOLE_SCENARIOS = {
             "pressed (and released) every second: tick start-lateness, /api/state and e-stop request times",
     "estop-browser": "E-STOP pointer-down in a real Chromium -> hard stop engaged in the loop, 50 clicks while the "
                      "page streams a stick (stubbed gamepad) and shows the 3D view: p50/p99/max [ms]",
+    "page-rates": "the operator page in a real Chromium beside a console at real time: the camera and the plots' "
+                  "update rates delivered (to a script) and shown (by the page, and viser's CP plot) over --duration "
+                  "wall seconds [Hz] (asked: camera >= 10, plots >= 20)",
     "viewers": "the console at real time watched by 5 clients, each with the camera stream (12 Hz) and the 20 Hz "
                "telemetry, for --duration wall seconds (the issue asks 300): tick start-lateness p99 per 30 s "
                "window against 10 s unwatched before, and the rates each client received",
@@ -230,6 +233,10 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
             from app.bench_browser import run_estop_browser_bench
 
             return run_estop_browser_bench(scene=scene)
+        if scenario == "page-rates":
+            from app.bench_browser import run_page_rates_bench
+
+            return run_page_rates_bench(duration_s, scene=scene)
         if scenario == "viewers":
             from app.bench_viewers import run_viewers_bench
 
