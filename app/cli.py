@@ -360,6 +360,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         from app.experiments.expo import main as expo_main
 
         code = expo_main(argv[2:])
+    elif argv[:2] == ["study", "estop"]:
+        from app.study.cli import main as study_main
+
+        code = study_main(argv[2:])
+    elif argv and argv[0] == "study":
+        print("hrp2-console study: error: expected a study name: estop (hrp2-console study estop --help)",
+              file=sys.stderr)
+        code = 2
     elif argv[:2] == ["experiment", "floor"]:
         from app.experiments.floor_object import main as floor_main
 
