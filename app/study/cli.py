@@ -115,7 +115,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--duration-s", type=positive_seconds, default=None,
                    help="end every experiment after this many seconds (0.5..600; default: each one's own length)")
     where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=integer(1, 64, "a number of processes"), default=os.cpu_count() or 1,
+    where.add_argument("--workers", type=integer(1, 64, "a number of processes"), default=None,
                        help=f"runs at once in a local process pool (1-64; default: the CPUs, {os.cpu_count()})")
     where.add_argument("--ray", metavar="ADDRESS", default=None,
                        help="run on a Ray cluster instead (HOST:PORT, ray://HOST:10001, auto; 'local': a private one "
@@ -156,7 +156,7 @@ def main(argv: Sequence[str]) -> int:
     held_out = [c for c in case_sample(args.validate, validation_seed, args.experiments) if c not in set(cases)]
     config = StudyConfig(params, cases, held_out, nominal_cases(args.experiments), args.duration_s, args.bootstrap,
                          args.seed)
-    backend = RayBackend(args.ray) if args.ray is not None else PoolBackend(args.workers)
+    backend = RayBackend(args.ray) if args.ray is not None else PoolBackend(args.workers or os.cpu_count() or 1)
     paths = study_paths(args.out)
     store = RunStore(paths["store"])
     print(f"study estop: {len(params)} parameter sets x {len(cases)} cases ({', '.join(args.experiments)}), "
