@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
 
-from app.study.analysis import Outcomes, Recommendation, Validation, collect, recommend, summarise, validate
+from app.study.analysis import Outcomes, Recommendation, Validation, collect, recommend, validate
 from app.study.progress import Progress
 from app.study.space import DEFAULT_T1_S, DEFAULT_T2_S, Case, EstopParams
 from app.study.spec import RunSpec
@@ -123,10 +123,6 @@ def run_study(config: StudyConfig, backend, store: RunStore, stream: TextIO | No
     errors = sorted({store.get(s.key())["result"]["error"] for s in specs
                      if s.key() in store and store.get(s.key())["result"]["verdict"] == "error"})
     return StudyResult(config, outcomes, rec, validation, tuple(phases), tuple(errors))
-
-
-def summaries_of(result: StudyResult):
-    return summarise(result.outcomes)
 
 
 def study_paths(out_dir: Path) -> dict[str, Path]:
