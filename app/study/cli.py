@@ -90,8 +90,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--thresholds-mm", type=number_list("mm", th_lo, th_hi),
                    default=[20.0, 30.0, 40.0, 50.0, 60.0, 70.0],
                    help=f"flag thresholds [mm], comma-separated, each in {th_lo:g}..{th_hi:g} (default 20,...,70)")
-    p.add_argument("--t1-s", type=number_list("s", *T1_LIMITS_S), default=[0.5, 1.0, 1.5],
-                   help=f"T1 values [s], each in {T1_LIMITS_S[0]:g}..{T1_LIMITS_S[1]:g} (default 0.5,1,1.5)")
+    p.add_argument("--t1-s", type=number_list("s", *T1_LIMITS_S), default=[0.5, 1.0],
+                   help=f"T1 values [s], each in {T1_LIMITS_S[0]:g}..{T1_LIMITS_S[1]:g} (default 0.5,1)")
     p.add_argument("--t2-s", type=number_list("s", *T2_LIMITS_S), default=[0.25, 0.5, 1.0],
                    help=f"T2 values [s], each in {T2_LIMITS_S[0]:g}..{T2_LIMITS_S[1]:g} (default 0.25,0.5,1)")
     p.add_argument("--param-samples", type=integer(0, MAX_PARAM_SETS, "a number of parameter sets"), default=0,
@@ -167,6 +167,10 @@ def main(argv: Sequence[str]) -> int:
     except RayUnavailable as exc:
         print(f"hrp2-console study estop: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        print(f"\nhrp2-console study estop: interrupted; {len(store)} finished runs are kept in {paths['store']}: "
+              "the same command goes on from there", file=sys.stderr)
+        return 130
     summaries = summarise(result.outcomes)
     write_runs_csv(result, store, paths["runs"])
     write_params_csv(summaries, paths["params"])
