@@ -88,8 +88,8 @@ def parser() -> argparse.ArgumentParser:
                     "heatmaps, the recommended parameters and their held-out validation. Resumable: finished runs "
                     "are kept in OUT/runs.jsonl and skipped when the command is run again.")
     p.add_argument("--thresholds-mm", type=number_list("mm", th_lo, th_hi),
-                   default=[20.0, 30.0, 40.0, 50.0, 60.0, 70.0],
-                   help=f"flag thresholds [mm], comma-separated, each in {th_lo:g}..{th_hi:g} (default 20,...,70)")
+                   default=[20.0, 30.0, 40.0, 50.0, 60.0],
+                   help=f"flag thresholds [mm], comma-separated, each in {th_lo:g}..{th_hi:g} (default 20,...,60)")
     p.add_argument("--t1-s", type=number_list("s", *T1_LIMITS_S), default=[0.5, 1.0],
                    help=f"T1 values [s], each in {T1_LIMITS_S[0]:g}..{T1_LIMITS_S[1]:g} (default 0.5,1)")
     p.add_argument("--t2-s", type=number_list("s", *T2_LIMITS_S), default=[0.25, 0.5, 1.0],
@@ -108,8 +108,8 @@ def parser() -> argparse.ArgumentParser:
                        help="instead: one factor at a time, each disturbance at LEVELS values of its range (2-9)")
     p.add_argument("--seed", type=integer(0, 2**31 - 1, "a seed"), default=1, help="seed of the tuning cases and "
                    "parameter samples (default 1)")
-    p.add_argument("--validate", type=integer(0, MAX_CASES, "a number of held-out cases"), default=40, metavar="N",
-                   help="N random held-out cases (not tuned on) for the recommended set (default 40; 0: none)")
+    p.add_argument("--validate", type=integer(0, MAX_CASES, "a number of held-out cases"), default=30, metavar="N",
+                   help="N random held-out cases (not tuned on) for the recommended set (default 30; 0: none)")
     p.add_argument("--validation-seed", type=integer(0, 2**31 - 1, "a seed"), default=None,
                    help="seed of the held-out cases; must differ from --seed (default: --seed + 1)")
     p.add_argument("--duration-s", type=positive_seconds, default=None,

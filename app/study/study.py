@@ -90,13 +90,15 @@ def execute(label: str, specs: Sequence[RunSpec], backend, store: RunStore, stre
         progress.start()
     t0 = time.perf_counter()
     sim_s = 0.0
+    ran = 0
     for record in backend.run([s.to_dict() for s in todo]):
         spec = by_key[record["key"]]
         store.add({"key": record["key"], "spec": spec.to_dict(), "result": record["result"],
                    "timing": record["timing"]})
         sim_s += record["timing"]["sim_s"]
+        ran += 1
         progress.done(spec.expected_sim_s())
-    return PhaseStats(label, len(todo), len(specs) - len(todo), sim_s, time.perf_counter() - t0 if todo else 0.0)
+    return PhaseStats(label, ran, len(specs) - len(todo), sim_s, time.perf_counter() - t0 if ran else 0.0)
 
 
 def result_getter(store: RunStore):
