@@ -32,6 +32,14 @@ def _outcome(result: Mapping[str, Any] | None, what: str) -> float:
     return float(value) * (1e3 if what in ("margin_mm", "peak_mm") else 1.0)
 
 
+def disturbed_nominal(result: Mapping[str, Any] | None) -> bool:
+    """A nominal (undisturbed) task the flag got in the way of: the flag rose, or the run failed or fell (a flag
+    that stops the valve's approach walk leaves the rim out of the planner's reach: the run ends in an error)."""
+    if result is None:
+        return False
+    return result["verdict"] != "stood" or result["flag_time_s"] is not None
+
+
 @dataclass(frozen=True)
 class Outcomes:
     """The study's runs as arrays (P parameter sets x C cases; nan: failed or not applicable)."""
@@ -44,7 +52,7 @@ class Outcomes:
     margin_mm: np.ndarray  # (P, C) CP distance inside the support polygon when the flag rose [mm]
     peak_mm: np.ndarray  # (P, C) peak CP error [mm]
     recovery_s: np.ndarray  # (P, C) from the end of the revert until the error stays under the threshold [s]
-    false_alarms: np.ndarray  # (P,) nominal tasks in which the flag rose at P's threshold
+    false_alarms: np.ndarray  # (P,) nominal tasks the flag got in the way of at P's threshold
     nominal: int  # how many nominal tasks
 
 
@@ -61,7 +69,7 @@ def collect(params: Sequence[EstopParams], cases: Sequence[Case], nominal: Seque
                 arrays[k][i, j] = _outcome(with_es, k)
             arrays["fell"][i, j] = _outcome(result_of(RunSpec.baseline(c, p.threshold_m, duration_s)), "fell")
         nominal_params = EstopParams(p.threshold_m, DEFAULT_T1_S, DEFAULT_T2_S)
-        false_alarms[i] = sum(_outcome(result_of(RunSpec(c, True, nominal_params, duration_s)), "flag") == 1.0
+        false_alarms[i] = sum(disturbed_nominal(result_of(RunSpec(c, True, nominal_params, duration_s)))
                               for c in nominal)
     return Outcomes(list(params), list(cases), arrays["stood"], arrays["fell"], arrays["flag"], arrays["margin_mm"],
                     arrays["peak_mm"], arrays["recovery_s"], false_alarms, len(nominal))

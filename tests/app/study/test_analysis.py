@@ -63,6 +63,13 @@ def test_the_recommendation_has_no_false_alarm_and_the_most_standing_and_resampl
     assert rec.rescue_interval[1] == 1.0 and 0.0 < rec.rescue_interval[0] < 1.0
 
 
+def test_a_nominal_task_that_failed_counts_as_a_false_alarm():
+    r = results()
+    r[RunSpec(NOMINAL[0], True, MID).key()] = result("error")  # the flag stopped the walk: the plan failed
+    mid = summarise(collect([MID], CASES, NOMINAL, lambda spec: r.get(spec.key()), None))[0]
+    assert mid.false_alarms == 1
+
+
 def test_a_failed_run_leaves_its_case_out():
     r = results()
     r[RunSpec(CASES[0], True, MID).key()] = result("error")
