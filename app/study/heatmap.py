@@ -1,5 +1,5 @@
-"""Heatmaps of a study over threshold x T1, one column per T2: stood with the EmergencyStopper, falls rescued,
-CP margin at the flag, peak CP error, recovery time (a sampled study is binned)."""
+"""Heatmaps of a study over threshold x T1, one column per T2: false alarms on the nominal tasks, stood with the
+EmergencyStopper, falls rescued, CP margin at the flag, peak CP error, recovery time (a sampled study is binned)."""
 
 from __future__ import annotations
 
@@ -15,6 +15,7 @@ BINS = 5
 
 #: (title, value of a summary, colour map, "higher is better")
 METRICS = (
+    ("false alarms [nominal tasks]", lambda s: float(s.false_alarms), "Reds", False),
     ("stood with ES [%]", lambda s: None if s.stood_share is None else 100 * s.stood_share, "RdYlGn", True),
     ("falls w/o ES rescued [%]", lambda s: None if s.rescue_share is None else 100 * s.rescue_share, "RdYlGn", True),
     ("CP margin at flag [mm]", lambda s: s.margin_at_flag_mm, "viridis", True),
