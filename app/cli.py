@@ -416,12 +416,33 @@ def experiment(argv: Sequence[str]) -> int:
                         + "; ".join(f"{n}: {', '.join(e.variants)}" for n, e in sorted(EXPERIMENTS.items())))
     p.add_argument("--out", type=Path, default=Path("out/experiments"),
                    help="where the CSV and the Fig. 10-like PNG go (default: out/experiments)")
+    accepted = {n: ", ".join(f"{k} [{d.low:g}, {d.high:g}] {d.unit}" for k, d in e.disturbances.items())
+                for n, e in sorted(EXPERIMENTS.items()) if e.disturbances}
+    p.add_argument("--disturb", action="append", default=[], metavar="NAME=VALUE",
+                   help="set one of the experiment's disturbances (repeatable): "
+                        + "; ".join(f"{n}: {names}" for n, names in accepted.items()))
     args = p.parse_args(argv)
-    variants = EXPERIMENTS[args.name].variants
+    exp = EXPERIMENTS[args.name]
+    variants = exp.variants
     if args.variant is not None and args.variant not in variants:
         p.error(f"argument --variant: {args.variant!r} is not a variant of {args.name}; "
                 f"choose from {', '.join(variants)}")
-    r = run_experiment(args.name, es=not args.no_es, out_dir=args.out, variant=args.variant)
+    disturbance = {}
+    for item in args.disturb:
+        name, sep, text = item.partition("=")
+        if not sep:
+            p.error(f"argument --disturb: expected NAME=VALUE, got {item!r}")
+        try:
+            value = float(text)
+        except ValueError:
+            value = float("nan")
+        disturbance[name.strip()] = value
+    try:
+        exp.disturbance(disturbance)
+    except ValueError as exc:
+        p.error(f"argument --disturb: {exc}")
+    r = run_experiment(args.name, es=not args.no_es, out_dir=args.out, variant=args.variant,
+                       disturbance=disturbance)
     print(f"experiment: {r.name} [{r.variant}] ({'with' if r.es else 'without'} EmergencyStopper), "
           f"{r.duration_s:.2f} s simulated")
     print(f"csv: {r.csv_path}\npng: {r.png_path}")
@@ -446,6 +467,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         from app.experiments.expo import main as expo_main
 
         code = expo_main(argv[2:])
+    elif argv[:2] == ["study", "estop"]:
+        from app.study.cli import main as study_main
+
+        code = study_main(argv[2:])
+    elif argv and argv[0] == "study":
+        print("hrp2-console study: error: expected a study name: estop (hrp2-console study estop --help)",
+              file=sys.stderr)
+        code = 2
     elif argv[:2] == ["experiment", "floor"]:
         from app.experiments.floor_object import main as floor_main
 

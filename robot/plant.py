@@ -250,6 +250,20 @@ class MujocoPlant:
         Unknown names raise ValueError listing the scene's objects (see robot.scene_objects.place_object)."""
         return scene_objects.place_object(self._model, self._data, name, position, yaw_rad)
 
+    def translate_robot(self, offset_xy_m) -> np.ndarray:
+        """Carry the robot (dx, dy) [m, world] across the floor, its posture and velocities kept, as if it had
+        been put down there; returns the new base position. Its own sensors cannot tell (the same as moving
+        the scene the other way). Lasts until the next reset."""
+        try:
+            offset = np.asarray(offset_xy_m, dtype=float)
+        except (TypeError, ValueError):
+            offset = np.full(1, np.nan)
+        if offset.shape != (2,) or not np.all(np.isfinite(offset)):
+            raise ValueError(f"offset_xy_m must be (dx, dy) finite [m], got {offset_xy_m!r}")
+        self._data.qpos[self._base_qpos:self._base_qpos + 2] += offset
+        mujoco.mj_forward(self._model, self._data)
+        return self._data.qpos[self._base_qpos:self._base_qpos + 3].copy()
+
     def object_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """True pose of an object (position [m, world], quaternion wxyz): for tests and setup, never the robot."""
         return scene_objects.object_pose(self._model, self._data, name)

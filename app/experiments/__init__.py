@@ -61,11 +61,13 @@ def settled_below_after_s(t: np.ndarray, err: np.ndarray, threshold: float, t_fr
 def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, settle_s: float = 2.5,
                    plot: bool = True, variant: str | None = None, write_csv: bool = True,
                    params: Mapping[str, Mapping[str, Any]] | None = None,
-                   duration_s: float | None = None) -> ExperimentResult:
+                   duration_s: float | None = None,
+                   disturbance: Mapping[str, float] | None = None) -> ExperimentResult:
     """Run experiment `name` (variant `variant`, default its first) with or without the EmergencyStopper.
 
     `params` changes layer parameters before the start, e.g. {"es": {"t1_s": 0.5}, "st": {"cp_threshold_m": 0.03}};
-    `duration_s` ends the script early (default: the experiment's duration).
+    `duration_s` ends the script early (default: the experiment's duration); `disturbance` sets some of the
+    experiment's declared disturbances (`EXPERIMENTS[name].disturbances`; the others keep their defaults).
     """
     if name not in EXPERIMENTS:
         raise ValueError(f"unknown experiment {name!r}; available: {', '.join(EXPERIMENTS)}")
@@ -73,6 +75,7 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
     variant = exp.variants[0] if variant is None else variant
     if variant not in exp.variants:
         raise ValueError(f"unknown variant {variant!r} of {name}; available: {', '.join(exp.variants)}")
+    disturbed = exp.disturbance(disturbance)
     robot = LocalRobot(exp.scene, speed=None)
     service = OperatorService(robot)
     rig = Rig(service, robot)
@@ -81,12 +84,14 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         service.set_params(params)
     if not es:
         service.enable_layers({"es": False})
+    if exp.place is not None:
+        exp.place(rig, disturbed)
     wall_t0 = time.perf_counter()
     loop.run_for(settle_s)  # AutoBalancer and Stabilizer blended in
     for limb in exp.impedance:
         service.start_impedance(limb)
     t0 = loop.snapshot.time_s
-    events = sorted(exp.script(rig, variant), key=lambda e: e[0])
+    events = sorted(exp.script(rig, variant, disturbed), key=lambda e: e[0])
     rows = []
     flag_time = None
     fell_at = None

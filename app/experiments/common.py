@@ -1,9 +1,10 @@
-"""What an experiment is, what it reports, and the motions the scripts share (setJointAngles, hand pushes)."""
+"""What an experiment is (and the disturbances it accepts), what it reports, and the motions the scripts share
+(setJointAngles, hand pushes)."""
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -43,17 +44,60 @@ class Rig:
 
 
 @dataclass(frozen=True)
+class DisturbanceParam:
+    """One disturbance an experiment accepts: its default (the experiment as the README describes it: no
+    disturbance beyond the variant's), the range it may be set to, its unit and what it changes."""
+
+    default: float
+    low: float
+    high: float
+    unit: str
+    description: str
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.low) and math.isfinite(self.high) and self.low <= self.default <= self.high):
+            raise ValueError(f"a disturbance's default {self.default} must lie in [{self.low}, {self.high}]")
+
+
+#: The disturbance values a script gets: every declared name, set or default.
+Disturbance = Mapping[str, float]
+
+
+@dataclass(frozen=True)
 class Experiment:
-    """`script(rig, variant)` gives the timed commands; `outcome(rig)` measures the task at the end
-    (valve angle, door angle, ...) from the simulation, for tests and the report."""
+    """`script(rig, variant, disturbance)` gives the timed commands; `place(rig, disturbance)`, when given, sets
+    the scene up before the robot settles (simulator operations: the robot put down farther from the wall);
+    `outcome(rig)` measures the task at the end (valve angle, door angle, ...) from the simulation, for tests
+    and the report. `disturbances` declares what a study may vary (name -> DisturbanceParam); at their
+    defaults the experiment is the one the README describes."""
 
     scene: str
-    script: Callable[[Rig, str], list[Event]]
+    script: Callable[[Rig, str, Disturbance], list[Event]]
     duration_s: float
     description: str
     variants: tuple[str, ...] = ("default",)
     impedance: tuple[str, ...] = ()  # limbs whose ImpedanceController runs during the experiment
     outcome: Callable[[Rig], dict[str, float]] | None = None
+    disturbances: Mapping[str, DisturbanceParam] = field(default_factory=dict)
+    place: Callable[[Rig, Disturbance], None] | None = None
+
+    def disturbance(self, values: Mapping[str, float] | None = None) -> dict[str, float]:
+        """`values` checked against the declared disturbances (names, finite, in range) and completed with the
+        defaults; ValueError naming the disturbance and what is allowed."""
+        values = dict(values or {})
+        unknown = sorted(set(values) - set(self.disturbances))
+        if unknown:
+            valid = ", ".join(self.disturbances) or "none"
+            raise ValueError(f"unknown disturbance {unknown[0]!r}; this experiment accepts: {valid}")
+        out = {}
+        for name, spec in self.disturbances.items():
+            value = values.get(name, spec.default)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+                    or not spec.low <= value <= spec.high:
+                raise ValueError(f"disturbance {name} must be a number in [{spec.low:g}, {spec.high:g}] "
+                                 f"{spec.unit}, got {value!r}")
+            out[name] = float(value)
+        return out
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ import math
 
 import numpy as np
 
-from app.experiments.common import Event, Experiment, Rig, pose_with
+from app.experiments.common import Disturbance, Event, Experiment, Rig, pose_with
 from controller.core.errors import InvalidCommand
 from controller.kinematics.limb_ik import LimbIkParams, PointAxisTarget, solve_limb_ik
 from controller.kinematics.model import RobotKinematics
@@ -121,7 +121,7 @@ def move_along_arc(rig: Rig, door_deg: float, time_s: float, chest_pitch_deg: fl
     rig.service.set_joint_angles_sequence(goals, [time_s / ARC_VIA_POINTS] * len(goals))
 
 
-def door_script(rig: Rig, variant: str) -> list[Event]:
+def door_script(rig: Rig, variant: str, disturbance: Disturbance) -> list[Event]:
     """Reach to just short of the knob (2 s), close in on it (1 s), close the gripper (0.6 s), start the
     ImpedanceController of the left hand, then move the hand along the door's arc: `pull` toward PULL_DEG in
     3 s, `push-plan` toward PUSH_DEG (against the door stop)."""

@@ -1,4 +1,5 @@
-"""[MLC] IV-C 1, Fig. 8-10: hands pushed into a rigid wall (scene `wall`), ImpedanceController off."""
+"""[MLC] IV-C 1, Fig. 8-10: hands pushed into a rigid wall (scene `wall`), ImpedanceController off; the
+disturbances a study varies (wall distance, push height, direction and speed)."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import math
 
 import numpy as np
 
-from app.experiments.common import Event, Experiment, Rig, move_hands, pose_with
+from app.experiments.common import Disturbance, DisturbanceParam, Event, Experiment, Rig, move_hands, pose_with
 from controller.interpolation.hoff_arbib import min_jerk
 from robot.names import JOINT_GROUPS
 
@@ -43,14 +44,61 @@ LEFT_REACH_CLEARANCE_M = 0.10
 
 #: Via points of the leftward push (a planner's straight hand line, sampled as joint angles).
 LEFT_PUSH_VIA_POINTS = 10
+#: The pushes of Fig. 9: 0.25 m forward in 4 s (alpha), 0.25 m leftward in 2 s (beta).
+FORWARD_PUSH_M, FORWARD_PUSH_S = 0.25, 4.0
+LEFT_PUSH_M, LEFT_PUSH_S = 0.25, 2.0
+#: When the hands are raised or lowered before the forward push (the reach ends at 2 s, the push starts at 3 s),
+#: and in how long [s].
+HEIGHT_CHANGE_AT_S, HEIGHT_CHANGE_S = 2.0, 0.8
+
+#: What a study may vary ([MLC] gives one distance, height and speed; these are the planner's or the operator's
+#: plausible mistakes around them). At the defaults the pushes are the paper's. The robot put down farther from
+#: the wall is a simulator operation before it settles: its own sensors cannot tell (the same as moving the wall).
+#: The height and yaw ranges are what the arms reach (measured: +0.07 m up, -20 deg or 30 deg of yaw are refused,
+#: setTargetPose out of reach).
+FORWARD_DISTURBANCES = {
+    "wall_gap_m": DisturbanceParam(0.0, -0.04, 0.10, "m", "the front wall this much farther from the hands than "
+                                   "the 0.05 m of the paper's set-up (negative: nearer)"),
+    "push_height_m": DisturbanceParam(0.0, -0.10, 0.05, "m", "both hands raised by this before the push"),
+    "push_yaw_deg": DisturbanceParam(0.0, -15.0, 15.0, "deg", "the push turned this much to the left of "
+                                     "straight ahead"),
+    "push_speed_m_s": DisturbanceParam(FORWARD_PUSH_M / FORWARD_PUSH_S, 0.03, 0.15, "m/s",
+                                       "the push's speed (its 0.25 m at this speed)"),
+}
+LEFT_DISTURBANCES = {
+    "wall_gap_m": DisturbanceParam(0.0, -0.06, 0.10, "m", "the left wall this much farther from the hand than "
+                                   "the 0.10 m of the set-up (negative: nearer)"),
+    "push_speed_m_s": DisturbanceParam(LEFT_PUSH_M / LEFT_PUSH_S, 0.0625, 0.25, "m/s",
+                                       "the push's speed (its 0.25 m at this speed)"),
+}
 
 
-def wall_push_forward(rig: Rig, variant: str) -> list[Event]:
+def place_forward(rig: Rig, disturbance: Disturbance) -> None:
+    """The robot put down `wall_gap_m` farther back from the front wall."""
+    if disturbance["wall_gap_m"] != 0.0:
+        rig.plant.translate_robot((-disturbance["wall_gap_m"], 0.0))
+
+
+def place_left(rig: Rig, disturbance: Disturbance) -> None:
+    """The robot put down `wall_gap_m` farther right of the left wall."""
+    if disturbance["wall_gap_m"] != 0.0:
+        rig.plant.translate_robot((0.0, -disturbance["wall_gap_m"]))
+
+
+def wall_push_forward(rig: Rig, variant: str, disturbance: Disturbance) -> list[Event]:
     """Fig. 9 (alpha): both hands 0.25 m forward in 4 s, into the wall in front."""
-    return [
+    yaw = math.radians(disturbance["push_yaw_deg"])
+    delta = FORWARD_PUSH_M * np.array([math.cos(yaw), math.sin(yaw), 0.0])
+    push_s = FORWARD_PUSH_M / disturbance["push_speed_m_s"]
+    events = [
         (0.0, lambda: rig.service.set_joint_angles(pose_with(rig, REACH_FORWARD_DEG), 2.0)),
-        (3.0, lambda: move_hands(rig, ("rarm", "larm"), np.array([0.25, 0.0, 0.0]), 4.0)),
+        (3.0, lambda: move_hands(rig, ("rarm", "larm"), delta, push_s)),
     ]
+    dz = disturbance["push_height_m"]
+    if dz != 0.0:
+        events.insert(1, (HEIGHT_CHANGE_AT_S,
+                          lambda: move_hands(rig, ("rarm", "larm"), np.array([0.0, 0.0, dz]), HEIGHT_CHANGE_S)))
+    return events
 
 
 def left_arm_deg(phi_deg: float) -> dict[str, float]:
@@ -74,11 +122,11 @@ def left_push_plan(rig: Rig, time_s: float) -> tuple[np.ndarray, list[float]]:
     return np.array(goals), [time_s / k] * k
 
 
-def wall_push_left(rig: Rig, variant: str) -> list[Event]:
+def wall_push_left(rig: Rig, variant: str, disturbance: Disturbance) -> list[Event]:
     """Fig. 9 (beta): the left hand 0.25 m leftward in 2 s, into the wall at the left."""
 
     def push() -> None:
-        goals, times = left_push_plan(rig, 2.0)
+        goals, times = left_push_plan(rig, LEFT_PUSH_M / disturbance["push_speed_m_s"])
         rig.service.set_group_sequence("larm", goals, times)
 
     return [
@@ -88,6 +136,8 @@ def wall_push_left(rig: Rig, variant: str) -> list[Event]:
 
 
 EXPERIMENTS: dict[str, Experiment] = {
-    "wall-push-forward": Experiment("wall", wall_push_forward, 12.0, wall_push_forward.__doc__),
-    "wall-push-left": Experiment("wall", wall_push_left, 10.0, wall_push_left.__doc__),
+    "wall-push-forward": Experiment("wall", wall_push_forward, 12.0, wall_push_forward.__doc__,
+                                    disturbances=FORWARD_DISTURBANCES, place=place_forward),
+    "wall-push-left": Experiment("wall", wall_push_left, 10.0, wall_push_left.__doc__,
+                                 disturbances=LEFT_DISTURBANCES, place=place_left),
 }

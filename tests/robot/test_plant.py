@@ -115,3 +115,28 @@ def test_write_sets_the_servo_targets_in_joint_order():
     plant.write(q)
     plant.step(500)
     assert plant.read().q_rad[JOINT_NAMES.index("HEAD_JOINT0")] == pytest.approx(0.3, abs=math.radians(0.5))
+
+
+def test_translating_the_robot_moves_its_base_and_not_its_sensors():
+    plant = MujocoPlant()
+    plant.step(50)
+    before = plant.read()
+    base0 = plant.ground_truth().base_pos_world.copy()
+    base = plant.translate_robot((-0.07, 0.03))
+    np.testing.assert_allclose(base - base0, [-0.07, 0.03, 0.0], atol=1e-12)
+    np.testing.assert_allclose(plant.ground_truth().base_pos_world, base)
+    after = plant.read()
+    np.testing.assert_array_equal(after.q_rad, before.q_rad)
+    np.testing.assert_array_equal(after.gyro_rad_s, before.gyro_rad_s)
+    plant.step(5)  # the next sensor means: the same floor, the same wrenches
+    moved = plant.read().wrenches
+    twin = MujocoPlant()
+    twin.step(50)
+    twin.step(5)
+    np.testing.assert_allclose(moved, twin.read().wrenches, atol=1e-9)
+
+
+@pytest.mark.parametrize("bad", [(0.1,), (0.1, float("nan")), "ab", None])
+def test_translating_the_robot_takes_two_finite_metres(bad):
+    with pytest.raises(ValueError, match="offset_xy_m"):
+        MujocoPlant().translate_robot(bad)
