@@ -34,7 +34,7 @@ class Ticker:
         self.ports = Ports()
         self.run(2.1)  # blended in, no capture point measured yet
 
-    def run(self, seconds, cp_xy=None, fz=(HALF_WEIGHT_N, HALF_WEIGHT_N), command=None, sensor_pos=None):
+    def run(self, seconds, cp_xy=None, fz=(HALF_WEIGHT_N, HALF_WEIGHT_N), command=None, sensor_pos=None, hold=False):
         for _ in range(int(round(seconds / DT))):
             w = np.zeros((4, 6))
             w[RF, 2], w[LF, 2] = fz
@@ -47,6 +47,7 @@ class Ticker:
                 self.ports.balance = BalanceEstimate(cog_world=cog, cog_vel_world=np.zeros(3),
                                                      zmp_world=np.array([cp_xy[0], cp_xy[1], 0.0]),
                                                      cp_world_xy=np.array(cp_xy, dtype=float), omega_1_s=OMEGA)
+            self.ports.hold = hold
             ctx.last_ports = self.ports
             ctx.ports.walk_command = command
             self.out = self.abc.tick(ctx, self.ref)
@@ -123,6 +124,16 @@ def test_a_foot_that_touches_down_early_lands_where_the_kinematics_put_it():
     assert record.landed and record.landed_early
     assert record.landing == pytest.approx((0.0095 + 0.25, 0.22 - 0.095), abs=1e-4)
     assert t.abc.gait.footsteps[1].x == pytest.approx(0.0095 + 0.25, abs=1e-4)
+
+
+def test_the_hard_e_stop_ends_the_emergency_step_with_its_stop_from_rest():
+    t = Ticker()
+    t.run(0.2, cp_xy=(TOE_X + 0.03, 0.0))
+    assert t.abc.status().emergency_step
+    t.run(0.1, cp_xy=None, hold=True)
+    assert not t.abc.status().emergency_step and t.abc.gait.stopping_from_rest
+    st = t.run(3.0, cp_xy=None)  # released: the stop from rest ends standing
+    assert not st.walking and not st.emergency_step
 
 
 def test_body_is_lowered_while_stepping():
