@@ -1,4 +1,5 @@
-"""Plots of what was tuned (ZMP, COG, capture point while walking and when pushed): `python -m app.plots`."""
+"""Plots of what was tuned (ZMP, COG, capture point while walking and when pushed, the emergency step):
+`python -m app.plots`."""
 
 from __future__ import annotations
 
@@ -108,6 +109,79 @@ def plot_push_before_after(out: Path) -> None:
     fig.savefig(out, dpi=100)
 
 
+def record_emergency_step(impulse_ns: float = 42.0, step: bool = True, seconds: float = 4.5):
+    """Stand 2.5 s, push BODY forward, watch until the fall or `seconds`; per tick: time after the push, measured
+    CP x, simulated COM x, measured ZMP x, the simulated ankles' x and heights (right, left), the front edge of the
+    planned soles in contact, BODY tilt (simulation) [deg], an emergency step in progress."""
+    from controller.balance.capture_point import HRP2_RIGHT_SOLE
+
+    robot = LocalRobot()
+    loop = robot.loop
+    if not step:
+        OperatorService(robot).set_params({"abc": {"emergency_step": False}})
+    robot.run_for(2.5)
+    loop.call(lambda: loop.plant.push("BODY", (impulse_ns / 0.1, 0.0, 0.0), 0.1))
+    rows = []
+    for _ in range(int(seconds / loop.dt_control_s)):
+        s = robot.step()
+        g = s.reference.gait
+        front = max(p[0] for p, c in ((g.p_rsole_world, g.contact[0]), (g.p_lsole_world, g.contact[1])) if c)
+        w, x, y, _ = (float(v) for v in s.truth.base_quat_wxyz)
+        tilt = np.degrees(np.arccos(np.clip(1.0 - 2.0 * (x * x + y * y), -1.0, 1.0)))
+        r_ankle, l_ankle = s.truth.body_pos_world[7], s.truth.body_pos_world[13]  # RLEG_LINK5, LLEG_LINK5
+        rows.append([s.time_s, s.layers["st"].cp_act[0], s.truth.com_world[0], s.zmp_world[0], r_ankle[0],
+                     l_ankle[0], r_ankle[2], l_ankle[2], front + HRP2_RIGHT_SOLE.front_m, tilt,
+                     float(s.layers["abc"].emergency_step)])
+        if s.fallen:
+            break
+    d = np.array(rows)
+    d[:, 0] -= d[0, 0]
+    return d
+
+
+def plot_emergency_step_before_after(out: Path, impulse_ns: float = 42.0) -> None:
+    """The 1.5x forward push without the capture-point emergency step (falls) and with it (steps and stands)."""
+    runs = (("without the emergency step", record_emergency_step(impulse_ns, step=False)),
+            ("with it (issue 13.3)", record_emergency_step(impulse_ns, step=True)))
+    fig, axes = plt.subplots(3, 2, figsize=(12, 9), sharex=True, sharey="row")
+    for col, (label, d) in enumerate(runs):
+        t = d[:, 0]
+        ax = axes[0, col]
+        ax.plot(t, d[:, 1], color="tab:red", label="CP x (measured)")
+        ax.plot(t, d[:, 2], color="tab:gray", ls="--", label="COM x (simulation)")
+        ax.plot(t, d[:, 3], color="tab:green", lw=0.8, label="ZMP x (F/T)")
+        ax.plot(t, d[:, 8], color="k", ls=":", label="toe edge of the soles down (plan)")
+        ax.set_ylim(-0.1, 1.0)
+        ax.set_title(label)
+        ax = axes[1, col]
+        ax.plot(t, d[:, 4], color="tab:blue", label="right ankle x (simulation)")
+        ax.plot(t, d[:, 5], color="tab:orange", label="left ankle x (simulation)")
+        ax.plot(t, 2.0 * (d[:, 6] - 0.105), color="tab:blue", ls=":", label="right ankle height x 2")
+        ax.plot(t, 2.0 * (d[:, 7] - 0.105), color="tab:orange", ls=":", label="left ankle height x 2")
+        ax = axes[2, col]
+        ax.plot(t, d[:, 9], color="tab:purple", label="BODY tilt (simulation)")
+        ax.axhline(45.0, color="tab:red", ls="--", lw=0.8, label="fallen (45 deg)")
+        ax.set_ylim(0.0, 50.0)
+        ax.set_xlabel("time after the push [s]")
+        for a in axes[:, col]:
+            a.fill_between(t, 0, 1, where=d[:, 10] > 0.5, transform=a.get_xaxis_transform(), color="tab:pink",
+                           alpha=0.25, label="emergency step" if a is axes[0, col] else None)
+        if d[-1, 9] > 45.0:
+            axes[2, col].annotate(f"falls at {t[-1]:.2f} s", (t[-1], 45.0), textcoords="offset points",
+                                  xytext=(-60, -20), fontsize=9)
+    axes[0, 0].set_ylabel("x [m]")
+    axes[1, 0].set_ylabel("[m]")
+    axes[2, 0].set_ylabel("[deg]")
+    for ax in axes.flat:
+        ax.grid(alpha=0.3)
+    for ax in axes[:, 1]:
+        ax.legend(fontsize=8, loc="upper right")
+    fig.suptitle(f"{impulse_ns:g} N s forward push on BODY (1.5x the largest absorbed standing), standing, "
+                 "Stabilizer on")
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+
+
 def plot_walk(out: Path) -> None:
     d = record_walk()
     t = d[:, 0]
@@ -160,6 +234,7 @@ def main(argv=None) -> int:
     plot_walk(args.out_dir / "walk_zmp_cog_cp.png")
     plot_push(args.out_dir / "push_cp_error.png")
     plot_push_before_after(args.out_dir / "push_before_after.png")
+    plot_emergency_step_before_after(args.out_dir / "emergency_step_before_after.png")
     return 0
 
 

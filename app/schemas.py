@@ -289,6 +289,7 @@ class ExperimentResponse(BaseModel):
                                                                  "e.g. the plan's next step after a motion stop")
     faults: list[str] = Field(default_factory=list, description="every distinct controller fault of the run "
                                                                 "(its own counters); empty: none")
+    emergency_steps: int = Field(default=0, description="capture-point emergency steps the AutoBalancer took")
     run_id: int = Field(description="the run's number in this console")
     csv_url: str | None = Field(default=None, description="where the run's CSV is (with save)")
     png_url: str | None = Field(default=None, description="where the run's Fig. 10-style PNG is (with save)")

@@ -148,5 +148,6 @@ def run_experiment(name: str, es: bool = True, out_dir: Path | None = None, sett
         edge_margin_at_flag_m=edge_at_flag, min_edge_margin_m=float(data[:, 5].min()),
         below_threshold_after_revert_s=recovered, duration_s=float(t[-1]), outcome=outcome, refused=tuple(refused),
         faults=tuple(robot.host.stats.summary()["faults"]),
+        emergency_steps=len(snap.layers["abc"].emergency_steps),
         real_time_factor=(settle_s + float(t[-1])) / sim_wall_s,
         csv_path=None if csv_path is None else str(csv_path), png_path=None if png_path is None else str(png_path))

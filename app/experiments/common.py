@@ -117,6 +117,7 @@ class ExperimentResult:
     real_time_factor: float = 0.0  # simulated time (settling included) / wall time spent simulating it
     refused: tuple[str, ...] = ()  # planner commands the robot refused (when, why): e.g. after a motion stop
     faults: tuple[str, ...] = ()  # every distinct controller fault of the run (its RunStats); empty: none
+    emergency_steps: int = 0  # capture-point emergency steps the AutoBalancer took (issue 13.3)
     csv_path: str | None = None
     png_path: str | None = None
 

@@ -10,7 +10,8 @@ from controller.operation.points import WalkCommand
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
-__all__ = ["Estimate", "GaitState", "Ports", "Reference", "TickContext", "frozen_array", "read_only"]
+__all__ = ["BalanceEstimate", "Estimate", "GaitState", "Ports", "Reference", "TickContext", "frozen_array",
+           "read_only"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -31,6 +32,18 @@ class GaitState:
     cog_acc_world: np.ndarray | None = None  # (3,) planned COG acceleration [m/s^2]
     base_pos_world: np.ndarray | None = None  # (3,) BODY where the AutoBalancer put it this tick [m]
     base_rpy_rad: np.ndarray | None = None  # (3,) and its roll, pitch, yaw [rad] (op places the upper body on it)
+
+
+@dataclass(frozen=True, slots=True)
+class BalanceEstimate:
+    """The Stabilizer's estimate of the actual balance state in one tick, world frame (what the AutoBalancer's
+    emergency step reads next tick): encoders, KalmanFilter attitude and foot sensors, no ground truth."""
+
+    cog_world: np.ndarray  # (3,) actual COG [m]
+    cog_vel_world: np.ndarray  # (3,) its low-passed velocity [m/s]
+    zmp_world: np.ndarray  # (3,) measured ZMP [m]
+    cp_world_xy: np.ndarray  # (2,) actual capture point cog + cog_vel / omega [m]
+    omega_1_s: float  # sqrt(g / (z_cog - z_zmp_ref)) [1/s]
 
 
 @dataclass(frozen=True, slots=True)
@@ -165,6 +178,11 @@ class Ports:
     # st: BODY (roll, pitch) [rad] from the kinematics of the soles lying flat where the plan puts them
     # (body_tilt_from_flat_soles); kf takes it as its tilt measurement next tick. None: no sole qualified
     body_tilt_kin_rad: tuple[float, float] | None = None
+    # st: the actual COG, its velocity, the ZMP and the capture point (the emergency step's trigger and seed);
+    # None when the Stabilizer did not estimate (disabled, or no gait reference)
+    balance: BalanceEstimate | None = None
+    # abc: a capture-point emergency step is in progress; es stops (and holds) the motion on it
+    emergency_step: bool = False
 
 
 @dataclass(slots=True)

@@ -1,6 +1,7 @@
 """AutoBalancer layer ([MLC] III-C): footsteps and reference ZMP from the gait planner, COG by preview
 control (Eq. 5), COG offset against hand forces (Eq. 6), whole-body IK with feet, COG X-Y, base height
-and orientation; when not walking it keeps the COG over the feet while the upper body moves."""
+and orientation; when not walking it keeps the COG over the feet while the upper body moves, and steps when the
+capture point leaves the support polygon (the capture-point emergency step)."""
 
 from __future__ import annotations
 
@@ -18,13 +19,14 @@ from controller.balance.tilt_anchor import TiltAnchor
 from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
-from controller.core.types import GaitState, Reference, TickContext, read_only
+from controller.core.types import BalanceEstimate, GaitState, Reference, TickContext, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
 from controller.operation.points import WalkCommand
-from controller.walking.footsteps import FootstepParams, StepParams, StrideLimits
+from controller.walking.emergency_step import EmergencyStepParams, EmergencyStepPlan, SupportRegion, swing_leg_for
+from controller.walking.footsteps import Footstep, FootstepParams, StepParams, StrideLimits
 from controller.walking.gait_generator import GaitGenerator, GaitParams
 from controller.walking.preview_control import PreviewController, PreviewControlParams
 from controller.walking.toe_heel import ToeHeelParams
@@ -47,6 +49,16 @@ MAX_STRIDE_RANGE_M = (0.0, 0.3)
 #: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
 #: edges at 0.19 m) keep >= 2 cm apart at the low end
 FOOT_DISTANCE_RANGE_M = (0.14, 0.30)
+#: [-] share of the robot's weight the feet must carry for an emergency step (a robot held in the air does not step)
+EMERGENCY_STEP_MIN_LOAD_RATIO = 0.5
+#: [-] an emergency step's foot touches down early when it carries this share of the weight after this share of its
+#: swing (the force sensor of a foot swung fast reads its inertia: up to 110 N measured 5 cm above the ground)
+TOUCHDOWN_LOAD_RATIO = 0.25
+TOUCHDOWN_SWING_SHARE = 0.6
+#: emergency steps remembered in the status
+EMERGENCY_STEPS_KEPT = 10
+#: [s] the BODY lowering of an emergency step comes in over this time, and goes back over 4 times it once standing
+BASE_LOWERING_TIME_S = 0.2
 #: [m/s], [rad/s] the walking point's velocity bounds (the goVelocity verb's); the stride limits clamp the steps
 WALK_VELOCITY_LIMIT_M_S = 0.5
 WALK_VELOCITY_LIMIT_RAD_S = math.radians(45.0)
@@ -106,6 +118,47 @@ class AutoBalancerParams(Params):
     # the Stabilizer's capture-point flag rising while walking (Ports.cp_flag, its estop_while_walking) calls the
     # emergency walking stop: the steps end in place while the EmergencyStopper holds the motion
     walking_stop_on_cp_flag: bool = field(default=True, metadata={"unit": "-"})
+    # the capture-point emergency step (issue 13.3): standing, when the measured capture point is farther than
+    # emergency_step_cp_margin_m outside the support polygon (the ankles cannot bring it back), one step where it
+    # will be (controller/walking/emergency_step.py); the EmergencyStopper holds the motion, the robot ends
+    # standing with its feet apart. The other fields are EmergencyStepParams' (units and ranges the same)
+    emergency_step: bool = field(default=True, metadata={"unit": "-"})
+    emergency_step_cp_margin_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
+    emergency_step_zmp_margin_m: float = field(default=0.015, metadata={"unit": "m", "min": 0.0, "max": 0.05})
+    emergency_step_initial_double_support_s: float = field(default=0.05, metadata={"unit": "s", "min": 0.005,
+                                                                                   "max": 0.5})
+    emergency_step_time_s: float = field(default=0.45, metadata={"unit": "s", "min": 0.2, "max": 1.5})
+    emergency_step_double_support_ratio: float = field(default=0.2, metadata={"unit": "-", "min": 0.05, "max": 0.5})
+    emergency_step_final_double_support_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.2, "max": 5.0})
+    emergency_step_height_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.01, "max": 0.1})
+    emergency_step_max_forward_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.0, "max": 0.7})
+    emergency_step_max_backward_m: float = field(default=0.4, metadata={"unit": "m", "min": 0.0, "max": 0.7})
+    emergency_step_min_width_m: float = field(default=0.16, metadata={"unit": "m", "min": 0.14, "max": 0.4})
+    emergency_step_max_width_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.16, "max": 0.7})
+    emergency_step_landing_offset_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
+    emergency_step_replan_until_s: float = field(default=0.1, metadata={"unit": "s", "min": 0.0, "max": 0.5})
+    emergency_step_zmp_shift_s: float = field(default=0.03, metadata={"unit": "s", "min": 0.005, "max": 0.3})
+    # BODY is lowered by this while the emergency step is taken (the legs reach farther), and raised again once
+    # the robot stands
+    emergency_step_base_lowering_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.0, "max": 0.1})
+
+    def validate(self) -> None:
+        super().validate()
+        if self.emergency_step_min_width_m > self.emergency_step_max_width_m:
+            raise InvalidCommand(f"AutoBalancerParams.emergency_step_min_width_m={self.emergency_step_min_width_m} "
+                                 f"> emergency_step_max_width_m={self.emergency_step_max_width_m}; "
+                                 "the lateral range must not be empty")
+
+    def emergency_step_params(self) -> EmergencyStepParams:
+        return EmergencyStepParams(
+            cp_margin_m=self.emergency_step_cp_margin_m, zmp_margin_m=self.emergency_step_zmp_margin_m,
+            initial_double_support_s=self.emergency_step_initial_double_support_s,
+            step_time_s=self.emergency_step_time_s, double_support_ratio=self.emergency_step_double_support_ratio,
+            final_double_support_s=self.emergency_step_final_double_support_s,
+            step_height_m=self.emergency_step_height_m, max_forward_m=self.emergency_step_max_forward_m,
+            max_backward_m=self.emergency_step_max_backward_m, min_width_m=self.emergency_step_min_width_m,
+            max_width_m=self.emergency_step_max_width_m, landing_offset_m=self.emergency_step_landing_offset_m,
+            replan_until_s=self.emergency_step_replan_until_s, zmp_shift_s=self.emergency_step_zmp_shift_s)
 
     def gait_params(self, base: GaitParams | None = None) -> GaitParams:
         return (base or GaitParams()).replaced(double_support_ratio_before=self.double_support_ratio_before,
@@ -136,6 +189,19 @@ class FootstepStatus:
 
 
 @dataclass(frozen=True, slots=True)
+class EmergencyStepRecord:
+    """A capture-point emergency step the AutoBalancer took, world frame."""
+
+    leg: str = field(metadata=described("the leg that stepped, 'rleg' or 'lleg'"))
+    time_s: float = field(metadata=described("simulated time the step was triggered", "s"))
+    cp_at_trigger: tuple[float, float] = field(metadata=described("measured capture point at the trigger", "m"))
+    landing: tuple[float, float] = field(metadata=described(
+        "where the sole lands (x, y): the target while stepping, where it touched down once landed", "m"))
+    landed: bool = field(metadata=described("the foot is down"))
+    landed_early: bool = field(metadata=described("it touched down before the planned time (where it was)"))
+
+
+@dataclass(frozen=True, slots=True)
 class AutoBalancerStatus(Status):
     active: bool = field(metadata=described("the AutoBalancer is running (started)"))
     weight: float = field(metadata=described("start/stop blend weight, 0..1", "-"))
@@ -148,6 +214,11 @@ class AutoBalancerStatus(Status):
         "the walking point (Ports.walk_command): 'idle', 'walking' (abc walks at it), or 'ignored: <why>'"))
     preview_gains: str = field(default="current", metadata=described(
         "'current', or 'pending': new preview_q / preview_r wait for the next standstill"))
+    emergency_step: bool = field(default=False, metadata=described(
+        "a capture-point emergency step is in progress: goPos, goVelocity, setFootSteps and the walking point are "
+        "refused and the EmergencyStopper holds the motion"))
+    emergency_steps: tuple[EmergencyStepRecord, ...] = field(default=(), metadata=described(
+        "the emergency steps taken, oldest first (the last 10)"))
 
 
 #: New preview gains (preview_q / preview_r) are computed off the control thread (a Riccati solve, ~15 ms) and
@@ -208,6 +279,12 @@ class AutoBalancer(Layer):
         self._walk_armed = True  # False after an e-stop or walking stop, until the walking point reads zero
         self._walk_point = "idle"
         self._last_cp_flag = False  # Ports.cp_flag as the last tick read it (the walking stop is on its rise)
+        self._estep: EmergencyStepPlan | None = None  # the emergency step being taken
+        self._estep_k = 0  # samples of its plan handed out
+        self._estep_lifted = False  # the swinging foot has been unloaded in this swing
+        self._estep_records: tuple[EmergencyStepRecord, ...] = ()
+        self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
+        self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
         if active:
             self.start()
 
@@ -295,6 +372,7 @@ class AutoBalancer(Layer):
         and a velocity walk (the walking point's too) ends in it. Returns 0 when the walk is in its last
         step: the new goal is then walked to from where the robot stands at its end."""
         self._require_active("goPos")
+        self._require_no_emergency_step("goPos")
         if self.walking_stop:
             raise InvalidState("goPos: the emergency walking stop is in force (stepping in place); "
                                "goPos again once the robot stands")
@@ -308,15 +386,29 @@ class AutoBalancer(Layer):
 
     def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
         self._require_active("goVelocity")
+        self._require_no_emergency_step("goVelocity")
         self._walking_stop_requested = False
         self.gait.go_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
 
     def go_stop(self) -> None:
         self.gait.go_stop()
 
+    @property
+    def emergency_step(self) -> bool:
+        """A capture-point emergency step is in progress."""
+        return self._estep is not None
+
+    def _require_no_emergency_step(self, what: str) -> None:
+        if self._estep is not None:
+            raise InvalidState(f"{what}: a capture-point emergency step is in progress; {what} again once the "
+                               "robot stands (status: abc.emergency_step false)")
+
     def emergency_stop_walking(self) -> None:
         """Remaining footsteps replaced so the robot stops in place (manipulation is left alone). The walking
-        point is ignored from now until it reads zero (a held stick does not walk on after the stop)."""
+        point is ignored from now until it reads zero (a held stick does not walk on after the stop). An emergency
+        step in progress goes on (it ends standing by itself)."""
+        if self._estep is not None:
+            return
         self.gait.emergency_stop()
         self._walking_stop_requested = True
         self._disarm_walk_point()
@@ -351,6 +443,8 @@ class AutoBalancer(Layer):
         self._walk_point = "walking"
 
     def _walk_point_refusal(self, cmd: WalkCommand) -> str | None:
+        if self._estep is not None:
+            return "ignored: a capture-point emergency step is in progress"
         if not self._walk_armed:
             return "ignored: stopped; the walking point must read zero once before walking again"
         if self.walking_stop:
@@ -369,6 +463,7 @@ class AutoBalancer(Layer):
         """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
         the current pose of that leg."""
         self._require_active("setFootSteps")
+        self._require_no_emergency_step("setFootSteps")
         if self.gait.walking:
             raise InvalidState("setFootSteps while walking is not supported; wait for the steps to finish")
         self._walking_stop_requested = False
@@ -425,9 +520,13 @@ class AutoBalancer(Layer):
         if self._weight <= 0.0 and not self.active:
             self.last_gait = None
             return ref
+        if self._estep is not None:
+            self._emergency_step_tick(ctx)
+        elif self.params.emergency_step and not self.gait.walking and self._blend is None:
+            self._check_emergency_step(ctx)
         flag = ctx.last_ports.cp_flag
         if flag and not self._last_cp_flag and self.params.walking_stop_on_cp_flag and self.gait.walking \
-                and not self.walking_stop:
+                and not self.walking_stop and self._estep is None:
             self.emergency_stop_walking()
         self._last_cp_flag = flag
         cmd = ctx.ports.walk_command
@@ -450,7 +549,10 @@ class AutoBalancer(Layer):
         base_rpy = np.array((roll, pitch, yaw_in + yaw))
         R_body = np.array(rpy_to_rows(roll, pitch, yaw_in + yaw))
         rsole, lsole = (g.p_rfoot_world, g.R_rfoot_world), (g.p_lfoot_world, g.R_lfoot_world)
-        res = self.ik.solve(ref.q_rad, float(ref.base_pos_world[2]), R_body, cog_abc_xy, rsole, lsole)
+        base_z = float(ref.base_pos_world[2])
+        if self._base_lowering_m or self._estep is not None:
+            base_z -= self._lower_base(ctx.dt_s)
+        res = self.ik.solve(ref.q_rad, base_z, R_body, cog_abc_xy, rsole, lsole)
         self.has_ik_failed = not res.reachable
         self._hand_pos_stale = True  # the hands moved with the solve: _hand_positions() reads them if needed
         com_z = float(res.com_world[2])
@@ -482,7 +584,118 @@ class AutoBalancer(Layer):
         self._last_in = ref
         ctx.ports.cog_acc_world = gait.cog_acc_world
         ctx.ports.gait = gait
+        if self._estep is not None:
+            self._estep_k += 1
         return self._last_out
+
+    # ---- the capture-point emergency step ---------------------------------------------------------------
+    def _check_emergency_step(self, ctx: TickContext) -> None:
+        """Standing: step when the capture point the Stabilizer measured last tick is farther than the margin
+        outside the support polygon of the two soles (and the feet carry the robot)."""
+        bal = ctx.last_ports.balance
+        g = self.last_gait
+        if bal is None or g is None or ctx.hold or g.walking:
+            return
+        support = self._support
+        if support is None or support[0] is not g.p_rsole_world:  # the idle soles' arrays: rebuilt when they move
+            support = self._support = (g.p_rsole_world, SupportRegion.of_soles(
+                (g.p_rsole_world, g.R_rsole_world), (g.p_lsole_world, g.R_lsole_world)))
+        cx, cy = bal.cp_world_xy.tolist()
+        if support[1].outside_m(cx, cy) <= self.params.emergency_step_cp_margin_m:
+            return
+        rows = ctx.estimate.wrenches_ext.tolist()
+        fz_r, fz_l = rows[FEET[0]][2], rows[FEET[1]][2]
+        if fz_r + fz_l < EMERGENCY_STEP_MIN_LOAD_RATIO * self.total_mass * GRAVITY_M_S2:
+            return
+        self._start_emergency_step(ctx, bal, fz_r, fz_l)
+
+    def _start_emergency_step(self, ctx: TickContext, bal: BalanceEstimate, fz_r: float, fz_l: float) -> None:
+        """Plan the step from the feet where the (idle) gait has them and start it this tick."""
+        gait = self.gait
+        rfoot, lfoot = Footstep.from_T("rleg", gait.T_world_rfoot), Footstep.from_T("lleg", gait.T_world_lfoot)
+        yaw = math.atan2(math.sin(rfoot.yaw) + math.sin(lfoot.yaw), math.cos(rfoot.yaw) + math.cos(lfoot.yaw))
+        dx = float(bal.cp_world_xy[0]) - 0.5 * (rfoot.x + lfoot.x)
+        dy = float(bal.cp_world_xy[1]) - 0.5 * (rfoot.y + lfoot.y)
+        c, s_ = math.cos(yaw), math.sin(yaw)
+        leg = swing_leg_for((c * dx + s_ * dy, -s_ * dx + c * dy), fz_r, fz_l)
+        stance, swing = (rfoot, lfoot) if leg == "lleg" else (lfoot, rfoot)
+        plan = EmergencyStepPlan(self.params.emergency_step_params(), self.dt_s, stance, swing, bal.cp_world_xy,
+                                 bal.zmp_world, bal.omega_1_s)
+        gait.plan(plan.footsteps(), params=plan.gait_params(gait.params))
+        gait.set_zmp(plan.zmp(0))
+        self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
+        self._estep, self._estep_k = plan, 0
+        self._walking_stop_requested = False
+        self._disarm_walk_point()  # a stick held through the step must be released before it walks again
+        self._estep_records = (*self._estep_records, EmergencyStepRecord(
+            leg=leg, time_s=ctx.time_s, cp_at_trigger=tuple(bal.cp_world_xy.tolist()),
+            landing=tuple(plan.landing_xy.tolist()), landed=False, landed_early=False))[-EMERGENCY_STEPS_KEPT:]
+        ctx.ports.emergency_step = True
+
+    def _emergency_step_tick(self, ctx: TickContext) -> None:
+        """One tick of the emergency step before the gait samples it: the landing follows the measured capture
+        point (until shortly before touchdown), a foot that touches down early lands where it is, the COG plan
+        restarts from the measured COG until the foot is down; the plan's end ends it (standing, the feet apart)."""
+        plan, k = self._estep, self._estep_k
+        if not self.gait.walking:
+            self._estep = None
+            self._update_record(plan, landed=True)
+            return
+        ctx.ports.emergency_step = True
+        bal = ctx.last_ports.balance
+        moved = False
+        if plan.swinging(k) and self._touched_down(ctx, plan, k):
+            x, y = self._measured_sole_xy(ctx, plan)
+            plan.land(k, (x, y))
+            self.gait.move_footsteps({1: (x, y)}, landed=True)
+            moved = True
+        elif bal is not None and plan.replan(k, bal.cp_world_xy):
+            self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())})
+            moved = True
+        if moved:
+            self.gait.set_zmp(plan.zmp(k))
+        if moved or k == plan.touchdown_k:
+            self._update_record(plan, landed=k >= plan.touchdown_k)
+        if bal is not None and k < plan.touchdown_k:  # the COG plan follows the measured COG until the foot is down
+            self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
+
+    def _touched_down(self, ctx: TickContext, plan: EmergencyStepPlan, k: int) -> bool:
+        """The swing foot, in the air before, carries TOUCHDOWN_LOAD_RATIO of the weight late in its swing: it has
+        touched the ground early. (A foot that never left the ground is not landing: it is dragged.)"""
+        fz = float(ctx.estimate.wrenches_ext[FEET[0 if plan.swing.leg == "rleg" else 1]][2])
+        if k == plan.n_lift:
+            self._estep_lifted = False
+        if fz < SWING_FOOT_LOADED_N:
+            self._estep_lifted = True
+            return False
+        late = k - plan.n_lift >= TOUCHDOWN_SWING_SHARE * (plan.n_touchdown - plan.n_lift)
+        return self._estep_lifted and late and fz > TOUCHDOWN_LOAD_RATIO * self.total_mass * GRAVITY_M_S2
+
+    @staticmethod
+    def _measured_sole_xy(ctx: TickContext, plan: EmergencyStepPlan) -> tuple[float, float]:
+        """Where the swing sole is [m]: the stance sole where the plan has it plus the measured kinematics from it to
+        the swing sole (encoders and the KalmanFilter attitude)."""
+        pos = ctx.estimate.sensor_pos_from_base.tolist()
+        i_sw, i_st = (FEET[0], FEET[1]) if plan.swing.leg == "rleg" else (FEET[1], FEET[0])
+        return (plan.stance.x + pos[i_sw][0] - pos[i_st][0], plan.stance.y + pos[i_sw][1] - pos[i_st][1])
+
+    def _lower_base(self, dt_s: float) -> float:
+        """BODY's lowering [m] this tick: toward emergency_step_base_lowering_m while an emergency step is taken,
+        back to zero once the robot stands (rate-limited, both ways)."""
+        target = self.params.emergency_step_base_lowering_m if self._estep is not None else 0.0
+        rate = self.params.emergency_step_base_lowering_m / BASE_LOWERING_TIME_S * (1.0 if target else 0.25)
+        step = max(rate, 1e-6) * dt_s
+        low = self._base_lowering_m
+        low = min(low + step, target) if target > low else max(low - step, target)
+        self._base_lowering_m = low
+        return low
+
+    def _update_record(self, plan: EmergencyStepPlan, landed: bool) -> None:
+        """The status record of the step in progress (the last one): its landing and whether it is down."""
+        if self._estep_records:
+            *rest, last = self._estep_records
+            self._estep_records = (*rest, dataclasses.replace(
+                last, landing=tuple(plan.landing_xy.tolist()), landed=landed, landed_early=plan.landed_k is not None))
 
     def _resume(self, ctx: TickContext) -> None:
         """Released from the hard e-stop: the robot stood still, so the COG plan restarts from rest where it
@@ -532,6 +745,7 @@ class AutoBalancer(Layer):
             self._holding = True
             self._disarm_walk_point()
             self._walk_point = "ignored: the hard e-stop holds"
+            self._estep = None  # the stop from rest replaces an emergency step too
             if self.gait.walking:
                 self._walking_stop_requested = True
                 self.gait.stop_from_rest(self._rest_zmp_xy(self._last_out.gait))
@@ -550,7 +764,8 @@ class AutoBalancer(Layer):
                                   walking_stop=self.walking_stop, has_ik_failed=self.has_ik_failed,
                                   footsteps=self._status_footsteps() if self.gait.walking else (),
                                   walk_point=self._walk_point,
-                                  preview_gains="current" if self._pending_preview is None else "pending")
+                                  preview_gains="current" if self._pending_preview is None else "pending",
+                                  emergency_step=self._estep is not None, emergency_steps=self._estep_records)
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes

@@ -1,6 +1,6 @@
 """EmergencyStopper layer ([MLC] III-E, Eq. 15): stops the planned motion and reverts it by T1 over T2
-when the Stabilizer's capture-point flag rises or the operator says stop; the balance layers after it
-keep running. Release blends back to the live plan (hrpsys recover)."""
+when the Stabilizer's capture-point flag rises, the AutoBalancer takes an emergency step or the operator says
+stop; the balance layers after it keep running. Release blends back to the live plan (hrpsys recover)."""
 
 from __future__ import annotations
 
@@ -27,7 +27,8 @@ class EmergencyStopperParams(Params):
 @dataclass(frozen=True, slots=True)
 class EmergencyStopperStatus(Status):
     stopped: bool = field(metadata=described("the planned motion is stopped (reverting or holding)"))
-    reason: str | None = field(metadata=described("why: 'capture_point' (the Stabilizer's flag) or 'operator'"))
+    reason: str | None = field(metadata=described(
+        "why: 'capture_point' (the Stabilizer's flag), 'emergency_step' (the AutoBalancer's) or 'operator'"))
     flag_time: float | None = field(metadata=described("simulated time of the last stop", "s"))
     recovering: bool = field(metadata=described("blending back to the live plan after a release"))
     t1_s: float = field(metadata=described("T1: how far back the revert goes", "s"))
@@ -104,7 +105,8 @@ class MotionReverter:
 
 class EmergencyStopper(Layer):
     """Sits after the SequencePlayer. Autonomous stop from the `cp_flag` port (the Stabilizer's capture-point
-    flag, one tick old as in hrpsys), manual stop from `stop_motion()`; latched until `release_motion()`.
+    flag, one tick old as in hrpsys) and the `emergency_step` port (the AutoBalancer steps), manual stop from
+    `stop_motion()`; latched until `release_motion()`.
     While the hard e-stop holds the chain, the flag is not acted on (nothing moves to revert)."""
 
     name = "es"
@@ -149,9 +151,11 @@ class EmergencyStopper(Layer):
         x_seq = pack(ref)
         t = ctx.time_s
         self.reverter.push(t, x_seq)
-        flag = ctx.last_ports.cp_flag and not ctx.last_ports.hold
-        if not self.stopped and (flag or self._requested):
-            self.reason = self._requested or "capture_point"
+        last = ctx.last_ports
+        flag = last.cp_flag and not last.hold
+        step = last.emergency_step and not last.hold
+        if not self.stopped and (flag or step or self._requested):
+            self.reason = self._requested or ("emergency_step" if step else "capture_point")
             self.flag_time_s = t
             self._requested = None
             prev = self._last_out if self._last_out is not None else x_seq

@@ -23,7 +23,7 @@ from controller.balance.state_estimation import ActualStateEstimator, body_tilt_
 from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidState
 from controller.core.layer import Layer, Params, Status, described
-from controller.core.types import GaitState, Reference, TickContext
+from controller.core.types import BalanceEstimate, GaitState, Reference, TickContext
 from controller.interpolation.blend import Transition
 from controller.kinematics.leg_ik import LEG_INDICES, LLEG, RLEG, leg_ik_floats
 from controller.kinematics.model import RobotKinematics
@@ -62,6 +62,11 @@ class StabilizerParams(Params):
     # with the hands loaded pitch uses rot_damping_gain too
     rot_damping_gain_pitch: float = field(default=150.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
     rot_damping_gain_walking: float = field(default=3000.0, metadata={"unit": "N m s/rad", "min": 1.0, "max": 1e6})
+    # during the AutoBalancer's capture-point emergency step (Ports.emergency_step): the walking gain keeps the
+    # landed foot's sole from following the ZMP it is asked for (after a 30 N s backward push the load stays on
+    # the front foot and the CP runs past the landed heel: falls with 1500-3000, stands with 300-1000)
+    rot_damping_gain_emergency_step: float = field(default=1000.0, metadata={"unit": "N m s/rad", "min": 1.0,
+                                                                              "max": 1e6})
     rot_time_const_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.01, "max": 100.0})
     rot_limit_deg: float = field(default=10.0, metadata={"unit": "deg", "min": 0.0, "max": 30.0})
     # foot vertical force difference control
@@ -141,6 +146,7 @@ class Stabilizer(Layer):
         self.cp_ref = np.zeros(2)
         self.cp_act = np.zeros(2)
         self.cp_error = np.zeros(2)
+        self.omega_1_s = math.sqrt(GRAVITY_M_S2 / 0.8)  # [1/s] the LIP's, from the last estimate
         self.emergency = False
         self.flag_rose_at_s: float | None = None
         self.new_zmp = np.zeros(3)
@@ -191,6 +197,8 @@ class Stabilizer(Layer):
             self.emergency = False
             return ref
         self._capture_points(cog, gait)
+        ctx.ports.balance = BalanceEstimate(cog_world=cog, cog_vel_world=self.act_cogvel, zmp_world=zmp,
+                                            cp_world_xy=self.cp_act, omega_1_s=self.omega_1_s)
         ctx.ports.body_tilt_kin_rad = self._body_tilt_kin(est, gait)
         foot_wrenches = self._foot_wrenches(est)
         contact_act = tuple(w[2] > self.params.contact_threshold_n for w in foot_wrenches)
@@ -206,7 +214,8 @@ class Stabilizer(Layer):
         zmp_new_xy = self._lip_feedback(cog, zmp, est, gait)
         contact_idx = [i for i in (0, 1) if gait.contact[i]]
         forces = self._distribute(zmp_new_xy, contact_idx, gait)
-        self._foot_damping(dt, contact_idx, contact_act, foot_wrenches, forces, gait.walking, self._hands_loaded(est))
+        self._foot_damping(dt, contact_idx, contact_act, foot_wrenches, forces, gait.walking, self._hands_loaded(est),
+                           ctx.ports.emergency_step)
         self._force_difference(dt, contact_idx, contact_act, foot_wrenches, forces)
         self._body_attitude(dt, est, ref)
         self._last_out = self._legs(ref, gait)
@@ -237,7 +246,7 @@ class Stabilizer(Layer):
         """cp = x + v / omega with omega = sqrt(g / (z_cog - z_zmp)) ([MLC] III-E), reference and actual."""
         cz = float(cog[2])
         height = max(MIN_LIP_HEIGHT_M, cz - float(gait.zmp_world[2]))
-        omega = math.sqrt(GRAVITY_M_S2 / height)
+        omega = self.omega_1_s = math.sqrt(GRAVITY_M_S2 / height)
         gcx, gcy = gait.cog_world[:2].tolist()
         gvx, gvy, _ = gait.cog_vel_world.tolist()
         cx, cy = cog[:2].tolist()
@@ -298,15 +307,18 @@ class Stabilizer(Layer):
         return forces
 
     def _foot_damping(self, dt: float, contact_idx: list[int], contact_act, foot_wrenches, forces,
-                      walking: bool, hands_loaded: bool = False) -> None:
+                      walking: bool, hands_loaded: bool = False, emergency_step: bool = False) -> None:
         """Eq. 3 with m = 0 on each sole's roll and pitch: d(rpy)/dt = (tau_act - tau_ref) / D - rpy / T for a
         foot in contact; a swing foot returns to the plan with SWING_FOOT_RETURN_TIME_CONST_S."""
         p = self.params
         # (roll, pitch); with the hands loaded (a sustained moment: a wall, a door) pitch keeps the roll's gain,
         # the soft pitch let the soles drift under it (the door push-plan's CP error crept back over the threshold)
         pitch = p.rot_damping_gain if hands_loaded else p.rot_damping_gain_pitch
-        damping = ((p.rot_damping_gain_walking, p.rot_damping_gain_walking) if walking
-                   else (p.rot_damping_gain, pitch))
+        if emergency_step:
+            damping = (p.rot_damping_gain_emergency_step, p.rot_damping_gain_emergency_step)
+        else:
+            damping = ((p.rot_damping_gain_walking, p.rot_damping_gain_walking) if walking
+                       else (p.rot_damping_gain, pitch))
         T_rot = p.rot_time_const_s
         d_foot = self.d_foot_rpy.tolist()
         n_xy = forces.n_xy_nm.tolist()

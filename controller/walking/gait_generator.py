@@ -173,6 +173,7 @@ class GaitGenerator:
         self._walk_origin = mid_coords(self._feet["rleg"], self._feet["lleg"])  # (x, y, yaw) where the walk began
         self._pending_goal: tuple[float, float, float] | None = None  # goPos goal mid-coords for after this walk
         self._velocity_step: tuple[float | None, float | None] = (None, None)  # (max stride, foot distance) [m]
+        self._plan_params: GaitParams | None = None  # the plan's own timing (an emergency step's), else params
         self._idle = self._idle_sample()
 
     def __repr__(self) -> str:
@@ -228,8 +229,11 @@ class GaitGenerator:
 
     # ----- commands (planning) --------------------------------------------------------------------------
 
-    def plan(self, footsteps: Sequence[Footstep]) -> None:
-        """Start walking on `footsteps`; footsteps[0] must be the current pose of its leg (the support foot)."""
+    def plan(self, footsteps: Sequence[Footstep], params: GaitParams | None = None) -> None:
+        """Start walking on `footsteps`; footsteps[0] must be the current pose of its leg (the support foot).
+
+        `params`: timing and ZMP of this plan only (an emergency step's short double supports), kept by its
+        replans; None: the generator's `params`."""
         if self._walking:
             raise InvalidState("already walking: use go_velocity / go_stop / emergency_stop, or wait for the end")
         footsteps = list(footsteps)
@@ -242,10 +246,11 @@ class GaitGenerator:
         self._footsteps = footsteps
         self._plan_version += 1
         self._stopping_from_rest = False
+        self._plan_params = params
         self._walk_origin = mid_coords(self._feet["rleg"], self._feet["lleg"])
         q0 = np.stack([_q_of(self._feet["rleg"]), _q_of(self._feet["lleg"])])
         self._segments = [_Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0,
-                                   params=self.params)]
+                                   params=params or self.params)]
         self._tick = self._origin = 0
         self._arrays = None
         self._walking = True
@@ -473,6 +478,75 @@ class GaitGenerator:
         self._plan_version += 1
         self._resample_from(from_index - 1)
 
+    def move_footsteps(self, xy_by_index: dict[int, tuple[float, float]], landed: bool = False) -> None:
+        """Move footsteps {index: (x, y) [m]} (world; heights and orientations kept) while the plan is walked: the
+        emergency step re-plans its landings from the measured capture point.
+
+        A footstep not stepped yet is replaced. The footstep being stepped on: the rest of its swing bends toward
+        the new landing by a min-jerk blend from the pose planned for the next tick (no jump); `landed`: its foot
+        has touched the ground there already (earlier than planned), so it stays there and the rest of the step is
+        double support. The reference ZMP of the rest of that step is recomputed from the new foot poses (flat
+        soles, no toe-heel offsets); the later segments are resampled once."""
+        if not self._walking or self._stopping_from_rest:
+            raise InvalidState("move_footsteps needs a footstep plan being walked")
+        seg_i = self._segments.index(self._current_segment())
+        seg = self._segments[seg_i]
+        for index in xy_by_index:
+            if not seg.index <= index < len(self._footsteps) or (index == seg.index and seg.kind != "step"):
+                raise InvalidCommand(f"move_footsteps({index}): only the footstep being stepped on ({seg.index}, "
+                                     f"{seg.kind}) or a later one (< {len(self._footsteps)}) may move")
+        if landed and seg.index not in xy_by_index:
+            raise InvalidState(f"move_footsteps(landed=True) must move the footstep being stepped on ({seg.index})")
+        for index, (x_m, y_m) in xy_by_index.items():
+            fs = self._footsteps[index]
+            if index == seg.index:
+                self._bend_swing(seg, fs, float(x_m), float(y_m), landed)
+            self._footsteps[index] = fs.replaced(x=float(x_m), y=float(y_m))
+        self._plan_version += 1
+        self._resample_from(seg_i, keep_first=True)
+
+    def _bend_swing(self, seg: _Segment, fs: Footstep, x_m: float, y_m: float, landed: bool) -> None:
+        """move_footsteps' patch of the rest of the segment being stepped (see there)."""
+        sw = _L if fs.leg == "lleg" else _R
+        a = self._arrays
+        j0 = self._tick - self._origin  # the next sample handed out
+        base = seg.start_tick - self._origin  # the segment's first sample
+        j1 = base + seg.n_ticks
+        p, R, support, zmp = a["p"].copy(), a["R"].copy(), a["support"].copy(), a["zmp"].copy()
+        gp = seg.params or self.params
+        if landed:
+            q_dst = _q_of(fs)
+            p[sw, j0:j1] = (x_m, y_m, q_dst[2])
+            R[sw, j0:j1] = _rpy_matrices(q_dst[None, 3:])[0]
+            support[j0:j1] = _BOTH
+        else:
+            # local rows 0 .. n_land - 1 swing (t < ta); the blend reaches 1 on the last of them
+            n_land = int(np.ceil((1.0 - gp.double_support_ratio_after) * seg.n_ticks - 1e-9)) - 1
+            i = np.arange(j0, j1) - base
+            i0 = j0 - base
+            w = np.where(i >= n_land - 1, 1.0, min_jerk((i - i0 + 1) / max(n_land - i0, 1)))
+            p[sw, j0:j1, 0] += w * (x_m - fs.x)
+            p[sw, j0:j1, 1] += w * (y_m - fs.y)
+        r = a["r"][j0:j1]
+        cop = np.einsum("fnij,fj->fni", R[:, j0:j1], self._zmp_offsets)  # (2, n, 3) flat soles
+        zmp[j0:j1] = (1.0 - r)[:, None] * (p[_R, j0:j1] + cop[_R]) + r[:, None] * (p[_L, j0:j1] + cop[_L])
+        self._arrays = {**a, "p": read_only(p), "R": read_only(R), "support": read_only(support),
+                        "zmp": read_only(zmp)}
+        seg.q_end = seg.q_end.copy()
+        seg.q_end[sw, :2] = (x_m, y_m)
+
+    def set_zmp(self, zmp_world: np.ndarray) -> None:
+        """Overwrite the reference ZMP of the next ticks with `zmp_world` (m, 3) [m], row 0 for the next tick
+        (the emergency step plans it from the measured capture point); rows past the plan's end are dropped,
+        the plan's own ZMP stays after the m given."""
+        if not self._walking:
+            raise InvalidState("set_zmp needs a walk in progress")
+        zmp = self._arrays["zmp"].copy()
+        j0 = self._tick - self._origin
+        m = min(len(zmp_world), len(zmp) - j0)
+        zmp[j0:j0 + m] = np.asarray(zmp_world, dtype=float)[:m]
+        self._arrays = {**self._arrays, "zmp": read_only(zmp)}
+
     # ----- per tick -------------------------------------------------------------------------------------
 
     def tick(self) -> GaitSample:
@@ -593,19 +667,22 @@ class GaitGenerator:
         """Eq. 4 weight of the left foot while footstep k is stepped on (support = the other leg)."""
         return 1.0 if other_leg(self._footsteps[k].leg) == "lleg" else 0.0
 
-    def _resample_from(self, seg_index: int) -> None:
-        """Rebuild segments seg_index.. (and the end segment) and their samples; keep what comes before."""
+    def _resample_from(self, seg_index: int, keep_first: bool = False) -> None:
+        """Rebuild segments seg_index.. (and the end segment) and their samples; keep what comes before.
+        `keep_first`: segment seg_index keeps its samples (patched by the caller), the later ones are rebuilt."""
         seg_index = max(seg_index, 0)
         segs = self._segments[: seg_index + 1]
         n_steps = len(self._footsteps)
+        gp = self._plan_params or self.params
         for k in range(seg_index + 1, n_steps + 1):
             prev = segs[-1]
-            duration = self._footsteps[k].step_time_s if k < n_steps else self.params.final_double_support_s
+            duration = self._footsteps[k].step_time_s if k < n_steps else gp.final_double_support_s
             segs.append(_Segment("step" if k < n_steps else "end", k, duration, self._n_ticks(duration),
-                                 prev.start_tick + prev.n_ticks, None, params=self.params))
+                                 prev.start_tick + prev.n_ticks, None, params=gp))
         self._segments = segs
         blocks = []
-        for k in range(seg_index, len(segs)):
+        first = seg_index + 1 if keep_first else seg_index
+        for k in range(first, len(segs)):
             if k > 0:
                 segs[k].q_start = segs[k - 1].q_end
             blocks.append(self._sample_segment(segs[k]))
@@ -613,7 +690,7 @@ class GaitGenerator:
         new = {key: np.concatenate([b[key] for b in blocks], axis=1 if key in ("p", "R") else 0)
                for key in blocks[0]}
         if self._arrays is not None:
-            lo, hi = keep_from - self._origin, segs[seg_index].start_tick - self._origin
+            lo, hi = keep_from - self._origin, segs[first].start_tick - self._origin
             new = {key: np.concatenate([self._arrays[key][:, lo:hi] if key in ("p", "R") else self._arrays[key][lo:hi],
                                         new[key]], axis=1 if key in ("p", "R") else 0) for key in new}
         self._origin = keep_from

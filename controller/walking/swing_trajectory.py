@@ -1,4 +1,5 @@
-"""Swing-foot position and orientation between two footholds over the swing time (cycloid, rectangle)."""
+"""Swing-foot position and orientation between two footholds over the swing time (cycloid, rectangle,
+trapezoid)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,9 @@ from controller.interpolation.hoff_arbib import min_jerk
 
 __all__ = ["ORBIT_TYPES", "swing_position", "swing_rpy"]
 
-ORBIT_TYPES = ("cycloid", "rectangle")
+ORBIT_TYPES = ("cycloid", "rectangle", "trapezoid")
+#: share of the swing over which the trapezoid orbit's horizontal speed ramps up, and again down
+TRAPEZOID_RAMP = 0.25
 
 
 def _cycloid(s: np.ndarray, p_src: np.ndarray, p_dst: np.ndarray, step_height_m: float) -> np.ndarray:
@@ -39,6 +42,24 @@ def _rectangle(s: np.ndarray, p_src: np.ndarray, p_dst: np.ndarray, step_height_
     return p
 
 
+def _trapezoid(s: np.ndarray, p_src: np.ndarray, p_dst: np.ndarray, step_height_m: float) -> np.ndarray:
+    """The cycloid's height with a horizontal speed that ramps up (raised cosine) over the first TRAPEZOID_RAMP of
+    the swing, stays constant, and ramps down over the last: its peak is 1 / (1 - ramp) = 4/3 of the mean speed
+    against the cycloid's 2, so a step that must be fast (the emergency step) asks the joints less."""
+    a = TRAPEZOID_RAMP
+    v = 1.0 / (1.0 - a)  # cruise speed of the ratio [1 / swing]
+    # ramp up: the speed v (1 - cos(pi s / a)) / 2, integrated
+    up = 0.5 * v * (s - (a / np.pi) * np.sin(np.pi * s / a))
+    cruise = 0.5 * v * a + v * (s - a)
+    ratio = np.where(s < a, up, np.where(s <= 1.0 - a, cruise, 1.0 - 0.5 * v * ((1.0 - s) - (a / np.pi)
+                                                                                 * np.sin(np.pi * (1.0 - s) / a))))
+    ratio = np.where(s >= 1.0, 1.0, ratio)
+    lift = np.where((s <= 0.0) | (s >= 1.0), 0.0, 0.5 * step_height_m * (1.0 - np.cos(2.0 * np.pi * s)))
+    p = p_src + (p_dst - p_src) * ratio[:, None]
+    p[:, 2] += lift
+    return p
+
+
 def swing_position(s, p_src, p_dst, step_height_m: float, orbit_type: str = "cycloid") -> np.ndarray:
     """(n, 3) swing-foot sole position [m] at swing ratios `s` (n,) in [0, 1]; zero velocity at both ends.
 
@@ -52,6 +73,8 @@ def swing_position(s, p_src, p_dst, step_height_m: float, orbit_type: str = "cyc
         return _cycloid(s, p_src, p_dst, step_height_m)
     if orbit_type == "rectangle":
         return _rectangle(s, p_src, p_dst, step_height_m)
+    if orbit_type == "trapezoid":
+        return _trapezoid(s, p_src, p_dst, step_height_m)
     raise ValueError(f"orbit_type {orbit_type!r}; valid: {list(ORBIT_TYPES)}")
 
 

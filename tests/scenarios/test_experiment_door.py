@@ -14,6 +14,7 @@ DOOR_OPENED_DEG = -10.0
 def test_door_pull_opens_the_door_and_the_robot_stands(tmp_path):
     r = run_experiment("door", es=True, variant="pull", out_dir=tmp_path, plot=False)
     assert r.verdict == "stood"
+    assert r.emergency_steps == 0  # no capture-point emergency step (issue 13.3)
     assert r.flag_time_s is None  # an undisturbed pull does not raise the flag
     assert r.outcome["door_angle_deg"] < DOOR_OPENED_DEG  # opened toward the robot by more than 10 deg
     assert r.faults == ()  # the run's own fault counter
@@ -23,6 +24,7 @@ def test_door_pull_opens_the_door_and_the_robot_stands(tmp_path):
 def test_door_push_plan_with_the_emergency_stopper_flags_inside_the_support_and_recovers(tmp_path):
     r = run_experiment("door", es=True, variant="push-plan", out_dir=tmp_path, plot=False)
     assert r.verdict == "stood"
+    assert r.emergency_steps == 0  # no capture-point emergency step (issue 13.3)
     assert r.flag_time_s is not None and r.flag_time_s > 4.5  # during the push, which starts at 4.5 s
     assert r.edge_margin_at_flag_m > 0.0  # the actual CP was still inside the support polygon
     assert r.below_threshold_after_revert_s is not None and r.below_threshold_after_revert_s < 2.0

@@ -17,6 +17,7 @@ from app.service.local import LocalRobot
 def test_undisturbed_the_robot_stands_and_turns_the_valve_by_a_third_of_the_planned_90_deg_or_more(tmp_path):
     r = run_experiment("valve", variant="undisturbed", out_dir=tmp_path, plot=False)
     assert r.verdict == "stood"
+    assert r.emergency_steps == 0  # no capture-point emergency step (issue 13.3)
     assert r.flag_time_s is None  # the planned turn itself does not raise the flag
     assert V.PLANNED_TURN_DEG == pytest.approx(90.0)
     # measured ~80 deg: the impedance lets the hand lag the plan by the valve's friction / K
@@ -29,6 +30,7 @@ def test_undisturbed_the_robot_stands_and_turns_the_valve_by_a_third_of_the_plan
 def test_disturbed_the_flag_rises_inside_the_support_and_the_error_recovers_after_the_revert(variant, tmp_path):
     r = run_experiment("valve", variant=variant, out_dir=tmp_path)
     assert r.verdict == "stood"
+    assert r.emergency_steps == 0  # no capture-point emergency step (issue 13.3)
     assert r.flag_time_s is not None
     assert r.edge_margin_at_flag_m > 0.0  # the actual CP was still inside the support polygon
     assert r.below_threshold_after_revert_s is not None and r.below_threshold_after_revert_s < 2.0

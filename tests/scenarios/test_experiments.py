@@ -9,6 +9,7 @@ from app.experiments import EXPERIMENTS, run_experiment
 def test_wall_push_forward_with_the_emergency_stopper_flags_before_the_edge_and_recovers(tmp_path):
     r = run_experiment("wall-push-forward", es=True, out_dir=tmp_path)
     assert r.verdict == "stood"
+    assert r.emergency_steps == 0  # the revert alone suffices: no capture-point emergency step (issue 13.3)
     assert r.flag_time_s is not None
     assert r.edge_margin_at_flag_m > 0.0  # the actual CP was still inside the support polygon
     assert r.below_threshold_after_revert_s is not None and r.below_threshold_after_revert_s < 2.0
@@ -23,12 +24,16 @@ def test_wall_push_forward_without_it_drives_the_capture_point_out_of_the_suppor
     # Fig. 10 (a): the error reaches the support-polygon edge (the CP leaves the polygon), then the fall
     assert r.min_edge_margin_m < 0.0
     assert r.verdict == "fell"
+    # the capture-point emergency step (on by default) is taken once the CP has left the soles, and does not save
+    # it: the stretched arms keep pushing on the wall (measured: 1 step, fell)
+    assert r.emergency_steps == 1
 
 
 @pytest.mark.slow
 def test_wall_push_left_with_the_emergency_stopper_flags_inside_the_support_and_recovers(tmp_path):
     r = run_experiment("wall-push-left", es=True, out_dir=tmp_path, plot=False)
     assert r.verdict == "stood"
+    assert r.emergency_steps == 0  # the revert alone suffices: no capture-point emergency step (issue 13.3)
     assert r.flag_time_s is not None and 3.0 < r.flag_time_s < 5.0  # during the 2 s push that starts at 3 s
     assert r.edge_margin_at_flag_m > 0.0  # the actual CP was still inside the support polygon
     assert r.below_threshold_after_revert_s is not None and r.below_threshold_after_revert_s < 2.0

@@ -65,6 +65,7 @@ class WalkWatch:
         for _ in range(int(round(seconds / self.loop.dt_control_s))):
             snap = self.loop.step()
             assert not snap.fallen, f"fell at t={snap.time_s:.2f} s"
+            assert not snap.layers["abc"].emergency_steps, "a capture-point emergency step while walking"
             if snap.layers["abc"].walking:
                 st = snap.layers["st"]
                 self.cp_error_m.append(st.cp_error_norm)
@@ -174,6 +175,7 @@ def test_a_push_during_a_walk_raises_the_flag_and_the_robot_stops_and_stands(imp
     assert all(abs(s.truth.base_pos_world[2] - STANDING_BASE_Z_M) < 0.01 for s in last)
     assert max(tilt_deg(s.truth.base_quat_wxyz) for s in last) < STANDING_TILT_DEG
     assert last[-1].layers["es"].stopped and not last[-1].layers["abc"].walking
+    assert last[-1].layers["abc"].emergency_steps == ()  # stopped by the walking stop, no emergency step
 
 
 def test_the_walking_stop_on_the_flag_can_be_switched_off():

@@ -101,3 +101,16 @@ def test_sample_at_picks_the_latest_sample_not_after_the_time():
     assert r.sample_at(1.0)[0] == pytest.approx(1.0)
     assert r.sample_at(1.0024)[0] == pytest.approx(1.0)
     assert r.sample_at(-5.0)[0] == r._history[0][1][0]  # older than the buffer: the oldest kept
+
+
+def test_an_emergency_step_stops_the_motion_like_the_flag_and_says_so():
+    es = EmergencyStopper(DT, EmergencyStopperParams(t1_s=0.5, t2_s=0.4))
+    for k in range(400):
+        t = k * DT
+        ctx = make_ctx(t=t, dt=DT)
+        ctx.last_ports.emergency_step = k >= 300  # the AutoBalancer's port of the tick before
+        es.tick(ctx, ref_at(t))
+    assert es.stopped and es.status().reason == "emergency_step"
+    assert ctx.ports.motion_stopped  # the operation layer freezes too
+    es.release_motion()
+    assert not es.stopped

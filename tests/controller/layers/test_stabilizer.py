@@ -158,3 +158,43 @@ def test_the_body_tilt_port_is_the_soles_kinematics_not_the_attitude_estimate():
             np.testing.assert_allclose(ctx.ports.body_tilt_kin_rad, (0.0, 0.0), atol=1e-9)
         else:
             assert ctx.ports.body_tilt_kin_rad is None
+
+
+def test_the_balance_port_carries_the_actual_cog_its_velocity_the_zmp_and_the_capture_point():
+    """What the AutoBalancer's emergency step reads next tick: the Stabilizer's own estimate, the CP x + v / omega."""
+    from controller.layers.remove_force_offset import RemoveForceOffset
+
+    st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+    rmfo = RemoveForceOffset(RobotKinematics())
+    ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
+    for k in range(3):
+        ctx = standing_ctx(0.005 * k)
+        rmfo.tick(ctx, ref)
+        st.tick(ctx, ref)
+    bal = ctx.ports.balance
+    assert bal.cog_world is ctx.estimate.cog_world and bal.zmp_world is ctx.estimate.zmp_world
+    assert bal.cog_vel_world == pytest.approx(st.act_cogvel)
+    assert bal.omega_1_s == pytest.approx(np.sqrt(9.80665 / (bal.cog_world[2] - 0.0)), rel=1e-9)
+    assert bal.cp_world_xy == pytest.approx(bal.cog_world[:2] + bal.cog_vel_world[:2] / bal.omega_1_s)
+
+
+def test_the_feet_are_softer_during_an_emergency_step_than_walking():
+    """With Ports.emergency_step the foot damping uses rot_damping_gain_emergency_step: the same moment error
+    turns the soles 3000 / 1000 times as fast as with the walking gain (the landed foot follows the ZMP)."""
+    from controller.layers.remove_force_offset import RemoveForceOffset
+
+    rates = []
+    for emergency in (False, True):
+        st = Stabilizer(0.005, StabilizerParams(transition_time_s=0.01))
+        rmfo = RemoveForceOffset(RobotKinematics())
+        walking = gait()
+        ref = Reference.from_arrays(HALF, base_pos_world=BASE).with_(
+            gait=GaitState(**{**{f: getattr(walking, f) for f in GaitState.__slots__}, "walking": True}))
+        for k in range(4):
+            ctx = standing_ctx(0.005 * k)
+            ctx.sensors.wrenches[0, 4] = 20.0  # a pitch moment on the right sole the reference does not ask for
+            ctx.ports.emergency_step = emergency
+            rmfo.tick(ctx, ref)
+            st.tick(ctx, ref)
+        rates.append(abs(st.d_foot_rpy[0, 1]))
+    assert rates[1] == pytest.approx(3.0 * rates[0], rel=0.05)

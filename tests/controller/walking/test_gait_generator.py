@@ -6,7 +6,7 @@ import time
 import numpy as np
 import pytest
 
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.walking.footsteps import Footstep
 from controller.walking.gait_generator import GaitGenerator, GaitParams
 
@@ -98,7 +98,7 @@ def check_walk(gg, samples, footsteps):
     assert np.allclose(samples[-1].zmp_world, 0.5 * (samples[-1].p_rfoot_world + samples[-1].p_lfoot_world))
 
 
-@pytest.mark.parametrize("orbit_type", ["cycloid", "rectangle"])
+@pytest.mark.parametrize("orbit_type", ["cycloid", "rectangle", "trapezoid"])
 def test_go_pos_0_2_0_1_20deg_passes_the_hrpsys_checks(orbit_type):
     gg = GaitGenerator(GaitParams(orbit_type=orbit_type), DT)
     steps = gg.go_pos(0.2, 0.1, math.radians(20.0))
@@ -277,3 +277,78 @@ def test_gait_parameters_changed_mid_walk_apply_to_later_steps_without_a_jump():
     steps = gg.footsteps
     check_walk(gg, samples, steps)
     assert steps[2].step_time_s == 1.0 and steps[-1].step_time_s == 0.8 and steps[-2].step_height_m == 0.08
+
+
+# ---- what the capture-point emergency step asks of the gait: its own timing, landings moved mid-step, its ZMP
+
+
+def emergency_steps(step_time_s=0.45):
+    return [Footstep("rleg", 0.0, -0.095, step_height_m=0.0, step_time_s=0.05),
+            Footstep("lleg", 0.3, 0.15, step_height_m=0.04, step_time_s=step_time_s)]
+
+
+EMERGENCY_PARAMS = GaitParams(double_support_ratio_before=0.0, double_support_ratio_after=0.2,
+                              final_double_support_s=1.5, orbit_type="trapezoid")
+
+
+def test_a_plans_own_timing_applies_to_that_plan_only():
+    gg = GaitGenerator(dt_s=DT)
+    gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+    support = [s.support for s in run(gg)]
+    # 0.05 s initial double support, the swing at once (no double support before it), 0.2 x 0.45 s after it
+    # and 1.5 s at the end
+    assert support[:10] == ["both"] * 10 and support[10] == "rleg"
+    assert support.count("rleg") == 71 and len(support) == 10 + 90 + 300
+    steps = gg.go_pos(0.1, 0.0, 0.0)  # the next plan has the generator's own timing again
+    check_walk(gg, run(gg), steps)
+
+
+def test_a_landing_moved_mid_swing_bends_the_swing_without_a_jump_and_lands_there():
+    gg = GaitGenerator(dt_s=DT)
+    gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+    samples = [gg.tick() for _ in range(40)]  # 30 ticks into the swing
+    gg.move_footsteps({1: (0.38, 0.2)})
+    samples += run(gg)
+    p = np.array([s.p_lfoot_world for s in samples])
+    assert np.max(np.linalg.norm(np.diff(p, axis=0), axis=1)) < MAX_FOOT_JUMP_M
+    assert p[-1] == pytest.approx((0.38, 0.2, 0.0), abs=1e-12)
+    assert gg.footsteps[1].x == pytest.approx(0.38)
+    zmp = np.array([s.zmp_world for s in samples])
+    assert zmp[-1] == pytest.approx(0.5 * (p[-1] + np.array([0.0, -0.095, 0.0])))
+
+
+def test_a_foot_that_touched_down_early_stays_where_it_touched_down_and_the_step_is_double_support():
+    gg = GaitGenerator(dt_s=DT)
+    gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+    for _ in range(60):
+        last = gg.tick()
+    assert last.support == "rleg"
+    gg.move_footsteps({1: (0.25, 0.12)}, landed=True)
+    rest = run(gg)
+    assert {s.support for s in rest} == {"both"}
+    assert np.array([s.p_lfoot_world for s in rest]) == pytest.approx(np.tile((0.25, 0.12, 0.0), (len(rest), 1)))
+    assert gg.T_world_lfoot[:3, 3] == pytest.approx((0.25, 0.12, 0.0))
+
+
+def test_only_the_footstep_being_stepped_on_or_a_later_one_moves():
+    gg = GaitGenerator(dt_s=DT)
+    gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+    with pytest.raises(InvalidState, match="being stepped on"):
+        gg.move_footsteps({1: (0.3, 0.2)}, landed=True)  # the swing has not started
+    gg.move_footsteps({1: (0.35, 0.2)})  # before the swing: replaced
+    assert gg.footsteps[1].x == pytest.approx(0.35)
+    for _ in range(110):
+        gg.tick()  # the final double support
+    with pytest.raises(InvalidCommand, match="only the footstep being stepped on"):
+        gg.move_footsteps({1: (0.4, 0.2)})
+
+
+def test_set_zmp_overwrites_the_next_ticks_reference_and_nothing_before():
+    gg = GaitGenerator(dt_s=DT)
+    gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+    first = gg.tick().zmp_world.copy()
+    path = np.column_stack((np.linspace(0.1, 0.2, 50), np.zeros(50), np.zeros(50)))
+    gg.set_zmp(path)
+    assert gg.zmp_preview(50) == pytest.approx(path)
+    assert gg.tick().zmp_world == pytest.approx(path[0])
+    assert not np.allclose(first, path[0])

@@ -1,0 +1,314 @@
+"""Capture-point emergency step: when the ankles cannot bring the measured capture point back into the support
+polygon, which leg steps, where it lands, and the reference ZMP with which the LIP from the measured state ends
+balanced ([MLC] II-B leaves stepping to future work; issue 13.3)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from controller.balance.capture_point import (
+    HRP2_LEFT_SOLE,
+    HRP2_RIGHT_SOLE,
+    FootRectangle,
+    distance_to_polygon_edge,
+    nearest_point_in_convex_polygon,
+    shrink_polygon,
+    support_polygon,
+)
+from controller.core.errors import InvalidCommand
+from controller.core.layer import Params
+from controller.interpolation.hoff_arbib import min_jerk
+from controller.walking.footsteps import Footstep
+from controller.walking.gait_generator import GaitParams
+
+__all__ = ["EmergencyStepParams", "EmergencyStepPlan", "SupportRegion", "clamp_landing", "landing_for",
+           "lip_capture_point", "needs_step", "stance_zmp", "swing_leg_for"]
+
+SOLES: dict[str, FootRectangle] = {"rleg": HRP2_RIGHT_SOLE, "lleg": HRP2_LEFT_SOLE}
+
+
+@dataclass(frozen=True)
+class EmergencyStepParams(Params):
+    """When to step and how (the AutoBalancer's `emergency_step_*` parameters; see AutoBalancerParams)."""
+
+    # the step is taken when the measured capture point is farther than this outside the support polygon of the
+    # soles (negative: still inside); the LIP's CP cannot come back from outside whatever the ankles do
+    cp_margin_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
+    # the planned ZMP keeps this far inside the sole edges (where the ankles can still put it)
+    zmp_margin_m: float = field(default=0.015, metadata={"unit": "m", "min": 0.0, "max": 0.05})
+    # double support before the swing (the ZMP goes to the stance sole), the step (swing and the double support
+    # after it), the share of the step after the landing, the double support that ends standing
+    initial_double_support_s: float = field(default=0.05, metadata={"unit": "s", "min": 0.005, "max": 0.5})
+    step_time_s: float = field(default=0.45, metadata={"unit": "s", "min": 0.2, "max": 1.5})
+    double_support_ratio: float = field(default=0.2, metadata={"unit": "-", "min": 0.05, "max": 0.5})
+    final_double_support_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.2, "max": 5.0})
+    step_height_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.01, "max": 0.1})
+    # the landing sole relative to the stance sole, in its frame: reach forward and backward, and sideways at
+    # least min_width_m (the soles do not overlap nor cross) and at most max_width_m
+    max_forward_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.0, "max": 0.7})
+    max_backward_m: float = field(default=0.4, metadata={"unit": "m", "min": 0.0, "max": 0.7})
+    min_width_m: float = field(default=0.16, metadata={"unit": "m", "min": 0.14, "max": 0.4})
+    max_width_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.16, "max": 0.7})
+    # the sole's centre lands this far beyond the capture point predicted at touchdown, along its motion
+    landing_offset_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
+    # once the foot is down the ZMP moves over this time to the capture point (at once: the CP is past the old
+    # stance sole; a ZMP left behind it while the load shifts lets the CP run on past the new sole)
+    zmp_shift_s: float = field(default=0.03, metadata={"unit": "s", "min": 0.005, "max": 0.3})
+    # the landing follows the measured capture point until this long before the planned touchdown
+    replan_until_s: float = field(default=0.1, metadata={"unit": "s", "min": 0.0, "max": 0.5})
+
+    def validate(self) -> None:
+        super().validate()
+        if self.min_width_m > self.max_width_m:
+            raise InvalidCommand(f"EmergencyStepParams.min_width_m={self.min_width_m} > max_width_m="
+                                 f"{self.max_width_m}; the lateral range must not be empty")
+
+
+# ---------------------------------------------------------------------------------------- pure pieces
+
+
+def lip_capture_point(cp_world_xy, zmp_world_xy, omega_1_s: float, t_s: float) -> np.ndarray:
+    """The LIP's capture point t_s [s] on with the ZMP held at zmp_world_xy: xi(t) = zmp + (xi0 - zmp) e^(omega t),
+    from xi_dot = omega (xi - zmp) [m], (2,)."""
+    zmp = np.asarray(zmp_world_xy, dtype=float)
+    return zmp + (np.asarray(cp_world_xy, dtype=float) - zmp) * math.exp(omega_1_s * t_s)
+
+
+def needs_step(cp_world_xy, support_polygon_xy, margin_m: float) -> bool:
+    """The capture point is farther than margin_m [m] outside the support polygon (M, 2): the ZMP, confined to
+    the polygon, cannot be put beyond it, so by xi_dot = omega (xi - zmp) it only moves away."""
+    return distance_to_polygon_edge(cp_world_xy, support_polygon_xy) < -margin_m
+
+
+class SupportRegion:
+    """A convex support polygon prepared for a test every tick: how far a point lies outside it [m]. Scalar maths
+    over its few edges (the standing robot's trigger test costs a few microseconds)."""
+
+    def __init__(self, polygon_xy) -> None:
+        self.polygon_xy = np.asarray(polygon_xy, dtype=float).reshape(-1, 2)  # (M, 2) counter-clockwise [m]
+        self._edges = []  # (ax, ay, nx, ny): a vertex and the edge's inward unit normal
+        pts = self.polygon_xy.tolist()
+        for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1], strict=True):
+            length = math.hypot(bx - ax, by - ay)
+            if length > 1e-12:
+                self._edges.append((ax, ay, -(by - ay) / length, (bx - ax) / length))
+
+    @classmethod
+    def of_soles(cls, right, left) -> SupportRegion:
+        """The region of HRP-2's two soles given as (position (3,), rotation (3, 3)) in the world."""
+        feet = [((float(p[0]), float(p[1]), math.atan2(float(R[1, 0]), float(R[0, 0]))), rect)
+                for (p, R), rect in ((right, HRP2_RIGHT_SOLE), (left, HRP2_LEFT_SOLE))]
+        return cls(support_polygon(feet))
+
+    def outside_m(self, x_m: float, y_m: float) -> float:
+        """Signed distance [m] of the point from the polygon's boundary, positive outside, negative inside."""
+        violation = max(-((x_m - ax) * nx + (y_m - ay) * ny) for ax, ay, nx, ny in self._edges)
+        if violation <= 0.0:  # inside: the nearest edge line is the nearest boundary
+            return violation
+        return -distance_to_polygon_edge((x_m, y_m), self.polygon_xy)
+
+
+def swing_leg_for(cp_from_feet_mid_xy, fz_rleg_n: float, fz_lleg_n: float) -> str:
+    """The leg that steps, for the capture point's offset from the feet's mid-point in the feet frame (x
+    forward, y left) [m]: sideways (|y| > |x|) the leg on the side it moves to; forward or backward the less
+    loaded one (measured vertical force [N]), the left one on a tie."""
+    dx, dy = (float(v) for v in cp_from_feet_mid_xy)
+    if abs(dy) > abs(dx):
+        return "lleg" if dy > 0.0 else "rleg"
+    return "rleg" if fz_rleg_n < fz_lleg_n else "lleg"
+
+
+def sole_corners_world(leg: str, x_m: float, y_m: float, yaw_rad: float) -> np.ndarray:
+    """(4, 2) corners [m] of HRP-2's sole of `leg` with its frame at (x, y, yaw) in the world."""
+    return SOLES[leg].corners_world((x_m, y_m, yaw_rad))
+
+
+def stance_zmp(cp_world_xy, leg: str, sole_xy, sole_yaw_rad: float, margin_m: float) -> np.ndarray:
+    """The ZMP while the other foot swings: the point of the stance sole (shrunk by margin_m) nearest the capture
+    point, the farthest the ankle can push against it [m], (2,)."""
+    corners = sole_corners_world(leg, float(sole_xy[0]), float(sole_xy[1]), sole_yaw_rad)
+    return nearest_point_in_convex_polygon(cp_world_xy, shrink_polygon(corners, margin_m))
+
+
+def clamp_landing(target_world_xy, stance_xy, stance_yaw_rad: float, swing_leg: str,
+                  params: EmergencyStepParams) -> np.ndarray:
+    """The landing sole origin [m] (2,) nearest target_world_xy that the leg reaches from the stance sole: in the
+    stance sole's frame forward at most max_forward_m, backward at most max_backward_m, and on the swing leg's
+    side between min_width_m and max_width_m (the soles never overlap nor cross)."""
+    c, s = math.cos(stance_yaw_rad), math.sin(stance_yaw_rad)
+    dx, dy = float(target_world_xy[0]) - float(stance_xy[0]), float(target_world_xy[1]) - float(stance_xy[1])
+    u, v = c * dx + s * dy, -s * dx + c * dy
+    u = min(max(u, -params.max_backward_m), params.max_forward_m)
+    side = 1.0 if swing_leg == "lleg" else -1.0  # the left foot lands at +y of the right one
+    v = side * min(max(side * v, params.min_width_m), params.max_width_m)
+    return np.array((float(stance_xy[0]) + c * u - s * v, float(stance_xy[1]) + s * u + c * v))
+
+
+def landing_for(cp_touchdown_xy, zmp_stance_xy, stance_xy, stance_yaw_rad: float, swing_leg: str,
+                params: EmergencyStepParams) -> np.ndarray:
+    """The landing sole origin [m] (2,) for the capture point predicted at touchdown: the sole's centre
+    landing_offset_m beyond it along its motion (away from the stance ZMP), clamped to the leg's reach
+    (clamp_landing)."""
+    cp_td = np.asarray(cp_touchdown_xy, dtype=float)
+    motion = cp_td - np.asarray(zmp_stance_xy, dtype=float)
+    norm = float(np.hypot(motion[0], motion[1]))
+    centre = cp_td + (params.landing_offset_m / norm) * motion if norm > 1e-9 else cp_td
+    rect = SOLES[swing_leg]  # the sole's centre in its own frame, turned by the stance yaw (no turning step)
+    cx, cy = 0.5 * (rect.front_m - rect.rear_m), 0.5 * (rect.left_m - rect.right_m)
+    c, s = math.cos(stance_yaw_rad), math.sin(stance_yaw_rad)
+    target = centre - np.array((c * cx - s * cy, s * cx + c * cy))
+    return clamp_landing(target, stance_xy, stance_yaw_rad, swing_leg, params)
+
+
+# ---------------------------------------------------------------------------------------- one step, planned
+
+
+def _swing_samples(n_step: int, ratio_after: float) -> int:
+    """Samples of a step of n_step samples that swing: the gait generator swings while its sample time
+    (i + 1) dt < (1 - ratio_after) T."""
+    return int(math.ceil((1.0 - ratio_after) * n_step - 1e-9)) - 1
+
+
+class EmergencyStepPlan:
+    """One emergency step from the tick it is triggered to standing with the feet apart: the swing leg lands where
+    the capture point will be, re-planned from the measured CP until `replan_until_s` before touchdown (or where
+    it touched down early); the footsteps for the gait generator, their timing in control ticks, and the
+    reference ZMP of every tick: to the stance sole (nearest the CP), held there through the swing, to the capture
+    point predicted at touchdown (inside the new support polygon: the CP held there stops), then to the feet's
+    middle.
+
+    Sample k counts the gait generator's samples from the plan's start (k = 0: the first one handed out).
+    """
+
+    def __init__(self, params: EmergencyStepParams, dt_s: float, stance: Footstep, swing: Footstep,
+                 cp_world_xy, zmp_world_xy, omega_1_s: float) -> None:
+        if stance.leg == swing.leg:
+            raise InvalidCommand(f"stance and swing are both {stance.leg}; give one foot of each leg")
+        self.params = params
+        self.dt_s = dt_s
+        self.stance, self.swing = stance, swing
+        self.omega_1_s = float(omega_1_s)
+        self.n_lift = max(1, round(params.initial_double_support_s / dt_s))  # the swing's first sample
+        n_step = max(2, round(params.step_time_s / dt_s))
+        self.n_touchdown = self.n_lift + _swing_samples(n_step, params.double_support_ratio)  # planned touchdown
+        self.n_step_end = self.n_lift + n_step
+        self.n_end = self.n_step_end + max(1, round(params.final_double_support_s / dt_s))
+        self.n_freeze = self.n_touchdown - round(params.replan_until_s / dt_s)
+        self.landed_k: int | None = None  # the sample the foot touched down before n_touchdown, if it did
+        self.z_m = stance.z
+        self.zmp_start_xy = np.asarray(zmp_world_xy, dtype=float)[:2].copy()
+        self.zmp_stance_xy = stance_zmp(cp_world_xy, stance.leg, (stance.x, stance.y), stance.yaw,
+                                        params.zmp_margin_m)
+        self._cp_measured = (0, np.asarray(cp_world_xy, dtype=float)[:2].copy())  # (sample, CP [m])
+        self.cp_touchdown_xy = self._cp_at(self.n_touchdown)
+        self.landing_xy = self._landing()
+
+    def __repr__(self) -> str:
+        return (f"EmergencyStepPlan({self.swing.leg} to {self.landing_xy.round(3).tolist()}; samples "
+                f"lift/touchdown/end {self.n_lift}/{self.touchdown_k}/{self.n_end})")
+
+    # ---- what the gait generator walks
+    def footsteps(self) -> list[Footstep]:
+        """[the stance sole where it is (the initial double support), the swing sole where it lands]."""
+        first = self.stance.replaced(step_height_m=0.0, toe_angle_rad=0.0, heel_angle_rad=0.0,
+                                     step_time_s=self.n_lift * self.dt_s)
+        x, y = self.landing_xy.tolist()
+        step = self.swing.replaced(x=x, y=y, z=self.z_m, roll=0.0, pitch=0.0, yaw=self.stance.yaw,
+                                   step_height_m=self.params.step_height_m, toe_angle_rad=0.0, heel_angle_rad=0.0,
+                                   step_time_s=(self.n_step_end - self.n_lift) * self.dt_s)
+        return [first, step]
+
+    def gait_params(self, base: GaitParams) -> GaitParams:
+        """The gait's timing for this plan: no double support before the swing, the plan's after it and at the end;
+        the trapezoid orbit (its horizontal speed peaks at 4/3 of the mean, the cycloid's at 2: a fast step within
+        the joints' speed limit)."""
+        return base.replaced(double_support_ratio_before=0.0,
+                             double_support_ratio_after=self.params.double_support_ratio,
+                             final_double_support_s=(self.n_end - self.n_step_end) * self.dt_s,
+                             orbit_type="trapezoid")
+
+    @property
+    def touchdown_k(self) -> int:
+        """The sample the foot touched (or touches) down."""
+        return self.n_touchdown if self.landed_k is None else self.landed_k
+
+    def swinging(self, k: int) -> bool:
+        """Sample k is in the swing (the foot in the air as planned, not touched down early)."""
+        return self.n_lift <= k < self.n_touchdown and self.landed_k is None
+
+    # ---- re-planning
+    def replan(self, k: int, cp_world_xy) -> bool:
+        """The capture point measured before sample k: until n_freeze the landing follows it. True when it moved
+        (by more than 1 mm)."""
+        if k >= self.n_freeze or self.landed_k is not None:
+            return False
+        self._cp_measured = (k, np.asarray(cp_world_xy, dtype=float)[:2].copy())
+        self.cp_touchdown_xy = self._cp_at(self.n_touchdown)
+        landing = self._landing()
+        if float(np.hypot(*(landing - self.landing_xy))) <= 1e-3:
+            return False
+        self.landing_xy = landing
+        return True
+
+    def land(self, k: int, landing_world_xy) -> None:
+        """The foot touched the ground at sample k (before the planned touchdown) at landing_world_xy [m]."""
+        self.cp_touchdown_xy = self._cp_at(k)
+        self.landed_k = k
+        self.landing_xy = np.asarray(landing_world_xy, dtype=float)[:2].copy()
+
+    def _landing(self) -> np.ndarray:
+        s = self.stance
+        return landing_for(self.cp_touchdown_xy, self.zmp_stance_xy, (s.x, s.y), s.yaw, self.swing.leg, self.params)
+
+    def _cp_at(self, k: int) -> np.ndarray:
+        """The LIP's capture point before sample k, from the last one measured, the ZMP following this plan's path
+        until touchdown (each sample's ZMP held over its tick: xi+ = a xi - (a - 1) zmp, a = e^(omega dt)) [m]."""
+        km, cp = self._cp_measured
+        if k <= km:
+            return cp.copy()
+        j = np.arange(km, k)
+        a = math.exp(self.omega_1_s * self.dt_s)
+        zmp = self._zmp_until_touchdown(j)
+        weights = (a - 1.0) * a ** (k - 1 - j)
+        return a ** (k - km) * cp - weights @ zmp
+
+    def _zmp_until_touchdown(self, k: np.ndarray) -> np.ndarray:
+        """(n, 2) the reference ZMP of samples k before touchdown: from where it was to the stance sole, then there."""
+        z0, zs = self.zmp_start_xy, self.zmp_stance_xy
+        lift = min_jerk((k + 1) / self.n_lift)[:, None]
+        return np.where((k < self.n_lift)[:, None], z0 + lift * (zs - z0), zs)
+
+    # ---- the reference ZMP
+    def support_polygon_after(self) -> np.ndarray:
+        """(M, 2) [m] the support polygon of the two soles once the foot is down."""
+        s, (x, y) = self.stance, self.landing_xy.tolist()
+        return support_polygon([((s.x, s.y, s.yaw), SOLES[s.leg]), ((x, y, s.yaw), SOLES[self.swing.leg])])
+
+    def zmp_after_touchdown_xy(self) -> np.ndarray:
+        """Where the ZMP goes once both feet are down: the capture point predicted at touchdown, inside the support
+        polygon shrunk by the margin (the CP held there stops) [m], (2,)."""
+        poly = shrink_polygon(self.support_polygon_after(), self.params.zmp_margin_m)
+        return nearest_point_in_convex_polygon(self.cp_touchdown_xy, poly)
+
+    def feet_middle_xy(self) -> np.ndarray:
+        """The final ZMP: midway between the two soles' origins [m], (2,) (the gait's end without ZMP offsets)."""
+        return 0.5 * (np.array((self.stance.x, self.stance.y)) + self.landing_xy)
+
+    def zmp(self, k_from: int) -> np.ndarray:
+        """(n_end - k_from, 3) reference ZMP [m] of samples k_from .. n_end - 1."""
+        k = np.arange(k_from, self.n_end)
+        td = self.touchdown_k
+        zs = self.zmp_stance_xy
+        zl, zm = self.zmp_after_touchdown_xy(), self.feet_middle_xy()
+        n_shift = min(max(1, round(self.params.zmp_shift_s / self.dt_s)), max(self.n_step_end - td, 1))
+        shift = min_jerk((k + 1 - td) / n_shift)[:, None]
+        final = min_jerk((k + 1 - self.n_step_end) / max(self.n_end - self.n_step_end, 1))[:, None]
+        xy = np.where((k < td)[:, None], self._zmp_until_touchdown(k),
+                      np.where((k < self.n_step_end)[:, None], zs + shift * (zl - zs), zl + final * (zm - zl)))
+        out = np.empty((len(k), 3))
+        out[:, :2] = xy
+        out[:, 2] = self.z_m
+        return out
