@@ -44,6 +44,8 @@ STOP_PLACE_TOLERANCE_M = 0.02
 STOP_YAW_TOLERANCE_RAD = math.radians(2.0)
 #: [s] a robot that tipped onto its swing foot under the hard e-stop lands it (and so levels) over this long
 TIPPED_LANDING_TIME_S = 2.0
+#: [rad] ... when it rests tilted more than this (a swing foot loaded with the robot level lands in the usual time)
+TIPPED_MIN_TILT_RAD = math.radians(1.0)
 #: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it
 MAX_STRIDE_RANGE_M = (0.0, 0.3)
 #: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
@@ -707,9 +709,10 @@ class AutoBalancer(Layer):
         gait = self._last_out.gait if self._last_out is not None else None
         if self.gait.walking and gait is not None and gait.support != "both":
             tilt = self._tipped(ctx, gait, 1.0)
+            tilted = tilt is not None and tilt.angle0_rad > TIPPED_MIN_TILT_RAD
             landing_s = self.gait.stop_from_rest(self._rest_zmp_xy(gait if tilt is None else None),
                                                  swing_foot_loaded=tilt is not None,
-                                                 min_landing_time_s=TIPPED_LANDING_TIME_S if tilt else 0.8)
+                                                 min_landing_time_s=TIPPED_LANDING_TIME_S if tilted else 0.8)
             if tilt is not None and landing_s > 0.0:
                 self._tilt = self._tipped(ctx, gait, landing_s)
 
