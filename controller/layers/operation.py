@@ -38,7 +38,6 @@ from controller.operation.limits import (
     clamp_to_achieved,
     limit_twist,
     ramp_twist,
-    share_along,
     speed_scale,
 )
 from controller.operation.points import (
@@ -409,10 +408,7 @@ class OperationLayer(Layer):
                         # the hand did part of its step at most: the target advances by the share it made along
                         # the asked direction (one scale for the whole step), never sideways with the IK's
                         # best effort, which drifted the hand off the asked line along the workspace's edge
-                        target = self._targets[point]
-                        share = share_along(start.step_to(target, HAND_STEP_LENGTH_M),
-                                            start.step_to(achieved, HAND_STEP_LENGTH_M))
-                        self._targets[point] = start.advanced(target, share)
+                        self._targets[point] = start.advanced_along(self._targets[point], achieved, HAND_STEP_LENGTH_M)
                     else:
                         self._targets[point] = clamp_to_achieved(self._targets[point], achieved, r.limited)
                 elif self._limited.get(point) != VELOCITY:

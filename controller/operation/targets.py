@@ -9,6 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from controller.core.types import read_only
+from controller.operation.limits import share_along
 from controller.operation.points import Twist
 from robot.sensors import frozen_array
 
@@ -65,6 +66,26 @@ class HandPose:
         `length_m`, so the two weigh alike."""
         w = pin.log3(other.R_feet_hand @ self.R_feet_hand.T)
         return np.concatenate((other.p_feet_m - self.p_feet_m, length_m * w))
+
+    def advanced_along(self, target: HandPose, achieved: HandPose, length_m: float) -> HandPose:
+        """From this pose toward `target` by the share of that step `achieved` made along it
+        (operation.limits.share_along over step_to with `length_m`): the target of a limited hand. A step
+        without rotation (`target` keeps this rotation object, as integrated() does) needs no log or exp."""
+        if target.R_feet_hand is not self.R_feet_hand:
+            share = share_along(self.step_to(target, length_m), self.step_to(achieved, length_m))
+            return self.advanced(target, share)
+        p0 = self.p_feet_m.tolist()
+        dp = [a - b for a, b in zip(target.p_feet_m.tolist(), p0, strict=True)]
+        da = [a - b for a, b in zip(achieved.p_feet_m.tolist(), p0, strict=True)]
+        n2 = dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2]
+        if not n2 > 0.0:
+            return self
+        share = (da[0] * dp[0] + da[1] * dp[1] + da[2] * dp[2]) / n2
+        if share >= 1.0:
+            return target
+        if share <= 0.0:
+            return self
+        return HandPose.owned(np.array([b + share * d for b, d in zip(p0, dp, strict=True)]), self.R_feet_hand)
 
     def advanced(self, other: HandPose, share: float) -> HandPose:
         """`share` [0, 1] of the way from this pose to `other`, along the straight line and the geodesic."""

@@ -43,3 +43,20 @@ def test_a_hand_advanced_by_a_share_of_its_step_goes_along_the_line_and_the_geod
     np.testing.assert_allclose(half.p_feet_m, [0.35, -0.2, 0.85], atol=1e-12)
     np.testing.assert_allclose(pin.log3(half.R_feet_hand), [0.0, 0.0, 0.2], atol=1e-12)
     assert a.advanced(b, 1.0) is b and a.advanced(b, 0.0) is a
+
+
+@pytest.mark.parametrize("rotated", [False, True])
+def test_advanced_along_is_the_share_of_the_step_made_along_it(rotated):
+    from controller.operation.limits import share_along
+
+    start = HandPose.of([0.3, -0.2, 0.8], np.eye(3))
+    target = start.integrated(Twist.of((0.1, 0.0, 0.02), (0.0, 0.0, 0.3 if rotated else 0.0)), 0.1)
+    assert (target.R_feet_hand is start.R_feet_hand) is not rotated  # integrated() keeps the rotation object
+    achieved = HandPose.of(start.p_feet_m + [0.004, 0.003, -0.001], pin.exp3(np.array([0.01, 0.0, 0.01])))
+    share = share_along(start.step_to(target, 0.1), start.step_to(achieved, 0.1))
+    expected = start.advanced(target, share)
+    out = start.advanced_along(target, achieved, 0.1)
+    np.testing.assert_allclose(out.p_feet_m, expected.p_feet_m, atol=1e-12)
+    np.testing.assert_allclose(out.R_feet_hand, expected.R_feet_hand, atol=1e-12)
+    assert 0.0 < share < 1.0
+    assert start.advanced_along(target, start, 0.1) is start and start.advanced_along(target, target, 0.1) is target
