@@ -127,6 +127,7 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
     chromium = os.environ.get("HRP2_CHROMIUM") or shutil.which("chromium") or "/usr/bin/chromium"
     console = Console("--speed", "1.0", "--scene", scene, headless=False, viewer_port=_free_port())
     latencies: list[float] = []
+    input_delays: list[float] = []  # pointer-down -> the page's handler running (the page's own thread)
     streamed: list[int] = []
     try:
         with sync_playwright() as pw:
@@ -150,8 +151,9 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
                 epoch_minus_mono_s = time.time() - time.monotonic()
                 reply = rec["reply"]
                 if reply.get("ok") and not reply.get("message", "").endswith("already engaged"):
-                    latencies.append((reply["engaged_at_monotonic_s"] + epoch_minus_mono_s) * 1e3
-                                     - rec["event_epoch_ms"])
+                    engaged_epoch_ms = (reply["engaged_at_monotonic_s"] + epoch_minus_mono_s) * 1e3
+                    latencies.append(engaged_epoch_ms - rec["event_epoch_ms"])
+                    input_delays.append(rec["handled_epoch_ms"] - rec["event_epoch_ms"])
                 streamed.append(1 if "streaming" in page.locator("#stream-state").inner_text() else 0)
                 console.request("POST", "/api/estop/release", body={})
             browser.close()
@@ -159,4 +161,5 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
         console.stop()
     return {"scenario": "estop-browser", "scene": scene, "clicks": clicks,
             "pointerdown_to_engaged": percentiles_ms(latencies),
+            "pointerdown_to_handler": percentiles_ms(input_delays),
             "clicks_while_streaming": sum(streamed)}

@@ -75,16 +75,24 @@ const post = (url, body) => api("POST", url, body);
 
 // ---- E-STOP: pointer-down (not click: no waiting for the release), Space / Esc anywhere, gamepad B ----------
 let lastEstopAt = -1e9;
+const estopsOnWs = [];  // the e-stops sent on the stick stream, answered in order
 // the e-stops this page sent: input event time (epoch [ms]) and the loop's reply (the e-stop benchmark reads it)
 window.hrp2Estops = [];
 function estop(source, eventTimeStamp) {
   lastEstopAt = performance.now();
-  const record = {source, event_epoch_ms: performance.timeOrigin + (eventTimeStamp ?? performance.now()), reply: null};
+  const now = performance.now();
+  const record = {source, event_epoch_ms: performance.timeOrigin + (eventTimeStamp ?? now),
+                  handled_epoch_ms: performance.timeOrigin + now, reply: null};
   window.hrp2Estops.push(record);
   if (window.hrp2Estops.length > 1000) window.hrp2Estops.shift();
+  // two ways in, whichever is first: the stick stream's open socket (no new request to set up) and a POST
+  if (opWs && opWs.readyState === WebSocket.OPEN) {
+    estopsOnWs.push(record);
+    opWs.send('{"estop": true}');
+  }
   fetch("/api/estop", {method: "POST", headers: headers(false), keepalive: true})
     .then((r) => r.json().then((d) => {
-      record.reply = d;
+      if (record.reply === null) record.reply = d;
       if (!r.ok) log(`E-STOP (${source}): ${r.status} ${d.detail}`, "bad");
     }))
     .catch((e) => log(`E-STOP (${source}) not sent: ${e}`, "bad"));
@@ -548,6 +556,11 @@ function connectOperator() {
   const ws = new WebSocket(wsUrl("/ws/operator"));
   ws.onopen = () => { opWs = ws; sentAt.length = 0; };
   ws.onmessage = (m) => {
+    if (m.data.includes('"estop": true')) {
+      const rec = estopsOnWs.shift();  // an e-stop's answer: not a setpoint's (no round trip to count)
+      try { const d = JSON.parse(m.data); if (rec && rec.reply === null) rec.reply = d; } catch (e) { /* */ }
+      return;
+    }
     const t0 = sentAt.shift();
     if (t0 !== undefined) {
       rtts.push(performance.now() - t0);
@@ -560,7 +573,11 @@ function connectOperator() {
       log(`stream: ${d.detail}`, "bad");
     } else if (d.ok) lastStreamError = "";
   };
-  ws.onclose = () => { if (opWs === ws) opWs = null; setTimeout(connectOperator, 1000); };
+  ws.onclose = () => {
+    if (opWs === ws) opWs = null;
+    estopsOnWs.length = 0;  // answered no more: their POSTs answer them
+    setTimeout(connectOperator, 1000);
+  };
 }
 
 function streamTick() {

@@ -17,6 +17,7 @@ from pydantic import TypeAdapter, ValidationError
 from app.deps import LockDep, ServiceDep, get_service
 from app.deps import get_lock as lock_of
 from app.errors import errors
+from app.hot_paths import estop_reply
 from app.operator_lock import Locked
 from app.params_http import params_changes_body, params_document
 from app.schemas import LockRequest, OperatorAck, OperatorLockState, OperatorVelocityRequest
@@ -36,6 +37,27 @@ def setpoint_of(req: OperatorVelocityRequest) -> Setpoint:
     """The request in SI units (deg/s -> rad/s), checked once more by Setpoint itself."""
     return Setpoint(req.point, tuple(float(v) for v in req.linear), tuple(math.radians(v) for v in req.angular),
                     getattr(req, "max_stride", None), getattr(req, "foot_distance", None))
+
+
+ESTOP_MESSAGE = {"estop": True}
+
+
+async def _estop_message(text: str, service, send) -> bool:
+    """`{"estop": true}` on the stream: the hard e-stop, as POST /api/estop (never refused by the operator
+    lock), answered with its reply and `"estop": true`; the page's open socket is a faster way in than a new
+    request. False: not that message (a setpoint's validation will say what is wrong)."""
+    try:
+        if json.loads(text) != ESTOP_MESSAGE:
+            return False
+    except ValueError:
+        return False
+    try:
+        reply = estop_reply(service.estop())
+    except ServiceError as exc:
+        await send(_error(str(exc), reason=getattr(exc, "reason", None), estop=True))
+        return True
+    await send(json.dumps({**reply, "estop": True}))
+    return True
 
 
 def _stop_points(service, points) -> None:
@@ -128,7 +150,9 @@ async def operator_stream(ws: WebSocket) -> None:
     answered with {"ok": true, "point", "seq", "applied_seq", "tick", "time_s"} once the robot has applied
     it (or a newer setpoint of the same point), or {"ok": false, "detail", "field"?, "reason"?}: a setpoint
     the robot ignored (the hard e-stop) says {"ok": false, "ignored": true, "reason": "hard_stop" or
-    "before_release", ...}; one refused by the operator lock {"reason": "locked", "holder"}. `?client=<id>`:
+    "before_release", ...}; one refused by the operator lock {"reason": "locked", "holder"}. The message
+    {"estop": true} engages the hard e-stop (POST /api/estop's answer with "estop": true; any client, the lock
+    never refuses it). `?client=<id>`:
     this connection keeps its client's operator lock (app.operator_lock)."""
     try:
         service = get_service(ws)
@@ -191,6 +215,8 @@ async def operator_stream(ws: WebSocket) -> None:
                 continue
             if len(text) > MAX_MESSAGE_BYTES:
                 await send(_error(f"message of {len(text)} bytes; the limit is {MAX_MESSAGE_BYTES}", field="body"))
+                continue
+            if text.startswith('{"estop"') and await _estop_message(text, service, send):
                 continue
             try:
                 req = _REQUEST.validate_json(text)

@@ -175,3 +175,22 @@ def test_telemetry_never_sends_faster_than_asked():
         assert ticks == sorted(set(ticks))  # each a new snapshot
     finally:
         robot.stop()
+
+
+def test_an_estop_message_on_the_stick_stream_engages_the_hard_stop_even_under_anothers_lock(client, runtime):
+    runtime.run_for(0.1)
+    assert client.post("/api/operator/lock", json={"client": "holder"}).status_code == 200
+    with client.websocket_connect("/ws/operator?client=watcher") as ws:
+        ws.send_json({"point": "rhand", "linear": [0.05, 0, 0]})
+        assert ws.receive_json()["reason"] == "locked"  # a watcher's stick is refused...
+        tick = runtime.loop.tick_count
+        ws.send_text('{"estop": true}')
+        reply = ws.receive_json()  # ... its e-stop never
+        assert reply["ok"] and reply["estop"] and reply["message"] == "hard e-stop engaged", reply
+        assert reply["tick"] >= tick and reply["engaged_at_monotonic_s"] > 0
+        ws.send_text('{"estop": true}')
+        assert ws.receive_json()["message"] == "hard e-stop already engaged"
+        ws.send_text('{"estop": false}')  # not the e-stop message: a setpoint's validation answers it
+        assert ws.receive_json()["ok"] is False
+    runtime.run_for(0.01)
+    assert client.get("/api/state").json()["emergency"]["hard_stop"]
