@@ -42,10 +42,16 @@ SWING_FOOT_LOADED_N = 25.0
 #: 0.3 m from it after a walk tipped the robot over). Standing where it started, BODY is 3 mm from it.
 STOP_PLACE_TOLERANCE_M = 0.02
 STOP_YAW_TOLERANCE_RAD = math.radians(2.0)
-#: [s] a robot that tipped onto its swing foot under the hard e-stop lands it (and so levels) over this long
-TIPPED_LANDING_TIME_S = 2.0
+#: [rad/s] a robot that tipped onto its swing foot under the hard e-stop lands it, and so levels, along a
+#: minimum-jerk path whose peak rate is this: well below the KalmanFilter's gyro trust band (0.1 rad/s), so its
+#: accelerometer keeps the attitude right as the robot turns back (levelling 7 deg in 2 s, 0.11 rad/s at the
+#: peak, the estimate lagged 0.5 deg and caught up in a jump: a capture-point error of 42-58 mm; in 5.7 s (0.04
+#: rad/s) 30-38 mm, in 7.6 s 32-36 mm)
+TIPPED_LEVELLING_RATE_RAD_S = 0.03
 #: [rad] ... when it rests tilted more than this (a swing foot loaded with the robot level lands in the usual time)
 TIPPED_MIN_TILT_RAD = math.radians(1.0)
+#: [-] peak over mean rate of a minimum-jerk path (15/8)
+MIN_JERK_PEAK_RATIO = 1.875
 #: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it
 MAX_STRIDE_RANGE_M = (0.0, 0.3)
 #: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
@@ -709,10 +715,11 @@ class AutoBalancer(Layer):
         gait = self._last_out.gait if self._last_out is not None else None
         if self.gait.walking and gait is not None and gait.support != "both":
             tilt = self._tipped(ctx, gait, 1.0)
-            tilted = tilt is not None and tilt.angle0_rad > TIPPED_MIN_TILT_RAD
+            levelling_s = 0.0 if tilt is None or tilt.angle0_rad <= TIPPED_MIN_TILT_RAD else \
+                MIN_JERK_PEAK_RATIO * tilt.angle0_rad / TIPPED_LEVELLING_RATE_RAD_S
             landing_s = self.gait.stop_from_rest(self._rest_zmp_xy(gait if tilt is None else None),
                                                  swing_foot_loaded=tilt is not None,
-                                                 min_landing_time_s=TIPPED_LANDING_TIME_S if tilted else 0.8)
+                                                 min_landing_time_s=max(0.8, levelling_s))
             if tilt is not None and landing_s > 0.0:
                 self._tilt = self._tipped(ctx, gait, landing_s)
 
