@@ -53,7 +53,7 @@ class Capture:
     inputs of the robot's own head-pose estimate (behaviors.perception.head_pose)."""
 
     camera: str
-    frames: Future  # -> robot.images.Frames; frames.result()[camera] is the CameraImage
+    frames: Future  # -> robot.images.Frames (frames.result()[camera] is the CameraImage), or the analysis' result
     time_s: float  # control time of the state the image shows [s]
     q_meas_rad: np.ndarray  # (30,) encoders
     base_rpy_est_rad: np.ndarray  # (3,) KalmanFilter attitude
@@ -96,8 +96,10 @@ class Commands(Protocol):
         weight of the parts below it removed (RemoveForceOffset), as of the last tick."""
         ...
 
-    def capture(self, camera: str) -> Capture:
-        """Render `camera` from the state of this tick boundary, off the control thread."""
+    def capture(self, camera: str, analyse: tuple | None = None) -> Capture:
+        """Render `camera` from the state of this tick boundary, off the control thread. `analyse` = (fn, args):
+        the capture's `frames` is then fn(frames, camera, time_s, q_meas_rad, base_rpy_est_rad, cog_world_m,
+        *args), computed where the image is rendered (fn a module-level function)."""
         ...
 
     def remember(self, object_name: str, recognition: Mapping[str, Any]) -> None:

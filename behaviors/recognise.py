@@ -26,7 +26,7 @@ class Recognise(Behavior):
         return RECOGNITION_DELAY_S + 2.0  # paced: a rendering late by up to 2 s still counts
 
     def start(self, ctx: Context) -> None:
-        self.pending = PendingRecognition(ctx.commands.capture(CAMERA), self.params.object)
+        self.pending = PendingRecognition(ctx.commands, CAMERA, self.params.object)
         self.found: dict | None = None
 
     def step(self, ctx: Context) -> Output:

@@ -6,7 +6,7 @@ import copy
 import math
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -215,22 +215,25 @@ class CameraRig:
         return frozenset(self._gl_thread_ids)
 
     def request(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
-                cameras: Sequence[str] | None = None) -> Future[Frames]:
+                cameras: Sequence[str] | None = None, analyse: Analysis | None = None) -> Future:
         """Queue a rendering of this state; the arrays are copied now, so the caller may go on stepping.
 
         qpos (nq,); mocap_pos (nmocap, 3) and mocap_quat (nmocap, 4) for fixed objects (None: the model's
-        poses); cameras: a subset of the rig's (None: all). The future's result is a Frames.
+        poses); cameras: a subset of the rig's (None: all). The future's result is a Frames, or with `analyse`
+        = (fn, args) what fn(frames, *args) returns, computed where the image was rendered (check_analysis).
         """
         q, pos, quat, chosen = _copied_request(qpos, mocap_pos, mocap_quat, cameras, self._cameras)
         _check_request(q, pos, quat, chosen, self._model.nq, self._model.nmocap, self._cameras)
+        check_analysis(analyse)
         with self._lock:
             if self._closed:
                 raise RuntimeError("CameraRig is closed")
-            return self._executor.submit(self._render, q, float(time_s), pos, quat, chosen)
+            return self._executor.submit(_analysed, self._render, (q, float(time_s), pos, quat, chosen), analyse)
 
-    def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None) -> Future[Frames]:
+    def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None,
+                         analyse: Analysis | None = None) -> Future:
         """request() with a copy of this MjData's qpos, time and mocap poses (e.g. MujocoPlant.data)."""
-        return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras)
+        return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras, analyse)
 
     def render(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
                cameras: Sequence[str] | None = None) -> Frames:
@@ -260,6 +263,29 @@ START_TIMEOUT_S = 60.0
 FRAME_TIMEOUT_S = 20.0
 
 
+#: A caller's analysis of a rendering, run where the image is: (fn, args), fn(frames, *args) -> a small result.
+Analysis = tuple[Callable[..., Any], tuple]
+
+
+def check_analysis(analyse: Analysis | None) -> None:
+    """An analysis must be a module-level function (a camera process imports it by name) and a tuple of args."""
+    if analyse is None:
+        return
+    fn, args = analyse
+    if not (callable(fn) and getattr(fn, "__module__", None) and "<" not in getattr(fn, "__qualname__", "<")):
+        raise ValueError(f"analyse: {fn!r} is not a module-level function (one a process can import by name)")
+    if not isinstance(args, tuple):
+        raise ValueError(f"analyse: the arguments must be a tuple, not {type(args).__name__}")
+
+
+def _analysed(render, request: tuple, analyse: Analysis | None):
+    frames = render(*request)
+    if analyse is None:
+        return frames
+    fn, args = analyse
+    return fn(frames, *args)
+
+
 def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: int,
            depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None) -> None:
     """The camera process: a CameraRig of its own, rendering each request it receives until None arrives."""
@@ -279,7 +305,8 @@ def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: 
             if msg is None:
                 return
             try:
-                conn.send(("ok", rig.render(*msg)))
+                request, analyse = msg
+                conn.send(("ok", _analysed(rig.render, request, analyse)))
             except Exception as err:  # noqa: BLE001 - one request's failure, reported in its future
                 conn.send(("error", f"{type(err).__name__}: {err}"))
 
@@ -381,38 +408,43 @@ class CameraProcess:
         """Block until the child has started and made its renderer (raises RuntimeError if it could not)."""
         self._executor.submit(self._ensure_ready).result(timeout_s)
 
-    def _roundtrip(self, msg: tuple) -> Frames:
+    def _roundtrip(self, msg: tuple, analyse: Analysis | None):
         self._ensure_ready()
         self._check(*msg)
         try:
-            self._conn.send(msg)
+            self._conn.send((msg, analyse))
         except OSError:  # a broken pipe: the child is gone
             self._proc.join(1.0)
             raise RuntimeError(f"the camera process ended (exit code {self._proc.exitcode})") from None
-        frames: Frames = self._receive(FRAME_TIMEOUT_S)
-        for image in frames.images.values():  # read-only, as CameraRig's
-            image.rgb.flags.writeable = False
-            if image.depth_m is not None:
-                image.depth_m.flags.writeable = False
-        return frames
+        result = self._receive(FRAME_TIMEOUT_S)
+        if analyse is None:
+            for image in result.images.values():  # read-only, as CameraRig's
+                image.rgb.flags.writeable = False
+                if image.depth_m is not None:
+                    image.depth_m.flags.writeable = False
+        return result
 
     def request(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
-                cameras: Sequence[str] | None = None) -> Future[Frames]:
-        """As CameraRig.request: the arrays are copied now; the future's result is a Frames."""
+                cameras: Sequence[str] | None = None, analyse: Analysis | None = None) -> Future:
+        """As CameraRig.request: the arrays are copied now; the future's result is a Frames, or with `analyse`
+        what fn(frames, *args) returns, computed in the camera process: the image never crosses into this one
+        (a recognition costs this process a small request and a small result, not ~2 MB of pixels)."""
         q, pos, quat, chosen = _copied_request(qpos, mocap_pos, mocap_quat, cameras, self._cameras)
         msg = (q, float(time_s), pos, quat, chosen)
         if self._nq is not None:
             self._check(*msg)
+        check_analysis(analyse)
         with self._lock:
             if self._closed:
                 raise RuntimeError("CameraProcess is closed")
-            return self._executor.submit(self._roundtrip, msg)
+            return self._executor.submit(self._roundtrip, msg, analyse)
 
     def _check(self, q, time_s, pos, quat, chosen) -> None:
         _check_request(q, pos, quat, chosen, self._nq, self._nmocap, self._cameras)
 
-    def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None) -> Future[Frames]:
-        return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras)
+    def request_state_of(self, data: mujoco.MjData, cameras: Sequence[str] | None = None,
+                         analyse: Analysis | None = None) -> Future:
+        return self.request(data.qpos, data.time, data.mocap_pos, data.mocap_quat, cameras, analyse)
 
     def render(self, qpos, time_s: float, mocap_pos=None, mocap_quat=None,
                cameras: Sequence[str] | None = None) -> Frames:

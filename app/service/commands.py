@@ -78,14 +78,17 @@ class HostCommands:
             raise Refused("state", f"unknown force sensor {sensor!r}; valid: {list(FORCE_SENSOR_NAMES)}")
         return np.array(self.host.loop.snapshot.wrenches_ext[FORCE_SENSOR_NAMES.index(sensor)])
 
-    def capture(self, camera: str) -> Capture:
+    def capture(self, camera: str, analyse: tuple | None = None) -> Capture:
         host = self.host
         snap = host.loop.snapshot
-        frames = host.cameras().request_state_of(host.plant.data, cameras=(camera,))
+        time_s, q, rpy, cog = float(snap.time_s), snap.q_meas_rad, snap.base_rpy_est_rad, snap.cog_world
+        if analyse is not None:  # run where the image is rendered, with what the robot knew of itself now
+            fn, args = analyse
+            analyse = (fn, (camera, time_s, q, rpy, cog, *args))
+        frames = host.cameras().request_state_of(host.plant.data, cameras=(camera,), analyse=analyse)
         loop = host.loop
-        return Capture(camera=camera, frames=frames, time_s=float(snap.time_s), q_meas_rad=snap.q_meas_rad,
-                       base_rpy_est_rad=snap.base_rpy_est_rad, cog_world_m=snap.cog_world,
-                       wait_for_result=loop.speed is None or not loop.running)
+        return Capture(camera=camera, frames=frames, time_s=time_s, q_meas_rad=q, base_rpy_est_rad=rpy,
+                       cog_world_m=cog, wait_for_result=loop.speed is None or not loop.running)
 
     def remember(self, object_name: str, recognition: Mapping[str, Any]) -> None:
         self.host.recognitions[object_name] = dict(recognition)

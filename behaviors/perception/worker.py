@@ -1,5 +1,6 @@
-"""Recognitions off the control thread: the head-pose estimate and the model fit run on one perception
-thread, after the render thread's image; the result enters the behaviour at a tick boundary."""
+"""Recognitions off the control thread and out of the robot's process: the head-pose estimate and the model fit
+run in the camera's process, on the image where it was rendered (a capture with an analysis); only the small
+result comes back, and it enters the behaviour at a tick boundary."""
 
 # Timing: a result is taken at the first tick boundary at least RECOGNITION_DELAY_S of control time after the
 # capture at which it is ready. When the loop runs as fast as possible (`--speed max`, or a test stepping it),
@@ -9,13 +10,11 @@ thread, after the render thread's image; the result enters the behaviour at a ti
 
 from __future__ import annotations
 
-import threading
-from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 import numpy as np
 
-from behaviors.base import Capture
+from behaviors.base import Commands
 from behaviors.perception.head_pose import T_world_camera_estimate
 from behaviors.perception.locate import Recognition, locate_can, locate_trash_box
 from controller.kinematics.model import RobotKinematics
@@ -25,40 +24,33 @@ from controller.kinematics.model import RobotKinematics
 RECOGNITION_DELAY_S = 0.3
 LOCATORS = {"can": locate_can, "trash_box": locate_trash_box}
 
-_lock = threading.Lock()
-_executor: ThreadPoolExecutor | None = None
-_local = threading.local()
+_kin: RobotKinematics | None = None  # the analysing process's own model (the controller's belongs to the loop)
 
 
-def _worker() -> ThreadPoolExecutor:
-    global _executor
-    with _lock:
-        if _executor is None:
-            _executor = ThreadPoolExecutor(max_workers=1, thread_name_prefix="perception")
-        return _executor
-
-
-def _recognise(capture: Capture, object_name: str) -> tuple[Recognition | None, Any]:
-    kin = getattr(_local, "kin", None)
-    if kin is None:  # the perception thread's own model (the controller's belongs to the loop)
-        kin = _local.kin = RobotKinematics()
-    image = capture.frames.result()[capture.camera]
-    T_world_camera = T_world_camera_estimate(kin, capture.q_meas_rad, capture.base_rpy_est_rad,
-                                             capture.cog_world_m, capture.camera)
+def recognise_image(frames, camera: str, time_s: float, q_meas_rad: np.ndarray, base_rpy_est_rad: np.ndarray,
+                    cog_world_m: np.ndarray, object_name: str) -> tuple[Recognition | None, Any]:
+    """The analysis of a capture (Commands.capture's `analyse`): the robot's own estimate of the camera's pose
+    from what it knew at the capture, and the object's model fitted to the image. (Recognition or None, the
+    camera's intrinsics)."""
+    global _kin
+    if _kin is None:
+        _kin = RobotKinematics()
+    image = frames[camera]
+    T_world_camera = T_world_camera_estimate(_kin, q_meas_rad, base_rpy_est_rad, cog_world_m, camera)
     locate = LOCATORS[object_name]
-    return locate(image.rgb, image.depth_m, image.intrinsics, T_world_camera, time_s=capture.time_s), image.intrinsics
+    return locate(image.rgb, image.depth_m, image.intrinsics, T_world_camera, time_s=time_s), image.intrinsics
 
 
 class PendingRecognition:
     """One recognition under way: `poll(elapsed_s)` at each tick boundary gives None until the result is due,
     then (Recognition or None when nothing was found, the camera's intrinsics)."""
 
-    def __init__(self, capture: Capture, object_name: str) -> None:
+    def __init__(self, commands: Commands, camera: str, object_name: str) -> None:
         if object_name not in LOCATORS:
             raise ValueError(f"unknown object {object_name!r}; valid: {sorted(LOCATORS)}")
-        self.capture = capture
         self.object_name = object_name
-        self.future: Future = _worker().submit(_recognise, capture, object_name)
+        self.capture = commands.capture(camera, analyse=(recognise_image, (object_name,)))
+        self.future = self.capture.frames
 
     def poll(self, elapsed_s: float) -> tuple[Recognition | None, Any] | None:
         if elapsed_s < RECOGNITION_DELAY_S - 1e-9:
