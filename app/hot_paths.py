@@ -40,10 +40,14 @@ class HotPaths:
             table = []
             for template, ops in self.api.openapi().get("paths", {}).items():
                 pattern = re.compile("^" + re.sub(r"\\{[^/]+\\}", "[^/]+", re.escape(template)) + "$")
-                table.append((pattern, {m.upper() for m in ops}))
+                table.append((pattern, "{" not in template, {m.upper() for m in ops}))
             self._methods = table
         path = scope["path"]
-        found = [methods for pattern, methods in self._methods if pattern.match(path)]
+        found = [(literal, methods) for pattern, literal, methods in self._methods if pattern.match(path)]
+        # a path written out (/api/sessions/start) is that path only, not also a value of a parameter
+        # (/api/sessions/{name}): its methods are the ones it documents
+        literal = [methods for is_literal, methods in found if is_literal]
+        found = literal or [methods for _, methods in found]
         return set().union(*found) if found else None
 
     async def __call__(self, scope, receive, send) -> None:

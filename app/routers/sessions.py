@@ -14,13 +14,13 @@ from app.deps import ServiceDep, SettingsDep
 from app.errors import errors
 from app.schemas import StrictBody
 from app.service.errors import InvalidArgument, NotFound
-from app.session.files import BadName, checked_name, free_name, list_sessions
+from app.session.files import NAME_PATTERN, BadName, checked_name, free_name, list_sessions
 
 router = APIRouter(prefix="/api/sessions", tags=["sessions"])
 
 
 class StartSessionRequest(StrictBody):
-    name: str | None = Field(default=None, max_length=64, description=(
+    name: str | None = Field(default=None, max_length=64, pattern=NAME_PATTERN, description=(
         "the file's name in the sessions folder: letters, digits, '_', '-', '.' (no path), '.mcap' appended when "
         "missing; default session-<time>.mcap; -2, -3 ... added when it exists"), examples=["walk-test"])
 
@@ -58,7 +58,7 @@ def stop(service: ServiceDep) -> dict:
 @router.get("/{name}", responses={**errors(404, 422), 200: {"content": {"application/octet-stream": {}},
                                                            "description": "the MCAP file"}},
             summary="Download a recorded session (MCAP: Foxglove and PlotJuggler open it)")
-def download(name: Annotated[str, Path(max_length=64)], settings: SettingsDep) -> FileResponse:
+def download(name: Annotated[str, Path(max_length=64, pattern=NAME_PATTERN)], settings: SettingsDep) -> FileResponse:
     try:
         file_name = checked_name(name)
     except BadName as exc:

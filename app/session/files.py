@@ -8,9 +8,12 @@ import re
 from pathlib import Path
 
 #: a session's file name as a client gives it: letters, digits, '_', '-', '.', starting with a letter or a digit,
-#: ending in .mcap (appended when left out); never a path
+#: ending in .mcap (appended when left out); never a path (no '/', and it cannot be '.' or '..': it starts with a
+#: letter or a digit)
 NAME_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,58}")
 SUFFIX = ".mcap"
+#: the same rule as a JSON-schema pattern, for the OpenAPI document (with the optional suffix)
+NAME_PATTERN = r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,58}(\.mcap)?$"
 
 
 class BadName(ValueError):
@@ -22,9 +25,9 @@ def checked_name(name: str) -> str:
     if not isinstance(name, str):
         raise BadName(f"must be a string (got {name!r})")
     stem = name[:-len(SUFFIX)] if name.endswith(SUFFIX) else name
-    if not NAME_RE.fullmatch(stem) or ".." in stem:
+    if not NAME_RE.fullmatch(stem):
         raise BadName(f"{name[:80]!r} is not a session name: 1-59 letters, digits, '_', '-' or '.', starting with a "
-                      f"letter or a digit (no path, no '..'), optionally ending in {SUFFIX}")
+                      f"letter or a digit (no path), optionally ending in {SUFFIX}")
     return stem + SUFFIX
 
 

@@ -61,7 +61,7 @@ def test_a_session_started_after_behaviour_runs_replays_with_their_ids(client, r
     assert result.identical, result.summary()
 
 
-@pytest.mark.parametrize("name", ["../x", "a/b", ".hidden", "", "x" * 70, "a..b", "sp ace"])
+@pytest.mark.parametrize("name", ["../x", "a/b", ".hidden", "..", "", "x" * 70, "x" * 60, "sp ace"])
 def test_a_session_name_that_is_not_a_plain_file_name_is_a_422_naming_the_field(client, name):
     r = client.post("/api/sessions/start", json={"name": name})
     assert r.status_code == 422 and r.json()["field"] == "name", r.text
@@ -74,3 +74,10 @@ def test_an_unknown_session_is_a_404_listing_the_recorded_ones_and_a_bad_one_a_4
     assert r.status_code in (404, 422)
     assert client.post("/api/sessions/start", json={"name": 3}).status_code == 422
     assert client.post("/api/sessions/start", json={"nom": "x"}).status_code == 422
+
+
+def test_the_start_and_stop_paths_are_not_session_names(client):
+    """/api/sessions/start is that path, not a session called 'start': it has POST only (Allow says so)."""
+    r = client.get("/api/sessions/start")
+    assert r.status_code == 405 and r.headers["allow"] == "POST", r.text
+    assert client.options("/api/sessions/stop").headers["allow"] == "POST"
