@@ -14,7 +14,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 from typing import Any, ClassVar, Protocol
@@ -58,8 +58,9 @@ class Capture:
     q_meas_rad: np.ndarray  # (30,) encoders
     base_rpy_est_rad: np.ndarray  # (3,) KalmanFilter attitude
     cog_world_m: np.ndarray  # (3,) estimated COG (anchored at the planned soles) [m]
-    wait_for_result: bool  # true when the loop runs as fast as possible: the result is waited for at its
-    #                        stated simulated delay, so a seeded run is the same every time
+    ready: Callable[[], bool]  # whether `frames`' result enters at this boundary (ask from its due time on):
+    #     as fast as possible it is waited for when due, so a seeded run is the same every time; paced, only
+    #     once it is done, so no tick waits for the camera (RobotHost.capture_ready)
 
 
 class Commands(Protocol):

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import math
+import os
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -278,6 +279,11 @@ def check_analysis(analyse: Analysis | None) -> None:
         raise ValueError(f"analyse: the arguments must be a tuple, not {type(args).__name__}")
 
 
+#: how much lower the camera process's priority is than the robot's (Linux nice increment; 10: the scheduler
+#: gives it ~1/10 of a core the loop also wants)
+CAMERA_NICE = 10
+
+
 def _analysed(render, request: tuple, analyse: Analysis | None):
     frames = render(*request)
     if analyse is None:
@@ -288,7 +294,16 @@ def _analysed(render, request: tuple, analyse: Analysis | None):
 
 def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: int,
            depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None) -> None:
-    """The camera process: a CameraRig of its own, rendering each request it receives until None arrives."""
+    """The camera process: a CameraRig of its own, rendering each request it receives until None arrives.
+
+    It runs at a lower priority than the robot's process (nice +CAMERA_NICE, set before the renderer starts its
+    threads, which inherit it): on a machine with as many busy threads as cores, rendering and analysing then
+    wait for the control loop instead of taking its core (measured: the first recognition, which imports the
+    analysis and loads its model here, made ticks late by 39-54 ms at equal priority)."""
+    try:
+        os.nice(CAMERA_NICE)
+    except OSError:
+        pass  # not allowed here: equal priority
     try:
         rig = CameraRig(scene_file, cameras, width, height, depth_cameras, disparity_noise_px, seed)
     except Exception as err:  # noqa: BLE001 - reported to the parent, which raises it in the requests

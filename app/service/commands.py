@@ -4,6 +4,7 @@ refused exactly when the operator would be (e-stop, motion stop, a fall, the Col
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping
 from typing import TYPE_CHECKING, Any
 
@@ -86,9 +87,9 @@ class HostCommands:
             fn, args = analyse
             analyse = (fn, (camera, time_s, q, rpy, cog, *args))
         frames = host.cameras().request_state_of(host.plant.data, cameras=(camera,), analyse=analyse)
-        loop = host.loop
+        host.captures += 1
         return Capture(camera=camera, frames=frames, time_s=time_s, q_meas_rad=q, base_rpy_est_rad=rpy,
-                       cog_world_m=cog, wait_for_result=loop.speed is None or not loop.running)
+                       cog_world_m=cog, ready=functools.partial(host.capture_ready, host.captures, frames))
 
     def remember(self, object_name: str, recognition: Mapping[str, Any]) -> None:
         self.host.recognitions[object_name] = dict(recognition)

@@ -8,6 +8,7 @@ import dataclasses
 import logging
 import time
 from collections.abc import Mapping
+from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any
 
@@ -140,6 +141,11 @@ class RobotHost:
         self.recognitions: dict[str, dict] = {}  # object -> its latest recognition (behaviours remember them)
         self._cameras = None  # robot.camera.CameraProcess of `_cameras_scene`, made on the first capture
         self._cameras_scene: str | None = None
+        self.captures = 0  # captures made since the last reset (their numbers, from 1)
+        self._late_captures: set[int] = set()  # paced: captures whose results were not ready when due
+        #: a replay's schedule of the results the recording took late: capture number -> "result_late" (not
+        #: entered yet) or "result_entered"; None when not replaying
+        self.replayed_captures: dict[int, str] | None = None
         self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
         self.start_auto_balancer = start_auto_balancer
         self.recorder: SessionRecorder | None = None  # the session being recorded, if any
@@ -225,6 +231,32 @@ class RobotHost:
             if self.runner.transitions != self._runs_recorded:
                 self._runs_recorded = self.runner.transitions
                 recorder.runs_changed(snap.time_s, self.runner.runs())
+
+    # ---- when a capture's result enters ------------------------------------------------------------------
+    def capture_ready(self, number: int, result: Future) -> bool:
+        """Whether capture `number`'s result enters at this boundary (asked at each boundary from the one it is
+        due at on). As fast as possible it is waited for, so it enters when due and a seeded run is the same
+        every time; paced, only when it is done, so no tick ever waits for a camera or a fit (the session
+        records a result that was late and the boundary it entered at, and a replay takes it there)."""
+        schedule = self.replayed_captures
+        if schedule is not None:
+            return schedule.get(number) != "result_late"
+        loop = self.loop
+        if loop.speed is None or not loop.pacing:
+            return True
+        done = result.done()
+        late = number in self._late_captures
+        if not done and not late:
+            self._late_captures.add(number)
+            self._record_capture(number, "result_late")
+        elif done and late:
+            self._late_captures.discard(number)
+            self._record_capture(number, "result_entered")
+        return done
+
+    def _record_capture(self, number: int, what: str) -> None:
+        if self.recorder is not None:
+            self.recorder.input("capture", "boundary", what, self.loop.plant.time_s, number, {"ok": True})
 
     # ---- the head cameras ----------------------------------------------------------------------------------
     def cameras(self):
@@ -400,6 +432,8 @@ class RobotHost:
         if scene != self._cameras_scene:
             self.close_cameras()
         self.recognitions.clear()
+        self.captures = 0
+        self._late_captures.clear()
         self.loop.replace_plant(plant)
         self._info = None
         self._install_before_tick()

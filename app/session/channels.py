@@ -85,11 +85,14 @@ SESSION_SCHEMAS: dict[str, dict] = {
     INPUTS_TOPIC: {"type": "object", "description": "an input applied at a tick boundary, as recorded", "properties": {
         "tick": {"type": "integer", "description": "the session tick it took effect before"},
         "time_s": {"type": "number", "description": "control time of that boundary [s]"},
-        "kind": {"type": "string", "enum": ["verb", "estop", "setpoints"]},
+        "kind": {"type": "string", "enum": ["verb", "estop", "setpoints", "capture"],
+                 "description": "capture: a camera capture's result was not ready when due (result_late) or entered "
+                                "at this boundary after that (result_entered); input: the capture's number"},
         "phase": {"type": "string", "enum": ["boundary", "hook"],
                   "description": "boundary: between ticks (verbs, e-stop); hook: the streamed setpoints taken at "
                                  "the start of the tick"},
-        "name": {"type": "string", "description": "the verb's name, 'estop' or 'setpoints'"},
+        "name": {"type": "string", "description": "the verb's name, 'estop', 'setpoints', 'result_late' or "
+                                                  "'result_entered'"},
         "input": {"description": "the verb's fields (tagged JSON: app.session.inputs) or the setpoints"},
         "outcome": {"type": "object", "description": "ok, or the error (kind, reason, message); setpoint acks"},
         "replayable": {"type": "boolean"}}},

@@ -123,6 +123,7 @@ def _run(session: Session, robot, on_tick, stop_at_difference: bool) -> ReplayRe
         host.runner.continue_ids_from(int(h["next_run_id"]))
     source = ReplaySource()
     host.setpoints = source
+    host.replayed_captures = {}
     by_tick: dict[int, list[dict]] = {}
     for doc in session.inputs:
         by_tick.setdefault(int(doc["tick"]), []).append(doc)
@@ -160,6 +161,9 @@ def _apply(host, source: ReplaySource, doc: Mapping[str, Any]) -> str | None:
         return f"input {doc.get('name')!r} does not rebuild: {exc}"
     if kind == "estop":
         host.engage_estop()
+        return None
+    if kind == "capture":  # a result the recording took late: held until the boundary it entered at
+        host.replayed_captures[int(value)] = doc["name"]
         return None
     if kind == "setpoints":
         if doc["phase"] == "hook":

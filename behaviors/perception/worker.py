@@ -3,10 +3,10 @@ run in the camera's process, on the image where it was rendered (a capture with 
 result comes back, and it enters the behaviour at a tick boundary."""
 
 # Timing: a result is taken at the first tick boundary at least RECOGNITION_DELAY_S of control time after the
-# capture at which it is ready. When the loop runs as fast as possible (`--speed max`, or a test stepping it),
-# that boundary waits for the result, so the result always arrives exactly RECOGNITION_DELAY_S after the
-# capture and a seeded run is the same every time; paced, it is never waited for (a late result enters at a
-# later boundary), so no tick is delayed.
+# capture at which it is ready (Capture.ready). When the loop runs as fast as possible (`--speed max`, or a test
+# stepping it), that boundary waits for the result, so the result always arrives exactly RECOGNITION_DELAY_S
+# after the capture and a seeded run is the same every time; paced, it is never waited for (a late result
+# enters at a later boundary, which a recorded session keeps), so no tick is delayed.
 
 from __future__ import annotations
 
@@ -55,7 +55,7 @@ class PendingRecognition:
     def poll(self, elapsed_s: float) -> tuple[Recognition | None, Any] | None:
         if elapsed_s < RECOGNITION_DELAY_S - 1e-9:
             return None
-        if not (self.capture.wait_for_result or self.future.done()):
+        if not self.capture.ready():
             return None
         return self.future.result()
 

@@ -101,6 +101,7 @@ class ControlLoop:
         self._queue: queue.SimpleQueue[tuple[Callable[[], Any], Future]] = queue.SimpleQueue()
         self._thread: threading.Thread | None = None
         self._stop_event = threading.Event()
+        self._pacing = False  # run_paced is ticking (in its own thread or the caller's)
         self.speed: float | None = 1.0
         self.tick_timer = TickTimer()
         self.physics_timer = TickTimer()
@@ -279,7 +280,14 @@ class ControlLoop:
     # ---- paced running -------------------------------------------------------------------------
     @property
     def running(self) -> bool:
+        """A background thread ticks (start())."""
         return self._thread is not None and self._thread.is_alive()
+
+    @property
+    def pacing(self) -> bool:
+        """run_paced is ticking, in a background thread or in the caller's (the robot process's main thread):
+        nothing may wait at a tick boundary for work done elsewhere."""
+        return self._pacing
 
     def start(self, speed: float | None = 1.0) -> None:
         """Run in a background thread; `speed` 1.0 = real time, None = as fast as possible."""
@@ -316,6 +324,13 @@ class ControlLoop:
         nothing ticks meanwhile.
         `between_ticks()` runs at every tick boundary before the tick (commands, e-stop, publishing).
         The lateness of each tick's start against its schedule is measured (`timing()`)."""
+        self._pacing = True
+        try:
+            self._run_paced(wait, between_ticks)
+        finally:
+            self._pacing = False
+
+    def _run_paced(self, wait: Callable[[float], None] | None, between_ticks: Callable[[], None] | None) -> None:
         sleep = wait or self._stop_event.wait
         clock = time.perf_counter
         meter = self.lateness

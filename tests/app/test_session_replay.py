@@ -77,3 +77,45 @@ def test_a_replay_without_the_estop_differs_from_its_tick_on(recorded):
     assert not result.identical
     assert result.difference.tick == estop["tick"], str(result.difference)
     assert result.difference.what == "row" and "flags/hard_stop" in result.difference.columns
+
+
+def test_a_recognition_late_at_real_time_is_not_waited_for_and_replays_where_it_entered(tmp_path, monkeypatch):
+    """Paced, no tick waits for a camera: a result not ready when due enters at a later boundary, the session
+    says which, and the replay (as fast as possible, where results are waited for) holds it until there."""
+    from behaviors.perception import worker
+
+    monkeypatch.setattr(worker, "RECOGNITION_DELAY_S", 0.0)  # due at once: the render and the fit are later
+    path = tmp_path / "late.mcap"
+    robot = LocalRobot("expo", speed=1.0, record=path)
+    service = OperatorService(robot)
+    robot.host.start_cameras()
+    robot.host.cameras().wait_ready()
+    robot.start()
+    try:
+        _wait_sim(robot, 2.1)
+        run_id = service.run_behavior("locate_can", {"x_m": 2.15, "y_m": 0.0, "z_m": 0.75, "views": 1})
+        deadline = time.monotonic() + 30.0
+        while service.get_run(run_id).state == "running":
+            assert time.monotonic() < deadline, "locate_can did not end"
+            time.sleep(0.05)
+        assert service.get_run(run_id).state == "succeeded", service.get_run(run_id)
+        status = robot.stop_recording()
+    finally:
+        robot.close()
+    assert status["error"] is None
+    session = read_session(path)  # (the lateness of the ticks meanwhile: bench --scenario recognition-paced)
+    events = {}  # capture number -> [(name, tick)]
+    for d in session.inputs:
+        if d["kind"] == "capture":
+            events.setdefault(d["input"], []).append((d["name"], d["tick"]))
+    assert events, "no result was late (each is due at once)"
+    for n, seen in events.items():  # each was late, then entered ticks later
+        assert [name for name, _ in seen] == ["result_late", "result_entered"], (n, seen)
+        assert seen[1][1] > seen[0][1], (n, seen)
+    result = replay(session)
+    assert result.identical, result.summary()
+    # without them, the replay takes each result when due (waiting for it) and differs from that tick on
+    untold = dataclasses.replace(session, inputs=[d for d in session.inputs if d["kind"] != "capture"])
+    first_due = min(seen[0][1] for seen in events.values())
+    result = replay(untold)
+    assert not result.identical and result.difference.tick >= first_due, result.summary()

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import threading
 
 import mujoco
@@ -256,7 +257,7 @@ def test_the_camera_process_refuses_bad_requests_at_once_and_fails_them_once_it_
 
 
 def test_a_camera_process_without_a_model_takes_the_sizes_from_its_child_and_checks_requests_there(plant):
-    from robot.camera import CameraProcess
+    from robot.camera import CAMERA_NICE, CameraProcess
 
     with CameraProcess("expo", None, cameras=("wide",), width=64, height=48) as proc:
         bad = proc.request(np.zeros(3), 0.0)  # queued before the child is up: checked on the pipe thread
@@ -265,6 +266,8 @@ def test_a_camera_process_without_a_model_takes_the_sizes_from_its_child_and_che
         frames = proc.request_state_of(plant.data).result(timeout=60)
         assert frames["wide"].rgb.shape == (48, 64, 3)
         assert proc.intrinsics["wide"].width == 64
+        # rendering and analysing wait for the control loop, not the other way round
+        assert os.getpriority(os.PRIO_PROCESS, proc.pid) == min(19, os.getpriority(os.PRIO_PROCESS, 0) + CAMERA_NICE)
         with pytest.raises(ValueError, match="qpos must be"):  # known now: at once
             proc.request(np.zeros(3), 0.0)
     with CameraProcess("expo", None, cameras=("eye",)) as proc, pytest.raises(RuntimeError, match="unknown camera"):

@@ -196,3 +196,20 @@ def test_an_exception_in_before_tick_never_stops_the_loop():
     for _ in range(3):
         loop.step()
     assert loop.tick_count == 3 and loop.fault is None
+
+
+def test_pacing_is_true_while_run_paced_ticks_in_the_callers_own_thread():
+    """The robot process runs run_paced in its main thread (no background thread: `running` stays false);
+    `pacing` says a tick boundary must not wait for work done elsewhere (a camera's result)."""
+    loop, _, _ = make_loop()
+    loop.speed = None
+    seen = []
+
+    def between_ticks():
+        seen.append((loop.pacing, loop.running))
+        if len(seen) == 3:
+            loop.request_stop()
+
+    assert not loop.pacing
+    loop.run_paced(between_ticks=between_ticks)
+    assert seen == [(True, False)] * 3 and not loop.pacing
