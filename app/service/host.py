@@ -20,6 +20,8 @@ from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
 from app.service.session_recorder import SessionRecorder
 from app.service.setpoints import LocalSource, Setpoint, SetpointAck
 from app.service.verbs import RobotInfo, SetParams, Verb
+from app.session.inputs import outcome_of
+from behaviors.registry import BEHAVIORS  # noqa: F401 - imported here, not at the first behaviour's boundary
 from behaviors.runner import BehaviorRunner
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
 from controller.core.layer import Params
@@ -309,8 +311,6 @@ class RobotHost:
         recorder = self.recorder
         if recorder is None or not verb.recorded:
             return self.apply(verb)
-        from app.session.inputs import outcome_of
-
         time_s = float(self.loop.plant.time_s)
         self._applying_input = True
         try:

@@ -161,3 +161,36 @@ def test_a_startup_parameter_document_is_loaded_checked_and_kept_across_resets()
         LocalRobot(params={"st": {"k1": "a"}})
     with pytest.raises(InvalidArgument, match=r"es\.t1_s=.*out of range|es\.t1_s"):
         LocalRobot(params={"es": {"t1_s": -1.0}})
+
+
+_FIRST_BEHAVIOUR = """
+import pickle, sys
+from app.service.local import LocalRobot
+robot = LocalRobot("default", speed=None)
+for _ in range(10):
+    robot.step()
+verbs = pickle.loads(bytes.fromhex(sys.argv[1]))  # as the robot process receives them (no __post_init__)
+before = set(sys.modules)
+for verb in verbs:
+    robot.host.apply_input(verb)
+    for _ in range(20):
+        robot.step()
+print(sorted(set(sys.modules) - before))
+"""
+
+
+def test_the_first_behaviour_imports_nothing_at_a_tick_boundary():
+    """The robot host loads the behaviours (and what records a session) when it is made: the first behaviour
+    started inside a tick boundary imported them there (0.1-0.2 s: the behaviours, their perception, scipy),
+    holding that tick up."""
+    import pickle
+    import subprocess
+    import sys
+
+    from app.service.verbs import RunBehavior
+
+    verbs = [RunBehavior("look_at", (("x_m", 2.0), ("y_m", 0.3), ("z_m", 0.8))),
+             RunBehavior("squat", (("depth_m", 0.03),))]
+    out = subprocess.run([sys.executable, "-c", _FIRST_BEHAVIOUR, pickle.dumps(verbs).hex()], capture_output=True,
+                         text=True, timeout=120, check=True)
+    assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout[-2000:]
