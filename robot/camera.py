@@ -296,11 +296,13 @@ def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: 
            depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None) -> None:
     """The camera process: a CameraRig of its own, rendering each request it receives until None arrives.
 
-    It runs at a lower priority than the robot's process (nice +CAMERA_NICE, set before the renderer starts its
-    threads, which inherit it): on a machine with as many busy threads as cores, rendering and analysing then
-    wait for the control loop instead of taking its core (measured: the first recognition, which imports the
-    analysis and loads its model here, made ticks late by 39-54 ms at equal priority)."""
+    It runs at a lower priority than the robot's process: never real-time (a real-time parent's SCHED_FIFO,
+    inherited, made its renderer's threads hold the loop's core for 3-4 ms at each render), and nice
+    +CAMERA_NICE, both set before the renderer starts its threads, which inherit them; so rendering and
+    analysing wait for the control loop instead of taking its core."""
     try:
+        if os.sched_getscheduler(0) in (os.SCHED_FIFO, os.SCHED_RR):  # a real-time parent's, inherited
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
         os.nice(CAMERA_NICE)
     except OSError:
         pass  # not allowed here: equal priority

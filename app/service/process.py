@@ -63,9 +63,11 @@ class UnexpectedError(ServiceError):
 
 # ---- inside the robot process -------------------------------------------------------------------------------
 def _raise_priority() -> str:
-    """SCHED_FIFO if allowed, else a lower nice value, else nothing; says which."""
+    """SCHED_FIFO if allowed, else a lower nice value, else nothing; says which. For the calling thread only:
+    threads and processes it starts later (the camera process, the session writer) are not real-time
+    (SCHED_RESET_ON_FORK): a camera rendering at the loop's FIFO priority took its core for 3-4 ms."""
     try:
-        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(10))
+        os.sched_setscheduler(0, os.SCHED_FIFO | os.SCHED_RESET_ON_FORK, os.sched_param(10))
         return "SCHED_FIFO 10"
     except (AttributeError, PermissionError, OSError):
         pass

@@ -272,3 +272,56 @@ def test_a_camera_process_without_a_model_takes_the_sizes_from_its_child_and_che
             proc.request(np.zeros(3), 0.0)
     with CameraProcess("expo", None, cameras=("eye",)) as proc, pytest.raises(RuntimeError, match="unknown camera"):
         proc.request_state_of(plant.data).result(timeout=60)
+
+
+def test_a_camera_process_started_by_a_real_time_thread_is_not_real_time(plant):
+    """The robot's loop runs SCHED_FIFO where allowed: its camera process must not inherit that (its renderer's
+    threads, at the loop's priority, held the loop's core for 3-4 ms at each render)."""
+    from robot.camera import CAMERA_NICE, CameraProcess
+
+    result = {}
+
+    def start_from_a_fifo_thread():
+        try:
+            os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(1))  # this thread only, no reset on fork
+        except PermissionError:
+            result["skip"] = "SCHED_FIFO not allowed here"
+            return
+        try:
+            result["proc"] = CameraProcess("expo", plant.model, cameras=("wide",), width=64, height=48)
+        finally:
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+
+    t = threading.Thread(target=start_from_a_fifo_thread)
+    t.start()
+    t.join()
+    if "skip" in result:
+        pytest.skip(result["skip"])
+    with result["proc"] as proc:
+        proc.wait_ready()
+        assert os.sched_getscheduler(proc.pid) == os.SCHED_OTHER
+        assert os.getpriority(os.PRIO_PROCESS, proc.pid) == min(19, os.getpriority(os.PRIO_PROCESS, 0) + CAMERA_NICE)
+
+
+def test_the_robot_process_priority_is_for_the_loop_thread_alone():
+    """_raise_priority makes the calling thread real-time and nothing it starts afterwards."""
+    from app.service.process import _raise_priority
+
+    seen = {}
+
+    def loop_thread():
+        said = _raise_priority()
+        seen["said"] = said
+        seen["self"] = os.sched_getscheduler(0)
+        child = threading.Thread(target=lambda: seen.setdefault("child", os.sched_getscheduler(0)))
+        child.start()
+        child.join()
+        os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+
+    t = threading.Thread(target=loop_thread)
+    t.start()
+    t.join()
+    if seen["said"] != "SCHED_FIFO 10":
+        pytest.skip(f"no SCHED_FIFO here ({seen['said']})")
+    assert seen["self"] & ~os.SCHED_RESET_ON_FORK == os.SCHED_FIFO
+    assert seen["child"] == os.SCHED_OTHER
