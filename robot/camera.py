@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import copy
+import logging
 import math
 import os
 import threading
@@ -293,7 +294,8 @@ def _analysed(render, request: tuple, analyse: Analysis | None):
 
 
 def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: int,
-           depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None) -> None:
+           depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None,
+           prepare: Callable[[], Any] | None = None) -> None:
     """The camera process: a CameraRig of its own, rendering each request it receives until None arrives.
 
     It runs at a lower priority than the robot's process: never real-time (a real-time parent's SCHED_FIFO,
@@ -311,6 +313,11 @@ def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: 
     except Exception as err:  # noqa: BLE001 - reported to the parent, which raises it in the requests
         conn.send(("error", f"{type(err).__name__}: {err}"))
         return
+    if prepare is not None:
+        try:
+            prepare()  # what the analyses need, loaded before the first request rather than by it
+        except Exception as err:  # noqa: BLE001 - the analysis that needs it will fail with its own error
+            logging.getLogger(__name__).warning("camera process: prepare %s failed: %s", prepare, err)
     m = rig._model
     conn.send(("ready", (m.nq, m.nmocap, rig.intrinsics)))
     with rig:
@@ -342,12 +349,14 @@ class CameraProcess:
     and give the intrinsics; the child loads `scene` itself. Without it (None: loading a model takes the lock
     for ~0.1 s) the child's ready message gives them, and a request made before that is checked on the pipe
     thread. Bad requests raise ValueError (in the future when checked there); a failure in the child (no
-    renderer, a crash) fails the requests' futures with RuntimeError.
+    renderer, a crash) fails the requests' futures with RuntimeError. `prepare`, a module-level function the
+    child calls once before it answers (loading what the analyses need, so that the first one is not slower).
     """
 
     def __init__(self, scene: str | Path, model: mujoco.MjModel | None, cameras: Sequence[str] = HEAD_CAMERAS,
                  width: int = 640, height: int = 480, depth_cameras: Sequence[str] | None = None,
-                 disparity_noise_px: float = 0.0, seed: int | None = None) -> None:
+                 disparity_noise_px: float = 0.0, seed: int | None = None,
+                 prepare: Callable[[], Any] | None = None) -> None:
         import multiprocessing
 
         cameras = tuple(cameras)
@@ -364,11 +373,13 @@ class CameraProcess:
                 raise ValueError(f"unknown camera(s) {unknown}; valid cameras: {', '.join(known)}")
             self._nq, self._nmocap = model.nq, model.nmocap
             self._intrinsics = {name: camera_intrinsics(model, name, width, height) for name in cameras}
+        if prepare is not None:
+            check_analysis((prepare, ()))
         ctx = multiprocessing.get_context("spawn")  # no fork of a process with threads and a GL context
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_serve, name="camera-render", daemon=True, args=(
             child, str(scene_path(scene)), cameras, width, height,
-            None if depth_cameras is None else tuple(depth_cameras), float(disparity_noise_px), seed))
+            None if depth_cameras is None else tuple(depth_cameras), float(disparity_noise_px), seed, prepare))
         self._ready = False
         self._lock = threading.Lock()
         self._closed = False

@@ -21,6 +21,7 @@ from app.service.session_recorder import SessionRecorder
 from app.service.setpoints import LocalSource, Setpoint, SetpointAck
 from app.service.verbs import RobotInfo, SetParams, Verb
 from app.session.inputs import outcome_of
+from behaviors.perception.worker import prepare as prepare_recognition
 from behaviors.registry import BEHAVIORS  # noqa: F401 - imported here, not at the first behaviour's boundary
 from behaviors.runner import BehaviorRunner
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
@@ -270,7 +271,8 @@ class RobotHost:
         if self._cameras is None:
             from robot.camera import CameraProcess
 
-            self._cameras = CameraProcess(self.scene, self.plant.model, cameras=("narrow_left",))
+            self._cameras = CameraProcess(self.scene, self.plant.model, cameras=("narrow_left",),
+                                          prepare=prepare_recognition)
             self._cameras_scene = self.scene
         return self._cameras
 
@@ -429,6 +431,7 @@ class RobotHost:
                                            f"{', '.join(available_scenes())}")
         plant = MujocoPlant(scene)
         self.runner.reset("cancelled: the simulation was reset")
+        restart_cameras = scene != self._cameras_scene and self._cameras is not None
         if scene != self._cameras_scene:
             self.close_cameras()
         self.recognitions.clear()
@@ -440,6 +443,8 @@ class RobotHost:
         self.plant = plant
         self.observation = Observation(self.loop.snapshot, plant.ground_truth())
         self.scene = scene
+        if restart_cameras:  # the new scene's camera process starts now, in the background (1-2 s), not at the
+            self.cameras()  # first capture, whose result would then wait for it
         self.generation += 1
         self.logger.clear()
         self.loop.lateness.clear()

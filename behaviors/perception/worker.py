@@ -27,14 +27,20 @@ LOCATORS = {"can": locate_can, "trash_box": locate_trash_box}
 _kin: RobotKinematics | None = None  # the analysing process's own model (the controller's belongs to the loop)
 
 
+def prepare() -> None:
+    """What recognise_image needs, loaded in the analysing process before its first image (the robot's model:
+    ~0.1-0.3 s), so that the first recognition after a start or a scene change takes no longer than the others."""
+    global _kin
+    if _kin is None:
+        _kin = RobotKinematics()
+
+
 def recognise_image(frames, camera: str, time_s: float, q_meas_rad: np.ndarray, base_rpy_est_rad: np.ndarray,
                     cog_world_m: np.ndarray, object_name: str) -> tuple[Recognition | None, Any]:
     """The analysis of a capture (Commands.capture's `analyse`): the robot's own estimate of the camera's pose
     from what it knew at the capture, and the object's model fitted to the image. (Recognition or None, the
     camera's intrinsics)."""
-    global _kin
-    if _kin is None:
-        _kin = RobotKinematics()
+    prepare()
     image = frames[camera]
     T_world_camera = T_world_camera_estimate(_kin, q_meas_rad, base_rpy_est_rad, cog_world_m, camera)
     locate = LOCATORS[object_name]

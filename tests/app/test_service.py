@@ -194,3 +194,20 @@ def test_the_first_behaviour_imports_nothing_at_a_tick_boundary():
     out = subprocess.run([sys.executable, "-c", _FIRST_BEHAVIOUR, pickle.dumps(verbs).hex()], capture_output=True,
                          text=True, timeout=120, check=True)
     assert out.stdout.strip().splitlines()[-1] == "[]", out.stdout[-2000:]
+
+
+def test_a_reset_to_another_scene_starts_its_camera_process_at_once():
+    """Not at the first capture, whose result would then wait 1-2 s for the process to start (a locate_can right
+    after switching to the EXPO scene overran its time)."""
+    robot = LocalRobot("default", speed=None)
+    try:
+        robot.host.start_cameras()
+        first = robot.host.cameras()
+        robot.host.reset("expo")
+        assert robot.host._cameras is not None and robot.host._cameras is not first
+        assert robot.host._cameras_scene == "expo"
+        expo = robot.host._cameras
+        robot.host.reset()  # the same scene: the same process
+        assert robot.host._cameras is expo
+    finally:
+        robot.host.close_cameras()

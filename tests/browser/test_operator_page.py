@@ -633,17 +633,29 @@ def test_a_touch_on_a_stick_drives_a_hand_to_its_reach_limit_and_the_readouts_sa
         cdp.send("Emulation.setTouchEmulationEnabled", {"enabled": False})
         cdp.detach()
     zeroed_within(hrp2_console, "rhand", t_release)  # (how soon: the mouse test's bound, same handler)
-    time.sleep(0.3)  # the hands' 0.5 m/s^2 limit brings 0.1 m/s to rest in 0.2 s
-    x1 = target(hrp2_console, "rhand")[0]
+    x0 = target(hrp2_console, "rhand")[0]
+    # at the reach limit the target is the achieved pose: while the IK still finds it out of reach (limited
+    # "reach", for up to ~0.4 s) it follows the IK's best effort back, 6-7 mm in all (measured, read every 0.05 s),
+    # then holds exactly, no longer limited; going on at 0.1 m/s would be 50 mm in 0.5 s
+    reads = [x0]
+
+    def still():  # not limited, and unchanged over the last three reads (0.3 s)
+        p = hrp2_console.state()["operation"]["points"]["rhand"]
+        reads.append(p["target"][0] if p["limited"] is None else None)
+        last = reads[-3:]
+        return len(last) == 3 and None not in last and max(last) - min(last) < 1e-4 and last[-1]
+
+    x1 = wait_until(still, 5.0, "the hand's target not limited and still for 0.3 s", period=0.15)
+    assert x1 <= x0 + 1e-3, "the hand moved on after the touch"
     time.sleep(0.5)
-    # at the reach limit the target is the achieved pose, which settled by up to 1.4 mm (measured); going on at
-    # 0.1 m/s would be 50 mm
-    assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=3e-3), "the hand moved on after the touch"
+    assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=5e-4), "the hand moved after it had settled"
     playwright_api.expect(page.locator("#limited")).to_have_text("no")
     latency = re.fullmatch(r"(\d+\.\d) ms \(median of (\d+)\)", page.locator("#latency").inner_text())
     assert latency and 0.0 < float(latency.group(1)) < 1000.0 and int(latency.group(2)) >= 1, latency
     run = post_json(f"{hrp2_console.base}/api/behaviors/stand", {})  # the hand back
-    wait_until(lambda: next(r for r in hrp2_console.state()["runs"] if r["id"] == run["id"])["state"] != "running",
+    # (the state is published every 50 ms: the run may not be in it yet)
+    wait_until(lambda: next((r for r in hrp2_console.state()["runs"] if r["id"] == run["id"]),
+                            {"state": "running"})["state"] != "running",
                20.0, "stand to end")
 
 

@@ -325,3 +325,25 @@ def test_the_robot_process_priority_is_for_the_loop_thread_alone():
         pytest.skip(f"no SCHED_FIFO here ({seen['said']})")
     assert seen["self"] & ~os.SCHED_RESET_ON_FORK == os.SCHED_FIFO
     assert seen["child"] == os.SCHED_OTHER
+
+
+_prepared = False
+
+
+def _prepare() -> None:
+    global _prepared
+    _prepared = True
+
+
+def _was_prepared(frames) -> bool:
+    return _prepared
+
+
+def test_a_camera_process_prepares_what_its_analyses_need_before_it_answers(plant):
+    from robot.camera import CameraProcess
+
+    for prepare, expected in ((_prepare, True), (None, False)):
+        with CameraProcess("expo", plant.model, cameras=("wide",), width=64, height=48, prepare=prepare) as proc:
+            assert proc.request_state_of(plant.data, analyse=(_was_prepared, ())).result(timeout=60) is expected
+    with pytest.raises(ValueError, match="module-level function"):
+        CameraProcess("expo", plant.model, cameras=("wide",), prepare=lambda: None)
