@@ -580,15 +580,29 @@ def test_held_keys_drive_the_selected_point_and_letting_go_stops_it(page, hrp2_c
         x0 = target(hrp2_console, "rhand")[0]
         wait_until(lambda: target(hrp2_console, "rhand")[0] > x0 + 0.02, 5.0, "the hand's target 2 cm forward")
         shot(page, artifacts, "keys_drive_rhand")
-        t_release = hrp2_console.state()["time"]
     finally:
         page.keyboard.up("KeyW")
+    # from when the page has handled the key-up (keyboard.up returns once the page's handlers ran): how long the
+    # page's own thread takes to get there under load is the browser's (bench --scenario estop-browser: p99
+    # 72-222 ms on this machine), and read before the key-up it made this bound fail in one CI run of three
+    t_release = hrp2_console.state()["time"]
     dt = zeroed_within(hrp2_console, "rhand", t_release)
     assert dt <= ZERO_WITHIN_S, f"the hand velocity went to zero {dt * 1e3:.0f} ms after the key was let go"
-    time.sleep(0.2)  # the hands' 0.5 m/s^2 limit brings 0.05 m/s to rest in 0.1 s (2.5 mm)
-    x1 = target(hrp2_console, "rhand")[0]
+    x_zero = target(hrp2_console, "rhand")[0]
+    reads = [x_zero]
+
+    def still():  # not limited, and unchanged over the last three reads (0.3 s)
+        p = hrp2_console.state()["operation"]["points"]["rhand"]
+        reads.append(p["target"][0] if p["limited"] is None else None)
+        last = reads[-3:]
+        return len(last) == 3 and None not in last and max(last) - min(last) < 1e-4 and last[-1]
+
+    # the hands' 0.5 m/s^2 limit brings 0.05 m/s to rest in 0.1 s (2.5 mm); near the reach limit the target
+    # settles back a few mm (see the touch test); going on would be 25 mm in 0.5 s
+    x1 = wait_until(still, 5.0, "the hand's target not limited and still for 0.3 s", period=0.15)
+    assert x1 <= x_zero + 3e-3, "the hand moved on after the keys"
     time.sleep(0.5)
-    assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=1e-3), "the hand moved on after the keys"
+    assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=5e-4), "the hand moved after it had settled"
     playwright_api.expect(page.locator("#stream-state")).to_have_text("idle")
 
 
