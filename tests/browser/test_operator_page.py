@@ -565,6 +565,21 @@ def target(c: Console, point: str) -> list[float]:
     return c.state()["operation"]["points"][point]["target"]
 
 
+def settled_target_x(c: Console, point: str, timeout: float = 5.0) -> float:
+    """The point's target x once it is no longer limited and unchanged over three reads 0.15 s apart (0.3 s): a
+    hand released at its reach limit follows the IK's best effort back a few mm first (measured 6-7 mm in up to
+    ~0.6 s), then holds exactly."""
+    reads: list[float | None] = []
+
+    def still():
+        p = c.state()["operation"]["points"][point]
+        reads.append(p["target"][0] if p["limited"] is None else None)
+        last = reads[-3:]
+        return len(last) == 3 and None not in last and max(last) - min(last) < 1e-4 and last[-1]
+
+    return wait_until(still, timeout, f"the {point} target not limited and still for 0.3 s", period=0.15)
+
+
 def test_held_keys_drive_the_selected_point_and_letting_go_stops_it(page, hrp2_console, artifacts):
     released(hrp2_console)
     motion_released(hrp2_console)
@@ -589,17 +604,9 @@ def test_held_keys_drive_the_selected_point_and_letting_go_stops_it(page, hrp2_c
     dt = zeroed_within(hrp2_console, "rhand", t_release)
     assert dt <= ZERO_WITHIN_S, f"the hand velocity went to zero {dt * 1e3:.0f} ms after the key was let go"
     x_zero = target(hrp2_console, "rhand")[0]
-    reads = [x_zero]
-
-    def still():  # not limited, and unchanged over the last three reads (0.3 s)
-        p = hrp2_console.state()["operation"]["points"]["rhand"]
-        reads.append(p["target"][0] if p["limited"] is None else None)
-        last = reads[-3:]
-        return len(last) == 3 and None not in last and max(last) - min(last) < 1e-4 and last[-1]
-
     # the hands' 0.5 m/s^2 limit brings 0.05 m/s to rest in 0.1 s (2.5 mm); near the reach limit the target
     # settles back a few mm (see the touch test); going on would be 25 mm in 0.5 s
-    x1 = wait_until(still, 5.0, "the hand's target not limited and still for 0.3 s", period=0.15)
+    x1 = settled_target_x(hrp2_console, "rhand")
     assert x1 <= x_zero + 3e-3, "the hand moved on after the keys"
     time.sleep(0.5)
     assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=5e-4), "the hand moved after it had settled"
@@ -651,15 +658,7 @@ def test_a_touch_on_a_stick_drives_a_hand_to_its_reach_limit_and_the_readouts_sa
     # at the reach limit the target is the achieved pose: while the IK still finds it out of reach (limited
     # "reach", for up to ~0.4 s) it follows the IK's best effort back, 6-7 mm in all (measured, read every 0.05 s),
     # then holds exactly, no longer limited; going on at 0.1 m/s would be 50 mm in 0.5 s
-    reads = [x0]
-
-    def still():  # not limited, and unchanged over the last three reads (0.3 s)
-        p = hrp2_console.state()["operation"]["points"]["rhand"]
-        reads.append(p["target"][0] if p["limited"] is None else None)
-        last = reads[-3:]
-        return len(last) == 3 and None not in last and max(last) - min(last) < 1e-4 and last[-1]
-
-    x1 = wait_until(still, 5.0, "the hand's target not limited and still for 0.3 s", period=0.15)
+    x1 = settled_target_x(hrp2_console, "rhand")
     assert x1 <= x0 + 1e-3, "the hand moved on after the touch"
     time.sleep(0.5)
     assert target(hrp2_console, "rhand")[0] == pytest.approx(x1, abs=5e-4), "the hand moved after it had settled"
