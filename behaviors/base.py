@@ -25,6 +25,8 @@ from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Params
 from controller.operation.points import OperationView, Twist, WalkCommand
 
+OVERRUN_FACTOR = 1.5  # a behaviour (a run, a plan's step) fails when it has taken this many times its nominal duration
+
 __all__ = ["Behavior", "BehaviorParams", "Capture", "Commands", "Context", "JointReading", "Output", "params_from"]
 
 
@@ -172,7 +174,7 @@ class Behavior(ABC):
 
     @abstractmethod
     def nominal_duration_s(self) -> float:
-        """How long the behaviour should take [s]; the runner fails it at 1.5 times this."""
+        """How long the behaviour should take [s]; the runner fails it at OVERRUN_FACTOR times this."""
 
     def progress(self, ctx: Context) -> float:
         """0..1; by default the elapsed time against the nominal duration."""

@@ -14,9 +14,7 @@ from collections.abc import Generator
 from dataclasses import dataclass, field
 from typing import Any
 
-from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
-
-OVERRUN_FACTOR = 1.5
+from behaviors.base import NOTHING, OVERRUN_FACTOR, Behavior, BehaviorParams, Context, Output
 
 
 class StepFailed(Exception):

@@ -9,6 +9,11 @@ from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
 from behaviors.perception.worker import LOCATORS, RECOGNITION_DELAY_S, PendingRecognition, recognition_dict
 
 CAMERA = "narrow_left"  # the narrow stereo pair's left camera, with the depth registered to it
+#: [s] paced, how late a result may come and still count (a run fails at 1.5 times the nominal duration). The
+#: camera process runs at nice +10 so that it waits for the control loop; on a machine kept busy by other work
+#: (a CI run's software-GL browser beside the console) a recognition of 0.1-0.2 s of processor time took over
+#: 3 s of wall time, and a 2 s allowance failed the locate_can of a CI run.
+RECOGNITION_LATE_S = 6.0
 
 
 @dataclass(frozen=True)
@@ -23,7 +28,7 @@ class Recognise(Behavior):
     summary = "Locate the can or the trash box in the narrow camera's image as the head points now"
 
     def nominal_duration_s(self) -> float:
-        return RECOGNITION_DELAY_S + 2.0  # paced: a rendering late by up to 2 s still counts
+        return RECOGNITION_DELAY_S + RECOGNITION_LATE_S
 
     def start(self, ctx: Context) -> None:
         self.pending = PendingRecognition(ctx.commands, CAMERA, self.params.object)

@@ -10,13 +10,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
-from behaviors.base import Behavior, Commands, Context, Output
+from behaviors.base import OVERRUN_FACTOR, Behavior, Commands, Context, Output
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
 from controller.operation.points import OperationView, Twist, WalkCommand, check_twist, sum_per_point
 
 log = logging.getLogger(__name__)
 
-OVERRUN_FACTOR = 1.5  # a run fails when it has taken this many times its nominal duration
 KEEP_FINISHED = 64  # finished runs kept for GET /api/behaviors/runs/{id}
 STATES = ("running", "succeeded", "failed", "cancelled")
 

@@ -7,7 +7,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
+from behaviors.base import NOTHING, OVERRUN_FACTOR, Behavior, BehaviorParams, Context, Output
 from controller.core.errors import InvalidCommand
 
 MAX_STEPS = 20
@@ -82,7 +82,7 @@ class Sequence(Behavior):
         out = child.step(child_ctx)
         if child.outcome is None:
             nominal = child.nominal_duration_s()
-            if child_ctx.elapsed_s > 1.5 * nominal:
+            if child_ctx.elapsed_s > OVERRUN_FACTOR * nominal:
                 child.stop(child_ctx)
                 child.teardown(child_ctx)
                 return self.fail(f"step {self.index} ({child.name}) overran its nominal duration of "
