@@ -280,8 +280,9 @@ def check_analysis(analyse: Analysis | None) -> None:
         raise ValueError(f"analyse: the arguments must be a tuple, not {type(args).__name__}")
 
 
-#: how much lower the camera process's priority is than the robot's (Linux nice increment; 10: the scheduler
-#: gives it ~1/10 of a core the loop also wants)
+#: how much lower the camera process's priority is than the robot's by default (Linux nice increment; 10: the
+#: scheduler gives it ~1/10 of a core the loop also wants). A loop that runs SCHED_FIFO preempts it whatever its
+#: nice: its owner then passes nice=0 (robot.camera.CameraProcess), so that a busy machine does not starve it.
 CAMERA_NICE = 10
 
 
@@ -295,17 +296,18 @@ def _analysed(render, request: tuple, analyse: Analysis | None):
 
 def _serve(conn, scene_file: str, cameras: tuple[str, ...], width: int, height: int,
            depth_cameras: tuple[str, ...] | None, disparity_noise_px: float, seed: int | None,
-           prepare: Callable[[], Any] | None = None) -> None:
+           prepare: Callable[[], Any] | None = None, nice: int = CAMERA_NICE) -> None:
     """The camera process: a CameraRig of its own, rendering each request it receives until None arrives.
 
     It runs at a lower priority than the robot's process: never real-time (a real-time parent's SCHED_FIFO,
-    inherited, made its renderer's threads hold the loop's core for 3-4 ms at each render), and nice
-    +CAMERA_NICE, both set before the renderer starts its threads, which inherit them; so rendering and
-    analysing wait for the control loop instead of taking its core."""
+    inherited, made its renderer's threads hold the loop's core for 3-4 ms at each render), and at `nice`
+    (+CAMERA_NICE unless the loop is real-time), both set before the renderer starts its threads, which
+    inherit them; so rendering and analysing wait for the control loop instead of taking its core."""
     try:
         if os.sched_getscheduler(0) in (os.SCHED_FIFO, os.SCHED_RR):  # a real-time parent's, inherited
             os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
-        os.nice(CAMERA_NICE)
+        if nice:
+            os.nice(nice)
     except OSError:
         pass  # not allowed here: equal priority
     try:
@@ -351,12 +353,13 @@ class CameraProcess:
     thread. Bad requests raise ValueError (in the future when checked there); a failure in the child (no
     renderer, a crash) fails the requests' futures with RuntimeError. `prepare`, a module-level function the
     child calls once before it answers (loading what the analyses need, so that the first one is not slower).
+    `nice`, the child's nice increment (see CAMERA_NICE).
     """
 
     def __init__(self, scene: str | Path, model: mujoco.MjModel | None, cameras: Sequence[str] = HEAD_CAMERAS,
                  width: int = 640, height: int = 480, depth_cameras: Sequence[str] | None = None,
                  disparity_noise_px: float = 0.0, seed: int | None = None,
-                 prepare: Callable[[], Any] | None = None) -> None:
+                 prepare: Callable[[], Any] | None = None, nice: int = CAMERA_NICE) -> None:
         import multiprocessing
 
         cameras = tuple(cameras)
@@ -379,7 +382,8 @@ class CameraProcess:
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_serve, name="camera-render", daemon=True, args=(
             child, str(scene_path(scene)), cameras, width, height,
-            None if depth_cameras is None else tuple(depth_cameras), float(disparity_noise_px), seed, prepare))
+            None if depth_cameras is None else tuple(depth_cameras), float(disparity_noise_px), seed, prepare,
+            int(nice)))
         self._ready = False
         self._lock = threading.Lock()
         self._closed = False

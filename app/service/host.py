@@ -29,6 +29,7 @@ from controller.core.layer import Params
 from controller.core.loop import Snapshot
 from controller.core.loop_timing import LoopTiming
 from controller.core.system import ControllerSystem
+from robot.camera import CAMERA_NICE
 from robot.names import JOINT_NAMES
 from robot.plant import MujocoPlant, available_scenes
 from robot.sensors import GroundTruth, is_fallen
@@ -143,6 +144,7 @@ class RobotHost:
         self._runs_cache: tuple[int, tuple] = (-1, ())
         self.recognitions: dict[str, dict] = {}  # object -> its latest recognition (behaviours remember them)
         self._cameras = None  # robot.camera.CameraProcess of `_cameras_scene`, made on the first capture
+        self.camera_nice = CAMERA_NICE  # the camera process's nice increment (0 when the loop is real-time)
         self._cameras_scene: str | None = None
         self.captures = 0  # captures made since the last reset (their numbers, from 1)
         self._late_captures: set[int] = set()  # paced: captures whose results were not ready when due
@@ -272,7 +274,7 @@ class RobotHost:
             from robot.camera import CameraProcess
 
             self._cameras = CameraProcess(self.scene, self.plant.model, cameras=("narrow_left",),
-                                          prepare=prepare_recognition)
+                                          prepare=prepare_recognition, nice=self.camera_nice)
             self._cameras_scene = self.scene
         return self._cameras
 

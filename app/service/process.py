@@ -106,6 +106,10 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     # a paced loop sleeps most of each tick and deserves the CPU when it wakes; one running as fast as it can
     # never sleeps, and with SCHED_FIFO it would starve the HTTP process (and everything else) of a core
     priority = _raise_priority() if cfg.realtime_priority and cfg.speed is not None else "default"
+    if priority.startswith("SCHED_FIFO"):
+        # the loop preempts the camera process whatever its nice; lowered, a busy machine (a software-GL browser
+        # beside the console) starved its start and its recognitions for over 10 s
+        host.camera_nice = 0
     try:
         host.start_cameras()  # before the loop runs at real time (robot.camera.CameraProcess)
     except Exception as exc:  # noqa: BLE001 - no cameras (no GL here): perception fails, the robot runs
