@@ -161,6 +161,8 @@ def page(hrp2_console, page_urls):
             pg = browser.new_page(viewport={"width": 1280, "height": 800})
             pg.on("request", lambda r: page_urls.append(r.url))
             pg.on("websocket", lambda ws: page_urls.append(ws.url))
+            pg.on("console", lambda m: m.type in ("error", "warning") and print(f"[page {m.type}] {m.text[:300]}"))
+            pg.on("pageerror", lambda e: print(f"[page error] {e}"))
             # Software WebGL (SwiftShader) renders the viser iframe in the same renderer and GPU process: while
             # it builds the scene, input events can stall for ~20 s on a 2-CPU machine, so actions wait longer.
             pg.set_default_timeout(40_000)
@@ -189,6 +191,14 @@ def saves_a_screenshot(request, artifacts):
     if report is not None and report.passed:
         saved = [p.name for p in artifacts.glob("*.png") if p.stat().st_mtime >= started]
         assert saved, f"{request.node.name} saved no screenshot in {artifacts}"
+    elif report is not None and report.failed and "page" in request.fixturenames:
+        # what the page showed and what the console said when it failed (a CI run keeps the folder)
+        try:
+            request.getfixturevalue("page").screenshot(path=str(artifacts / f"FAILED_{request.node.name}.png"))
+        except Exception as exc:  # noqa: BLE001 - the failure itself is what the report shows
+            print(f"no screenshot of the failure: {exc}")
+        c = request.getfixturevalue("hrp2_console")
+        print("the console's last output:\n" + "".join(c.output[-40:]))
 
 
 def shot(pg, artifacts: Path, name: str) -> Path:
@@ -443,8 +453,12 @@ def test_stop_walking_ends_a_walk_in_place(page, hrp2_console, artifacts):
     wait_until(lambda: hrp2_console.state()["walking"], 10.0, "walking")
     time.sleep(2.0)  # well into the walk
     page.get_by_role("button", name="Stop walking", exact=True).click()
-    stopping = wait_until(lambda: (s := hrp2_console.state())["emergency"]["walking_stop"] and s, 5.0,
-                          "walking_stop in /api/state")
+    try:
+        stopping = wait_until(lambda: (s := hrp2_console.state())["emergency"]["walking_stop"] and s, 5.0,
+                              "walking_stop in /api/state")
+    except AssertionError as exc:  # (failed once in CI: what did the page say about the click?)
+        raise AssertionError(f"{exc}; the page's history ends: {page.locator('#history').inner_text()[-600:]!r}; "
+                             f"walking: {hrp2_console.state()['walking']}") from None
     x0 = stopping["base"]["pos"][0]
     playwright_api.expect(page.locator("#s-walkstop")).to_have_text("STOPPING in place")
     playwright_api.expect(page.locator("#stop-walking")).to_have_class(re.compile(r"\bon\b"))
@@ -791,18 +805,38 @@ def test_a_command_a_script_sends_appears_in_the_pages_history(page, hrp2_consol
     post_json(f"{hrp2_console.base}/api/sequence/joint-angles", {"angles_deg": {joint: angle + 10.0}, "time": 1.0})
 
 
-def test_the_cp_error_plot_data_grows(page, artifacts):
+def viser_legend_t(page) -> float:
+    """The time [s] of the newest sample in the legend under viser's CP-error plot."""
+    legend = page.frame_locator("#view iframe").get_by_text(re.compile(r"^t \d+\.\d\d s: x"))
+    return float(re.match(r"t (\d+\.\d+) s", legend.inner_text()).group(1))
+
+
+def xfail_if_viser_froze(page, c: Console) -> None:
+    """The known defect of issue 12, open: now and then (about one browser run in three here, also in CI) the
+    whole viser panel of the page stops updating for good (time, plot, legend) while the console's threads are
+    idle and the rest of the page goes on; not found yet. Recognised by the legend more than 5 s behind the
+    robot, it is reported as that expected failure; any other way of failing fails."""
+    shown_s, robot_s = viser_legend_t(page), c.state()["time"]
+    if robot_s - shown_s > 5.0:
+        pytest.xfail(f"viser's panel froze (issue 12): its legend at t {shown_s:.2f} s, the robot at {robot_s:.2f} s")
+
+
+def test_the_cp_error_plot_data_grows(page, hrp2_console, artifacts):
     frame = page.frame_locator("#view iframe")
     legend = frame.get_by_text(re.compile(r"^t \d+\.\d\d s: x"))
     playwright_api.expect(legend).to_be_visible(timeout=20_000)
 
     def shown_t() -> float:
-        return float(re.match(r"t (\d+\.\d+) s", legend.inner_text()).group(1))
+        return viser_legend_t(page)
 
     t0 = shown_t()
     plot = frame.locator(".uplot canvas").first
     before = plot.screenshot()
-    wait_until(lambda: shown_t() > t0 + 1.0, 20.0, "the plot's newest sample 1 s later")
+    try:
+        wait_until(lambda: shown_t() > t0 + 1.0, 20.0, "the plot's newest sample 1 s later")
+    except AssertionError:
+        xfail_if_viser_froze(page, hrp2_console)
+        raise
     assert plot.screenshot() != before, "the plot was not redrawn"
     shot(page, artifacts, "cp_plot")
 
@@ -856,6 +890,8 @@ def test_the_camera_and_every_plot_keep_updating_while_watched(page, hrp2_consol
     page.locator("#camera").scroll_into_view_if_needed()
     rates = measure_page_rates(page, hrp2_console.base, RATE_WINDOW_S)
     print(rates)
+    if rates["shown_hz"].get("cp_plot_draws") == 0.0:
+        xfail_if_viser_froze(page, hrp2_console)
     for group in ("delivered_hz", "shown_hz"):
         for name, hz in rates[group].items():
             assert hz > 0.0, f"{group}[{name}] did not update in {RATE_WINDOW_S} s: {rates}"
