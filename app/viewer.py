@@ -19,6 +19,7 @@ import trimesh
 import viser
 
 from app.service import OperatorService, ServiceError
+from app.viser_wakeup import wake_stuck_buffers
 from controller.balance.capture_point import (
     HRP2_LEFT_SOLE,
     HRP2_RIGHT_SOLE,
@@ -33,6 +34,7 @@ log = logging.getLogger(__name__)
 _VISUAL_GROUPS = (0, 1, 2)  # MJCF geom groups drawn by default; group 3 holds the collision shapes
 PLOT_WINDOW_S = 10.0  # [s] of simulated time shown by the capture-point error plot
 PLOT_RATE_HZ = 25.0  # plot samples and redraws per second (wall time): the issue asks >= 20
+WAKE_PERIOD_S = 0.5  # [s] how often a viser sender that missed its wake-up is looked for (app/viser_wakeup.py)
 PLOT_RANGE_MM = 100.0  # the plot's fixed y range +-[mm]: the default 40 mm threshold stays readable
 OP_TARGET_POINTS = ("rhand", "lhand")  # operational points whose target position is drawn (x, y, z in F)
 MAX_FOOTSTEPS = 16  # planned footsteps drawn (fixed buffer: the handles are only updated, never rebuilt)
@@ -676,6 +678,8 @@ class Viewer:
                     self._update_recognitions(self.service.recognitions())
                 if n % max(1, round(self.rate_hz / PLOT_RATE_HZ)) == 0:
                     self._update_plot(snap)
+                if n % max(1, round(self.rate_hz * WAKE_PERIOD_S)) == 0:
+                    wake_stuck_buffers(self.server)  # viser 1.1.1's lost wake-up (app/viser_wakeup.py)
             except ServiceError:  # the robot process is gone or restarting: try again shortly
                 time.sleep(0.5)
             except Exception:  # noqa: BLE001 - keep drawing whatever happens
