@@ -10,9 +10,10 @@ from behaviors.perception.worker import LOCATORS, RECOGNITION_DELAY_S, PendingRe
 
 CAMERA = "narrow_left"  # the narrow stereo pair's left camera, with the depth registered to it
 #: [s] paced, how late a result may come and still count (a run fails at 1.5 times the nominal duration). The
-#: camera process runs at nice +10 so that it waits for the control loop; on a machine kept busy by other work
-#: (a CI run's software-GL browser beside the console) a recognition of 0.1-0.2 s of processor time took over
-#: 3 s of wall time, and a 2 s allowance failed the locate_can of a CI run.
+#: camera process shares the processors with everything but a real-time loop (nice +10 beside a loop that is
+#: not SCHED_FIFO, 0 beside one that is); on a machine kept busy by other work (a CI run's software-GL browser
+#: beside the console) a recognition of 0.1-0.2 s of processor time took over 3 s of wall time, and a 2 s
+#: allowance failed the locate_can of a CI run.
 RECOGNITION_LATE_S = 6.0
 
 
