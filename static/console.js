@@ -821,6 +821,39 @@ const CAMERA_HZ = 12;  // asked of the stream: a little over the 10 Hz the view 
 window.hrp2Camera = {frames: 0, seq: null, meta: null};
 const cameraTimes = [];
 let cameraWs = null;
+// One frame decodes at a time and the newest waiting one follows it: a frame set while the previous was still
+// loading replaced it, and on a loaded machine (frames every 83 ms, a decode slower than that) the image could
+// stay blank. A frame counts (frames, seq, rate) when it is on screen, with the recognitions of its meta.
+let cameraLoading = false;
+let cameraNext = null;  // {blob, meta}: the newest frame received while one was loading
+function showCameraFrame(blob, meta) {
+  if (cameraLoading) { cameraNext = {blob, meta}; return; }
+  cameraLoading = true;
+  const img = $("camera-img");
+  const old = img.src;
+  const shown = (ok) => {
+    img.onload = img.onerror = null;
+    if (old.startsWith("blob:")) URL.revokeObjectURL(old);
+    cameraLoading = false;
+    if (ok) {
+      const cam = window.hrp2Camera;
+      cam.frames += 1;
+      cam.seq = meta ? meta.seq : null;
+      cam.meta = meta;
+      const now = performance.now();
+      cameraTimes.push(now);
+      while (cameraTimes.length && cameraTimes[0] < now - 2000) cameraTimes.shift();
+      const hz = cameraTimes.length > 1 ? 1000 * (cameraTimes.length - 1) / (now - cameraTimes[0]) : 0;
+      $("camera-info").textContent = `wide head camera 93.6 x 70.8 deg: ${hz.toFixed(1)} Hz` +
+        (meta ? `, t ${fmt(meta.time_s, 2)} s` : "");
+      if (meta) drawRecognitions(meta);
+    }
+    if (cameraNext) { const n = cameraNext; cameraNext = null; showCameraFrame(n.blob, n.meta); }
+  };
+  img.onload = () => shown(true);
+  img.onerror = () => shown(false);
+  img.src = URL.createObjectURL(blob);
+}
 function startCamera() {
   if (cameraWs || document.hidden) return;  // a hidden page watches nothing: the console renders for no one
   let ws;
@@ -836,21 +869,7 @@ function startCamera() {
       else if (d.ok === false) $("camera-info").textContent = `wide head camera: ${d.detail}`;
       return;
     }
-    const img = $("camera-img");
-    const old = img.src;
-    img.src = URL.createObjectURL(m.data);
-    if (old.startsWith("blob:")) URL.revokeObjectURL(old);
-    const cam = window.hrp2Camera;
-    cam.frames += 1;
-    cam.seq = meta ? meta.seq : null;
-    cam.meta = meta;
-    const now = performance.now();
-    cameraTimes.push(now);
-    while (cameraTimes.length && cameraTimes[0] < now - 2000) cameraTimes.shift();
-    const hz = cameraTimes.length > 1 ? 1000 * (cameraTimes.length - 1) / (now - cameraTimes[0]) : 0;
-    $("camera-info").textContent = `wide head camera 93.6 x 70.8 deg: ${hz.toFixed(1)} Hz` +
-      (meta ? `, t ${fmt(meta.time_s, 2)} s` : "");
-    if (meta) drawRecognitions(meta);
+    showCameraFrame(m.data, meta);
   };
   ws.onclose = () => { if (cameraWs === ws) cameraWs = null; setTimeout(startCamera, 1000); };
 }
