@@ -1089,8 +1089,9 @@ def test_a_recognition_popup_appears_after_locate_can_and_confirm_and_correct_re
         before = max((r["id"] for r in hrp2_console.state()["runs"]), default=0)
         run_command(page, "look_at can")
         playwright_api.expect(page.locator("#history")).to_contain_text("can: can at (")
-        look = wait_until(lambda: (r := last_run(hrp2_console, "look_at"))["id"] > before
-                          and r["state"] != "running" and r, 30.0, "look_at can to end")
+        look = wait_until(lambda: next((r for r in hrp2_console.state()["runs"] if r["behavior"] == "look_at"
+                                        and r["id"] > before and r["state"] != "running"), None),
+                          30.0, "look_at can to end")  # (run alone, no look_at ran before it)
         assert [look["params"][k] for k in ("x_m", "y_m", "z_m")] == pytest.approx(rec["position_m"])
         assert look["state"] == "succeeded", look
     finally:
