@@ -226,6 +226,64 @@ def plot_push(out: Path) -> None:
     fig.savefig(out, dpi=110)
 
 
+#: the COG velocity filter before the LIP prediction (issue 13.2, toe-heel walk): the 4 Hz low-pass alone
+COGVEL_BEFORE = {"st": {"cogvel_lip_prediction": False}}
+
+
+def record_toe_heel_walk(overrides: dict | None = None, seconds: float = 8.0):
+    """Stand 2.5 s, then the toe 20 / heel 10 deg footsteps of the walking tests; per tick while walking: time,
+    the Stabilizer's |CP error| (estimated) and the simulation's own |CP ref - CP| (its COM and the COM's
+    finite-difference velocity, the LIP's omega from the COM height over the reference ZMP)."""
+    from app.service.verbs import Footstep
+    from controller.core.constants import GRAVITY_M_S2
+    from controller.walking.footsteps import StepParams
+
+    robot = LocalRobot()
+    loop = robot.loop
+    service = OperatorService(robot)
+    if overrides:
+        service.set_params(overrides)
+    robot.run_for(2.5)
+    sp = StepParams(toe_angle_rad=np.radians(20.0), heel_angle_rad=np.radians(10.0))
+    # relative to the first (the right foot where it stands): 0.2 m steps, the feet 0.19 m apart
+    service.set_footsteps([Footstep("rleg", (0.0, 0.0, 0.0)), Footstep("lleg", (0.2, 0.19, 0.0)),
+                           Footstep("rleg", (0.4, 0.0, 0.0)), Footstep("lleg", (0.4, 0.19, 0.0))], sp)
+    rows, com_prev = [], None
+    for _ in range(int(seconds / loop.dt_control_s)):
+        s = robot.step()
+        com = np.asarray(s.truth.com_world, dtype=float)
+        vel = (com - com_prev) / loop.dt_control_s if com_prev is not None else np.zeros(3)
+        com_prev = com
+        if not s.layers["abc"].walking:
+            continue
+        st = s.layers["st"]
+        omega = np.sqrt(GRAVITY_M_S2 / (com[2] - s.reference.gait.zmp_world[2]))
+        true_err = np.hypot(*(np.asarray(st.cp_ref) - (com[:2] + vel[:2] / omega)))
+        rows.append([s.time_s, st.cp_error_norm, true_err])
+    return np.array(rows)
+
+
+def plot_walk_cp_before_after(out: Path) -> None:
+    runs = (("before: the COG velocity low-passed at 4 Hz (the anchor's switches already taken out)",
+             record_toe_heel_walk(COGVEL_BEFORE)),
+            ("after: the LIP's acceleration predicts, the 4 Hz low-pass corrects", record_toe_heel_walk()))
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True, sharey=True)
+    for ax, (label, d) in zip(axes, runs, strict=True):
+        p99 = np.percentile(d[:, 1], 99)
+        ax.plot(d[:, 0], d[:, 1] * 1e3, color="tab:red", label=f"|CP error| estimated (p99 {p99 * 1e3:.1f} mm)")
+        ax.plot(d[:, 0], d[:, 2] * 1e3, color="tab:gray", ls=":", label="|CP ref - CP| of the simulation")
+        ax.axhline(25.0, color="tab:gray", ls="--", lw=0.8, label="goal p99 25 mm")
+        ax.axhline(40.0, color="tab:blue", ls="--", label="threshold")
+        ax.set_title(label, fontsize=10)
+        ax.set_ylabel("[mm]")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8, loc="upper left")
+    axes[1].set_xlabel("time [s]")
+    fig.suptitle("Toe 20 / heel 10 deg footsteps: the capture-point error while walking (issue 13.2)")
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--out-dir", type=Path, default=Path("docs/img"))
@@ -235,6 +293,7 @@ def main(argv=None) -> int:
     plot_push(args.out_dir / "push_cp_error.png")
     plot_push_before_after(args.out_dir / "push_before_after.png")
     plot_emergency_step_before_after(args.out_dir / "emergency_step_before_after.png")
+    plot_walk_cp_before_after(args.out_dir / "walk_cp_error_before_after.png")
     return 0
 
 

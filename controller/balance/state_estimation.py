@@ -77,6 +77,19 @@ def body_tilt_from_flat_soles(R_body_est, R_soles_plan, R_soles_meas, wrenches_s
     return roll_sum / weight, pitch_sum / weight
 
 
+def lip_velocity_filter_step(v_xy: tuple[float, float], diff_xy: tuple[float, float], alpha: float,
+                             accel_xy: tuple[float, float] = (0.0, 0.0), dt_s: float = 0.0) -> tuple[float, float]:
+    """One tick of the COG velocity filter [m/s]: predict `v_xy` with the acceleration `accel_xy` [m/s^2] over
+    `dt_s`, then move it by `alpha` (0..1) towards the finite difference `diff_xy` [m/s].
+
+    With no acceleration it is the first-order low-pass of the finite difference, which lags an accelerating
+    COG by about a / (2 pi f_c); with the LIP's acceleration omega^2 (balance point - measured ZMP) only what
+    the LIP does not explain (a push, a model error) is lagged."""
+    vx = v_xy[0] + accel_xy[0] * dt_s
+    vy = v_xy[1] + accel_xy[1] * dt_s
+    return vx + alpha * (diff_xy[0] - vx), vy + alpha * (diff_xy[1] - vy)
+
+
 def zmp_from_foot_wrenches(pos_world: np.ndarray, wrench_world: np.ndarray, z0: float,
                            min_fz: float = CONTACT_FZ_N) -> np.ndarray | None:
     """ZMP on the plane z = z0 from per-foot wrenches at the sensor origins (world axes).
@@ -108,6 +121,11 @@ class ActualStateEstimator:
         self.kin = kinematics
         self.last_zmp = np.zeros(3)
         self.base_pos_world = np.zeros(3)  # where the anchoring put BODY [m]
+        #: [m] how far this tick's change of anchor (the planned contacts switched) moved the estimate: the COG
+        #: with the new anchor minus with the previous one; zero on the other ticks. Not a motion of the robot:
+        #: a velocity estimate takes it out of its finite difference.
+        self.anchor_shift_world = (0.0, 0.0, 0.0)
+        self._anchor_weights: tuple[float, float] | None = None  # the planned contacts' weights last tick
         self._soles_key: tuple[bytes, bytes, bytes] | None = None  # the reference posture of _soles
         self._soles: np.ndarray | None = None
 
@@ -128,6 +146,7 @@ class ActualStateEstimator:
             # hrpsys's actual foot-origin frame: the feet mid-point when both are meant to be down,
             # otherwise the planned support foot (deterministic switches, no Fz chatter)
             return self._with_gait(est, ref.gait)
+        self.anchor_shift_world, self._anchor_weights = (0.0, 0.0, 0.0), None  # (the measured loads anchor)
         # the soles weighted by their measured load (equal weights when hardly loaded). The two weighted
         # sums stay numpy dot products: the same roundings as ever (numpy fuses the multiply-add)
         ref_soles = self.reference_soles(ref)
@@ -159,6 +178,14 @@ class ActualStateEstimator:
         ox = w0 * (rx - mrx) + w1 * (lx - mlx)
         oy = w0 * (ry - mry) + w1 * (ly - mly)
         oz = w0 * (rz - mrz) + w1 * (lz - mlz)
+        last = self._anchor_weights
+        if last is None or last == (w0, w1):
+            self.anchor_shift_world = (0.0, 0.0, 0.0)
+        else:  # the same measurement with last tick's anchor: the difference is the switch's, not the robot's
+            v0, v1 = last
+            self.anchor_shift_world = (ox - v0 * (rx - mrx) - v1 * (lx - mlx), oy - v0 * (ry - mry) - v1 * (ly - mly),
+                                       oz - v0 * (rz - mrz) - v1 * (lz - mlz))
+        self._anchor_weights = (w0, w1)
         self.base_pos_world = np.array((ox, oy, oz))
         cx, cy, cz = est.com_from_base.tolist()
         cog = np.array((cx + ox, cy + oy, cz + oz))
