@@ -15,7 +15,9 @@ the CP error peaked at 56-149 mm (the release itself 104-117 mm), though the rob
 Measured on this machine (e-stop at 11 instants of one step, 1.80-2.60 s into the walk at 0.2 m/s, and at 9
 instants 2.0-3.0 s into a 0.1 m/s walk turning 10 deg/s; 3 s hold; 10 s after the release): the robot stood
 every time, yaw change 0.25 deg at most; frozen in double support the CP error peaks under 6 mm, on one foot at
-23-36 mm (the cases below: 30, 3, 23, 3, 32, 36 and 34 mm)."""
+23-36 mm (the cases below: 30, 3, 23, 3, 32, 36 and 34 mm). With the LIP prediction of the COG velocity while
+walking (issue 13.2) the cases below peak at 21.6, 3.8, 16.3, 3.5, 31.7, 35.5 and 28.6 mm (the sweep of 20
+instants not redone)."""
 
 import math
 
