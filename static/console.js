@@ -818,7 +818,7 @@ $("lock-btn").addEventListener("click", async () => {
 
 // ---- the wide head camera (WS /ws/camera: meta, then the JPEG) and the recognitions over it ----------------
 const CAMERA_HZ = 12;  // asked of the stream: a little over the 10 Hz the view must keep
-window.hrp2Camera = {frames: 0, seq: null, meta: null};
+window.hrp2Camera = {frames: 0, seq: null, meta: null, src: null};  // src: the frame on screen (the next may load)
 const cameraTimes = [];
 let cameraWs = null;
 // One frame decodes at a time and the newest waiting one follows it: a frame set while the previous was still
@@ -839,6 +839,7 @@ function showCameraFrame(blob, meta) {
       const cam = window.hrp2Camera;
       cam.frames += 1;
       cam.seq = meta ? meta.seq : null;
+      cam.src = img.src;
       cam.meta = meta;
       const now = performance.now();
       cameraTimes.push(now);
