@@ -129,6 +129,7 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
     latencies: list[float] = []
     input_delays: list[float] = []  # pointer-down -> the page's handler running (the page's own thread)
     streamed: list[int] = []
+    answered_by: list[str] = []  # which way in answered first: "door", "stream" or "post"
     try:
         with sync_playwright() as pw:
             browser = pw.chromium.launch(executable_path=chromium, headless=True, args=CHROMIUM_ARGS)
@@ -150,6 +151,7 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
                 rec = page.evaluate(f"window.hrp2Estops[{n}]")
                 epoch_minus_mono_s = time.time() - time.monotonic()
                 reply = rec["reply"]
+                answered_by.append(reply.get("via") or ("stream" if reply.get("estop") else "post"))
                 if reply.get("ok") and not reply.get("message", "").endswith("already engaged"):
                     engaged_epoch_ms = (reply["engaged_at_monotonic_s"] + epoch_minus_mono_s) * 1e3
                     latencies.append(engaged_epoch_ms - rec["event_epoch_ms"])
@@ -162,4 +164,5 @@ def run_estop_browser_bench(clicks: int = 50, scene: str = "default") -> dict[st
     return {"scenario": "estop-browser", "scene": scene, "clicks": clicks,
             "pointerdown_to_engaged": percentiles_ms(latencies),
             "pointerdown_to_handler": percentiles_ms(input_delays),
-            "clicks_while_streaming": sum(streamed)}
+            "clicks_while_streaming": sum(streamed),
+            "answered_first_by": {k: answered_by.count(k) for k in sorted(set(answered_by))}}

@@ -125,6 +125,9 @@ def run_parser() -> argparse.ArgumentParser:
                         "--host other than loopback. Open the page as http://HOST:PORT/?token=<token>")
     p.add_argument("--port", type=_port, default=8000, help="HTTP API port")
     p.add_argument("--viewer-port", type=_port, default=8080, help="viser viewer port")
+    p.add_argument("--estop-port", type=_port, default=0,
+                   help="port of the e-stop's own WebSocket door, served by the robot process (default 0: a free "
+                        "one; the page reads it from GET /api/config)")
     p.add_argument("--params", type=_params_file, default=None, metavar="FILE",
                    help="start with these layer parameters: a JSON document {owner: {field: value}} as "
                         "GET /api/params gives (some owners and fields suffice; checked as PUT /api/params "
@@ -229,7 +232,7 @@ def test_hooks_from_env() -> bool:
 def run(argv: Sequence[str]) -> int:
     args = run_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
-    from app.security import TokenRequired, check_token_config, is_loopback, token_from_env
+    from app.security import TokenRequired, allowed_hosts_for, check_token_config, is_loopback, token_from_env
 
     token = token_from_env(args.token)
     try:  # before anything starts: nothing answers other machines without a token
@@ -240,6 +243,7 @@ def run(argv: Sequence[str]) -> int:
 
     from app.main import create_app
     from app.service import OperatorService, ServiceError
+    from app.service.estop_door import EstopDoorConfig
     from app.service.process import RobotConfig, RobotProcess
     from app.settings import Settings
     from robot.sensors import is_fallen
@@ -251,7 +255,10 @@ def run(argv: Sequence[str]) -> int:
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     wall0 = time.perf_counter()
     try:
-        robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed, params=args.params, record=args.record))
+        door = EstopDoorConfig(host=args.host, port=args.estop_port, allowed_hosts=allowed_hosts_for(args.host),
+                               token=token)
+        robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed, params=args.params, record=args.record,
+                                         estop_door=door))
     except ServiceError as exc:
         print(f"hrp2-console: error: {exc}", file=sys.stderr)
         return 2

@@ -230,6 +230,9 @@ class ChainInfo(BaseModel):
 
 class ConsoleConfig(BaseModel):
     viewer_port: int | None
+    estop_port: int | None = Field(default=None, description=(
+        "port of the e-stop's own WebSocket door (same host; send {\"estop\": true}, answered as POST /api/estop "
+        "with \"via\": \"door\"): served by the robot process, it does not wait for this server. null: none"))
     joints: list[str]
     joint_limits_deg: dict[str, list[float]]
     scenes: list[str]

@@ -76,7 +76,7 @@ def allowed_hosts_for(bind_host: str, extra: Iterable[str] = ()) -> tuple[str, .
     return tuple(sorted(names))
 
 
-def _host_name(host_header: str) -> str:
+def host_name(host_header: str) -> str:
     """The name part of a Host header ("[::1]:8000" -> "::1", "localhost:8000" -> "localhost")."""
     h = host_header.strip().lower()
     if h.startswith("["):
@@ -84,12 +84,12 @@ def _host_name(host_header: str) -> str:
     return h.rsplit(":", 1)[0] if h.count(":") == 1 else h
 
 
-def _origin_host(origin: str) -> tuple[str, str] | None:
+def origin_host(origin: str) -> tuple[str, str] | None:
     """(scheme, host name) of an Origin header, or None if it is "null" or malformed."""
     if "://" not in origin:
         return None
     scheme, rest = origin.split("://", 1)
-    return scheme.lower(), _host_name(rest.split("/", 1)[0])
+    return scheme.lower(), host_name(rest.split("/", 1)[0])
 
 
 async def _send_json(send, status: int, detail: str, headers: Iterable[tuple[bytes, bytes]] = ()) -> None:
@@ -136,18 +136,18 @@ class ConsoleGuard:
         if self.allowed_hosts is None:
             return True
         host = headers.get(b"host", b"").decode("latin-1")
-        return _host_name(host) in self.allowed_hosts
+        return host_name(host) in self.allowed_hosts
 
     def _origin_ok(self, headers: dict[bytes, bytes]) -> bool:
         origin = headers.get(b"origin")
         if origin is None:
             return True  # not a browser's cross-origin request (curl, scripts, same-origin GET)
-        parsed = _origin_host(origin.decode("latin-1"))
+        parsed = origin_host(origin.decode("latin-1"))
         if parsed is None:
             return False
         if self.allowed_hosts is None:
             # any interface: the page must come from the host it talks to
-            return parsed[1] == _host_name(headers.get(b"host", b"").decode("latin-1"))
+            return parsed[1] == host_name(headers.get(b"host", b"").decode("latin-1"))
         return parsed[1] in self.allowed_hosts
 
     async def __call__(self, scope, receive, send) -> None:

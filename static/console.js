@@ -85,7 +85,12 @@ function estop(source, eventTimeStamp) {
                   handled_epoch_ms: performance.timeOrigin + now, reply: null};
   window.hrp2Estops.push(record);
   if (window.hrp2Estops.length > 1000) window.hrp2Estops.shift();
-  // two ways in, whichever is first: the stick stream's open socket (no new request to set up) and a POST
+  // three ways in, whichever answers first: the e-stop's own door into the robot process (it does not wait for
+  // the console), the stick stream's open socket (no new request to set up) and a POST
+  if (doorWs && doorWs.readyState === WebSocket.OPEN) {
+    estopsOnDoor.push(record);
+    doorWs.send('{"estop": true}');
+  }
   if (opWs && opWs.readyState === WebSocket.OPEN) {
     estopsOnWs.push(record);
     opWs.send('{"estop": true}');
@@ -99,6 +104,34 @@ function estop(source, eventTimeStamp) {
   log(`E-STOP pressed (${source})`, "bad");
 }
 $("estop").addEventListener("pointerdown", (e) => { e.preventDefault(); estop("button", e.timeStamp); });
+
+// The e-stop's own door (GET /api/config's estop_port): a socket to the robot process itself, served between its
+// ticks; kept open, reopened when it closes. Without it (no port, or not reachable) the other two ways remain.
+let doorWs = null;
+let doorPort = null;
+const estopsOnDoor = [];  // the e-stops sent on the door, answered in order
+function connectDoor() {
+  if (!doorPort) return;
+  const host = location.hostname.includes(":") ? `[${location.hostname}]` : location.hostname;
+  const url = new URL(`${location.protocol === "https:" ? "wss" : "ws"}://${host}:${doorPort}/`);
+  if (TOKEN) url.searchParams.set("token", TOKEN);
+  let ws;
+  try { ws = new WebSocket(url.href); } catch (e) { setTimeout(connectDoor, 2000); return; }
+  ws.onopen = () => { doorWs = ws; };
+  ws.onmessage = (m) => {
+    const rec = estopsOnDoor.shift();
+    let d = {};
+    try { d = JSON.parse(m.data); } catch (e) { return; }
+    if (rec) rec.door_reply = d;
+    if (rec && rec.reply === null) rec.reply = d;
+    if (d.ok === false) log(`E-STOP door: ${d.detail}`, "bad");
+  };
+  ws.onclose = () => {
+    if (doorWs === ws) doorWs = null;
+    estopsOnDoor.length = 0;  // answered no more: the other ways answer them
+    setTimeout(connectDoor, 2000);
+  };
+}
 $("estop").addEventListener("click", () => { if (performance.now() - lastEstopAt > 500) estop("button"); });
 
 function isTyping(target) {
@@ -1057,6 +1090,8 @@ window.addEventListener("blur", () => {
 
 async function start() {
   const cfg = await api("GET", "/api/config") || {};
+  doorPort = cfg.estop_port || null;
+  connectDoor();
   limits = cfg.joint_limits_deg || {};
   for (const name of cfg.joints || []) $("joint").append(el("option", {value: name, text: name}));
   if (cfg.joints && cfg.joints.includes("RARM_JOINT0")) { $("joint").value = "RARM_JOINT0"; $("joint").dispatchEvent(new Event("change")); }

@@ -54,7 +54,8 @@ def get_config(service: ServiceDep, settings: SettingsDep) -> ConsoleConfig:
 
     info = service.info
     return ConsoleConfig(
-        viewer_port=settings.viewer_port, joints=list(info.joint_names),
+        viewer_port=settings.viewer_port, estop_port=getattr(service.robot, "estop_door_port", None),
+        joints=list(info.joint_names),
         joint_limits_deg={n: [round(math.degrees(lo), 3), round(math.degrees(hi), 3)]
                           for n, lo, hi in zip(info.joint_names, info.q_lower_rad, info.q_upper_rad, strict=True)},
         scenes=list(info.scenes))

@@ -25,6 +25,7 @@ import numpy as np
 from app.service.board import Board, attach
 from app.service.data_logger import DataLogger
 from app.service.errors import ServiceError, Unavailable
+from app.service.estop_door import EstopDoor, EstopDoorConfig
 from app.service.host import EstopAck, Published, RobotHost
 from app.service.setpoints import BOARD_BYTES, BoardSource, Setpoint, SetpointTable
 from app.service.verbs import GetInfo, Reset, RobotInfo, Shutdown, Verb
@@ -55,6 +56,8 @@ class RobotConfig:
     # a parameter document {owner: {field: value}} the chain starts with (and again after each reset)
     params: dict[str, dict[str, Any]] | None = None
     record: str | None = None  # record a session to this MCAP file from the first tick
+    # the hard e-stop's own WebSocket door, served by the loop's thread (app.service.estop_door); None: none
+    estop_door: EstopDoorConfig | None = None
 
 
 class UnexpectedError(ServiceError):
@@ -114,11 +117,18 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
         host.start_cameras()  # before the loop runs at real time (robot.camera.CameraProcess)
     except Exception as exc:  # noqa: BLE001 - no cameras (no GL here): perception fails, the robot runs
         log.error("no head cameras: %s", exc)
+    door = None
+    if cfg.estop_door is not None:
+        try:
+            door = EstopDoor(cfg.estop_door, host.engage_estop)
+        except OSError as exc:  # e.g. the port is taken: the console's e-stop paths remain
+            log.error("no e-stop door on %s:%s: %s", cfg.estop_door.host, cfg.estop_door.port, exc)
     board.put(host.publish())
-    cmd.send(("ready", host.info(), priority))
+    cmd.send(("ready", host.info(), priority, None if door is None else door.port))
     loop = host.loop
     loop.nap_s = cfg.nap_s
     last_publish = [0.0]
+    pipes = (estop, cmd)
 
     def handle_estop() -> None:
         while estop.poll():
@@ -151,17 +161,19 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             except ValueError as exc:  # larger than the board: say so once in a while, keep ticking
                 log.error("snapshot not published: %s", exc)
 
-    fds = (estop.fileno(), cmd.fileno())
-
     def wait(delay_s: float) -> None:
         # select() sleeps to the microsecond (connection.wait's poll() rounds up to whole milliseconds)
-        ready, _, _ = select.select(fds, (), (), delay_s)
+        ready, _, _ = select.select(pipes if door is None else (*pipes, *door.sockets), (), (), delay_s)
         if ready:
             handle_estop()
+            if door is not None:
+                door.serve(ready)
             handle_commands()
 
     def between_ticks() -> None:
         handle_estop()
+        if door is not None:
+            door.poll()
         handle_commands()
         publish()
 
@@ -170,6 +182,9 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     except (EOFError, OSError):  # the console went away
         _finish_recording(host)
         return
+    finally:
+        if door is not None:
+            door.close()
     _finish_recording(host)
     publish(force=True)
     host.close_cameras()
@@ -210,6 +225,7 @@ class RobotProcess:
         self.exit_reason: str | None = None
         self.summary: dict[str, Any] | None = None
         self.priority = "default"
+        self.estop_door_port: int | None = None  # the e-stop's own door (RobotConfig.estop_door), once started
         self._info: RobotInfo | None = None
         self._start()
 
@@ -261,7 +277,7 @@ class RobotProcess:
         if first[0] != "ready":
             self.close()
             raise Unavailable(f"the robot process could not start: {first[1]}")
-        _, self._info, self.priority = first
+        _, self._info, self.priority, self.estop_door_port = first
         self._reader = threading.Thread(target=self._read_replies, name="robot-replies", daemon=True)
         self._reader.start()
 

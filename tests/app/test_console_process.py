@@ -101,6 +101,30 @@ def test_an_estop_needs_no_json_body_and_any_page_of_this_host_may_send_it(conso
     assert console.request("POST", "/api/estop/release")[0] == 200
 
 
+def test_the_estop_door_of_the_robot_process_engages_even_while_the_console_process_is_stopped(console):
+    """GET /api/config names the e-stop's own door; an e-stop on it engages in the robot process while the
+    console (HTTP) process is frozen (SIGSTOP): the e-stop does not depend on the server the page talks to."""
+    import json
+
+    from websockets.sync.client import connect
+
+    port = console.request("GET", "/api/config")[1]["estop_port"]
+    assert isinstance(port, int) and port > 0
+    with connect(f"ws://127.0.0.1:{port}/", origin=f"http://127.0.0.1:{console.port}", open_timeout=5) as ws:
+        console.proc.send_signal(signal.SIGSTOP)
+        try:
+            sent = time.monotonic()
+            ws.send('{"estop": true}')
+            reply = json.loads(ws.recv(timeout=5.0))
+        finally:
+            console.proc.send_signal(signal.SIGCONT)
+    assert reply["ok"] and reply["via"] == "door" and reply["message"] == "hard e-stop engaged"
+    assert sent <= reply["engaged_at_monotonic_s"]  # engaged after it was sent (both on this machine's clock)
+    wait_state(console, lambda s: s["emergency"]["hard_stop"])
+    assert console.request("POST", "/api/estop/release")[0] == 200
+    wait_state(console, lambda s: not s["emergency"]["hard_stop"])
+
+
 def test_a_10_mb_body_is_refused_with_413_and_no_tick_is_late_meanwhile(console):
     t0 = time.monotonic()
     status, body = console.request("PUT", "/api/stabilizer/params", body=b"{" + b" " * (10 * 1024 * 1024) + b"}")

@@ -318,7 +318,7 @@ def test_every_request_of_the_page_and_its_3d_view_stays_on_this_machine(page, h
     every resource each frame fetched (its Resource Timing entries: the 3D view's iframe runs in another
     process, whose requests Playwright does not report) and the 3D view's websocket address."""
     http_port = int(hrp2_console.base.rsplit(":", 1)[1])
-    ports = {http_port, hrp2_console.viewer_port}
+    ports = {http_port, hrp2_console.viewer_port, get_json(f"{hrp2_console.base}/api/config")["estop_port"]}
     frame = page.frame_locator("#view iframe")
     playwright_api.expect(frame.locator("canvas[data-engine]").first).to_be_visible(timeout=30_000)
     urls = list(page_urls)
@@ -390,6 +390,12 @@ def test_estop_click_engages_the_hard_stop_the_banner_shows_and_release_works(pa
     playwright_api.expect(page.locator("#banner")).to_be_hidden()
     page.get_by_role("button", name="E-STOP", exact=True).click()
     wait_until(lambda: hrp2_console.state()["emergency"]["hard_stop"], 5.0, "hard_stop == true in /api/state")
+    # the page sent it on the e-stop's own door into the robot process too, which answered (the page also
+    # POSTs it and sends it on its stick stream: whichever answers first counts)
+    door = wait_until(lambda: page.evaluate("(() => { const r = window.hrp2Estops[window.hrp2Estops.length - 1]; "
+                                            "return r && r.door_reply; })()"), 5.0, "the door's answer")
+    assert door["ok"] and door["via"] == "door" and door["message"] in ("hard e-stop engaged",
+                                                                        "hard e-stop already engaged"), door
     playwright_api.expect(page.locator("#banner")).to_be_visible()
     playwright_api.expect(page.locator("#banner")).to_contain_text("HARD E-STOP ENGAGED")
     playwright_api.expect(page.locator("#stop-hard")).to_have_class(re.compile(r"\bon\b"))

@@ -1,0 +1,215 @@
+"""The hard e-stop's own door into the robot process: a WebSocket listener served by the loop's thread between
+ticks, as the e-stop pipe is. The operator page opens it beside its other sockets and sends `{"estop": true}` on
+it first: that e-stop does not wait for the console process (its HTTP server, its streams and the 3D view share
+one interpreter lock, and on a loaded machine the page's e-stop waited there 10-180 ms), and it still engages if
+the console hangs.
+
+It runs in the real-time process, so it takes as little as the e-stop needs and bounds the rest: at most
+MAX_CLIENTS connections, messages of at most MAX_MESSAGE_BYTES, a handshake within HANDSHAKE_TIMEOUT_S, at most
+RECV_BYTES read per socket per wait; the same Host, Origin and token rules as the console's own door
+(app.security); one message, `{"estop": true}`, answered as POST /api/estop is. The WebSocket protocol is
+websockets' sans-I/O implementation; no thread, no event loop: the loop's select() waits on these sockets too.
+"""
+
+from __future__ import annotations
+
+import hmac
+import json
+import logging
+import select
+import socket
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from urllib.parse import parse_qs, urlsplit
+
+from websockets.frames import Frame, Opcode
+from websockets.http11 import Request
+from websockets.protocol import State
+from websockets.server import ServerProtocol
+
+from app.security import host_name, origin_host
+
+log = logging.getLogger(__name__)
+
+MAX_CLIENTS = 8
+MAX_MESSAGE_BYTES = 256
+HANDSHAKE_TIMEOUT_S = 2.0
+RECV_BYTES = 4096
+ESTOP_MESSAGE = {"estop": True}
+
+
+@dataclass(frozen=True)
+class EstopDoorConfig:
+    """Where the door listens and whom it lets in: `allowed_hosts` as app.security.allowed_hosts_for (None: any
+    Host, the page's Origin then the host it talks to); `token`: required as `?token=` or a Bearer header."""
+
+    host: str = "127.0.0.1"
+    port: int = 0  # 0: a free port, chosen at start (the page reads it from GET /api/config)
+    allowed_hosts: tuple[str, ...] | None = ("127.0.0.1", "localhost", "::1")
+    token: str | None = None
+
+
+class _Client:
+    __slots__ = ("sock", "protocol", "since")
+
+    def __init__(self, sock: socket.socket, now: float) -> None:
+        self.sock = sock
+        self.protocol = ServerProtocol(max_size=MAX_MESSAGE_BYTES)
+        self.since = now
+
+
+class EstopDoor:
+    """The listener and its clients. `engage()` engages the hard e-stop and returns its acknowledgement (tick,
+    sim_time_s, engaged_at_monotonic_s, already_engaged); `serve(readable)` handles the sockets select() found
+    readable, `poll()` looks without waiting; `sockets` is what to wait on."""
+
+    def __init__(self, config: EstopDoorConfig, engage: Callable[[], object],
+                 handshake_timeout_s: float = HANDSHAKE_TIMEOUT_S) -> None:
+        self.config = config
+        self._engage = engage
+        self._handshake_timeout_s = handshake_timeout_s
+        family = socket.AF_INET6 if ":" in config.host else socket.AF_INET
+        self._listener = socket.create_server((config.host, config.port), family=family, backlog=MAX_CLIENTS)
+        self._listener.setblocking(False)
+        self.port: int = self._listener.getsockname()[1]
+        self._allowed = None if config.allowed_hosts is None else frozenset(h.lower() for h in config.allowed_hosts)
+        self._token = None if config.token is None else config.token.encode()
+        self._clients: dict[socket.socket, _Client] = {}
+        self.sockets: tuple[socket.socket, ...] = (self._listener,)
+        self.engaged = 0  # e-stops engaged through the door (for the tests and the log)
+
+    # ---- the loop's side ---------------------------------------------------------------------------------
+    def serve(self, readable) -> None:
+        """Handle the readable sockets among `readable` (others are ignored); drop handshakes that took too long."""
+        for sock in readable:
+            if sock is self._listener:
+                self._accept()
+            else:
+                client = self._clients.get(sock)
+                if client is not None:
+                    self._read(client)
+        if self._clients:
+            self._expire(time.monotonic())
+
+    def poll(self) -> None:
+        """serve() whatever is readable now (no wait)."""
+        readable, _, _ = select.select(self.sockets, (), (), 0.0)
+        if readable or self._clients:
+            self.serve(readable)
+
+    def close(self) -> None:
+        for client in list(self._clients.values()):
+            self._drop(client)
+        self._listener.close()
+        self.sockets = ()
+
+    # ---- connections ---------------------------------------------------------------------------------------
+    def _accept(self) -> None:
+        try:
+            sock, _ = self._listener.accept()
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:
+            log.warning("e-stop door: accept failed: %s", exc)
+            return
+        if len(self._clients) >= MAX_CLIENTS:
+            sock.close()  # full: the page keeps its other ways in
+            return
+        sock.setblocking(False)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._clients[sock] = _Client(sock, time.monotonic())
+        self.sockets = (self._listener, *self._clients)
+
+    def _drop(self, client: _Client) -> None:
+        self._clients.pop(client.sock, None)
+        self.sockets = (self._listener, *self._clients)
+        try:
+            client.sock.close()
+        except OSError:
+            pass
+
+    def _expire(self, now: float) -> None:
+        for client in list(self._clients.values()):
+            if client.protocol.state is State.CONNECTING and now - client.since > self._handshake_timeout_s:
+                self._drop(client)
+
+    def _read(self, client: _Client) -> None:
+        protocol = client.protocol
+        try:
+            data = client.sock.recv(RECV_BYTES)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError:
+            self._drop(client)
+            return
+        if data:
+            protocol.receive_data(data)
+        else:
+            protocol.receive_eof()
+        for event in protocol.events_received():
+            if isinstance(event, Request):
+                protocol.send_response(self._handshake(protocol, event))
+            elif isinstance(event, Frame) and event.opcode is Opcode.TEXT:
+                protocol.send_text(self._answer(event).encode())
+            elif isinstance(event, Frame) and event.opcode is Opcode.BINARY:
+                protocol.send_text(json.dumps({"ok": False, "estop": True, "detail": _ONLY}).encode())
+        self._flush(client)
+
+    def _flush(self, client: _Client) -> None:
+        protocol = client.protocol
+        try:
+            for chunk in protocol.data_to_send():
+                if chunk:
+                    client.sock.sendall(chunk)  # a few hundred bytes: the socket buffer takes them
+                else:  # the protocol is done with the connection
+                    self._drop(client)
+                    return
+        except OSError:  # including a full buffer: a client that does not read is dropped
+            self._drop(client)
+            return
+        if protocol.state is State.CLOSED:
+            self._drop(client)
+
+    # ---- what it answers -----------------------------------------------------------------------------------
+    def _handshake(self, protocol: ServerProtocol, request: Request):
+        headers = request.headers
+        if self._allowed is not None and host_name(headers.get("Host", "")) not in self._allowed:
+            return protocol.reject(421, "this console does not answer for that Host\n")
+        origin = headers.get("Origin")
+        if origin is not None:
+            parsed = origin_host(origin)
+            allowed = (parsed is not None and (parsed[1] == host_name(headers.get("Host", ""))
+                                                if self._allowed is None else parsed[1] in self._allowed))
+            if not allowed:
+                return protocol.reject(403, "cross-origin e-stops are refused; use the console's own page\n")
+        if self._token is not None:
+            auth = headers.get("Authorization", "")
+            given = auth[7:].strip() if auth[:7].lower() == "bearer " else None
+            if given is None:
+                values = parse_qs(urlsplit(request.path).query).get("token")
+                given = values[-1] if values else None
+            if given is None or not hmac.compare_digest(given.encode("utf-8", "replace"), self._token):
+                return protocol.reject(401, "token missing or wrong: connect with ?token=<the console's token>\n")
+        return protocol.accept(request)
+
+    def _answer(self, frame: Frame) -> str:
+        try:
+            message = json.loads(frame.data)
+        except (ValueError, UnicodeDecodeError):
+            message = None
+        if message != ESTOP_MESSAGE:
+            return json.dumps({"ok": False, "estop": True, "detail": _ONLY})
+        try:
+            ack = self._engage()
+        except Exception as exc:  # noqa: BLE001 - said to the client; the loop goes on (the other doors too)
+            log.error("e-stop door: engaging failed: %s", exc)
+            return json.dumps({"ok": False, "estop": True, "detail": f"the e-stop could not be engaged: {exc}"})
+        self.engaged += 1
+        return json.dumps({"ok": True, "estop": True, "via": "door",
+                           "message": "hard e-stop already engaged" if ack.already_engaged else "hard e-stop engaged",
+                           "tick": ack.tick, "sim_time_s": ack.sim_time_s,
+                           "engaged_at_monotonic_s": ack.engaged_at_monotonic_s})
+
+
+_ONLY = 'this door takes one message, {"estop": true}'

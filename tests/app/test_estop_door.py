@@ -1,0 +1,170 @@
+"""The e-stop's own door into the robot process (app.service.estop_door): what it lets in, what it answers,
+and how it bounds what it takes, driven as the robot's loop drives it (select on its sockets, then serve)."""
+
+import json
+import select
+import socket
+import threading
+import time
+from types import SimpleNamespace
+
+import pytest
+from websockets.exceptions import ConnectionClosed, ConnectionClosedError, InvalidHandshake, InvalidStatus
+from websockets.sync.client import connect
+
+from app.service.estop_door import MAX_CLIENTS, MAX_MESSAGE_BYTES, EstopDoor, EstopDoorConfig
+
+PAGE = "http://127.0.0.1:8000"  # an origin of the console's page (any port of an allowed host)
+
+
+class Served:
+    """A door served by a thread as the robot's loop serves it, and what its engage() was asked."""
+
+    def __init__(self, config: EstopDoorConfig, fail: bool = False, handshake_timeout_s: float = 2.0) -> None:
+        self.calls = 0
+        self.fail = fail
+        self.door = EstopDoor(config, self._engage, handshake_timeout_s=handshake_timeout_s)
+        self.url = f"ws://127.0.0.1:{self.door.port}/"
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _engage(self):
+        self.calls += 1
+        if self.fail:
+            raise RuntimeError("the loop is gone")
+        return SimpleNamespace(tick=42, sim_time_s=0.21, engaged_at_monotonic_s=time.monotonic(),
+                               already_engaged=self.calls > 1)
+
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            readable, _, _ = select.select(self.door.sockets, (), (), 0.01)
+            self.door.serve(readable)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=2.0)
+        self.door.close()
+
+
+@pytest.fixture
+def served():
+    s = Served(EstopDoorConfig())
+    yield s
+    s.close()
+
+
+def estop(ws) -> dict:
+    ws.send(json.dumps({"estop": True}))
+    return json.loads(ws.recv(timeout=2.0))
+
+
+def test_an_estop_on_the_door_engages_and_is_answered_as_post_api_estop(served):
+    with connect(served.url, origin=PAGE) as ws:
+        first = estop(ws)
+        second = estop(ws)
+    assert served.calls == 2
+    assert first["ok"] and first["estop"] and first["via"] == "door" and first["message"] == "hard e-stop engaged"
+    assert first["tick"] == 42 and first["sim_time_s"] == 0.21 and first["engaged_at_monotonic_s"] > 0.0
+    assert second["message"] == "hard e-stop already engaged"
+
+
+def test_a_script_without_an_origin_may_press_it(served):
+    with connect(served.url) as ws:
+        assert estop(ws)["ok"]
+
+
+@pytest.mark.parametrize("origin", ["http://evil.example", "http://127.0.0.1.evil.example:8000", "null"])
+def test_a_page_of_another_site_is_refused_before_any_message(served, origin):
+    with pytest.raises(InvalidStatus) as exc:
+        connect(served.url, origin=origin)
+    assert exc.value.response.status_code == 403
+    assert served.calls == 0
+
+
+def test_a_host_it_does_not_answer_for_is_refused():
+    s = Served(EstopDoorConfig(allowed_hosts=("localhost",)))
+    try:
+        with pytest.raises(InvalidStatus) as exc:
+            connect(s.url, origin="http://localhost:8000")  # Host: 127.0.0.1:port
+        assert exc.value.response.status_code == 421
+        with connect(f"ws://localhost:{s.door.port}/", origin="http://localhost:8000") as ws:
+            assert estop(ws)["ok"]
+    finally:
+        s.close()
+
+
+def test_with_a_token_it_takes_the_token_in_the_query_or_as_a_bearer_header_and_nothing_else():
+    s = Served(EstopDoorConfig(token="a-long-enough-secret-token"))
+    try:
+        for url, headers in ((s.url, None), (s.url + "?token=wrong", None),
+                             (s.url, {"Authorization": "Bearer wrong"})):
+            with pytest.raises(InvalidStatus) as exc:
+                connect(url, origin=PAGE, additional_headers=headers)
+            assert exc.value.response.status_code == 401
+        assert s.calls == 0
+        with connect(s.url + "?token=a-long-enough-secret-token", origin=PAGE) as ws:
+            assert estop(ws)["ok"]
+        with connect(s.url, origin=PAGE, additional_headers={"Authorization": "Bearer a-long-enough-secret-token"}) as ws:
+            assert estop(ws)["ok"]
+    finally:
+        s.close()
+
+
+@pytest.mark.parametrize("message", ['{"estop": false}', '{"estop": true, "x": 1}', "estop", "[]", '"estop"', b"\x00"])
+def test_any_other_message_is_answered_with_what_it_takes_and_engages_nothing(served, message):
+    with connect(served.url, origin=PAGE) as ws:
+        ws.send(message)
+        reply = json.loads(ws.recv(timeout=2.0))
+        assert reply == {"ok": False, "estop": True, "detail": 'this door takes one message, {"estop": true}'}
+        assert estop(ws)["ok"]  # the same connection still works
+    assert served.calls == 1
+
+
+def test_an_oversized_message_closes_that_connection_and_the_door_goes_on(served):
+    with connect(served.url, origin=PAGE) as ws:
+        ws.send("x" * (MAX_MESSAGE_BYTES + 1))
+        with pytest.raises(ConnectionClosedError) as exc:
+            ws.recv(timeout=2.0)
+        assert exc.value.rcvd.code == 1009
+    assert served.calls == 0
+    with connect(served.url, origin=PAGE) as ws:
+        assert estop(ws)["ok"]
+
+
+def test_it_holds_at_most_max_clients_connections(served):
+    open_ = [connect(served.url, origin=PAGE) for _ in range(MAX_CLIENTS)]
+    try:
+        with pytest.raises((InvalidHandshake, ConnectionClosed, OSError)):  # closed at once: no HTTP answer
+            connect(served.url, origin=PAGE, open_timeout=2.0)
+        open_.pop().close()
+        deadline = time.monotonic() + 2.0
+        while len(served.door.sockets) > MAX_CLIENTS and time.monotonic() < deadline:  # the close seen
+            time.sleep(0.01)
+        with connect(served.url, origin=PAGE) as ws:
+            assert estop(ws)["ok"]
+    finally:
+        for ws in open_:
+            ws.close()
+
+
+def test_a_connection_that_never_completes_its_handshake_is_dropped():
+    s = Served(EstopDoorConfig(), handshake_timeout_s=0.2)
+    try:
+        with socket.create_connection(("127.0.0.1", s.door.port), timeout=3.0) as raw:
+            raw.sendall(b"GET / HTTP/1.1\r\n")  # and nothing more
+            assert raw.recv(100) == b""  # closed by the door, not by this timeout
+    finally:
+        s.close()
+
+
+def test_an_engage_that_fails_is_said_and_the_door_goes_on():
+    s = Served(EstopDoorConfig(), fail=True)
+    try:
+        with connect(s.url, origin=PAGE) as ws:
+            reply = estop(ws)
+            assert reply["ok"] is False and "the loop is gone" in reply["detail"]
+            s.fail = False
+            assert estop(ws)["ok"]
+    finally:
+        s.close()
