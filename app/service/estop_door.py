@@ -5,8 +5,10 @@ one interpreter lock, and on a loaded machine the page's e-stop waited there 10-
 the console hangs.
 
 It runs in the real-time process, so it takes as little as the e-stop needs and bounds the rest: at most
-MAX_CLIENTS connections, messages of at most MAX_MESSAGE_BYTES, a handshake within HANDSHAKE_TIMEOUT_S, at most
-RECV_BYTES read per socket per wait; the same Host, Origin and token rules as the console's own door
+MAX_CLIENTS connections, messages of at most MAX_MESSAGE_BYTES, a handshake within HANDSHAKE_TIMEOUT_S, and per
+tick at most READS_PER_TICK socket operations (an accept, or a read of at most RECV_BYTES): a client flooding it
+(four of them sent 25,000 messages a second) made the loop's ticks up to 38 ms late before; the rest waits in the
+sockets for the next tick. The same Host, Origin and token rules as the console's own door
 (app.security); one message, `{"estop": true}`, answered as POST /api/estop is. The WebSocket protocol is
 websockets' sans-I/O implementation; no thread, no event loop: the loop's select() waits on these sockets too.
 """
@@ -35,7 +37,8 @@ log = logging.getLogger(__name__)
 MAX_CLIENTS = 8
 MAX_MESSAGE_BYTES = 256
 HANDSHAKE_TIMEOUT_S = 2.0
-RECV_BYTES = 4096
+RECV_BYTES = 512  # a browser's handshake takes two reads; an e-stop frame is 21 bytes (15 and its framing)
+READS_PER_TICK = 4
 ESTOP_MESSAGE = {"estop": True}
 
 
@@ -76,13 +79,30 @@ class EstopDoor:
         self._allowed = None if config.allowed_hosts is None else frozenset(h.lower() for h in config.allowed_hosts)
         self._token = None if config.token is None else config.token.encode()
         self._clients: dict[socket.socket, _Client] = {}
-        self.sockets: tuple[socket.socket, ...] = (self._listener,)
+        self.sockets: tuple[socket.socket, ...] = (self._listener,)  # what to wait on (none once the budget is spent)
+        self._budget = READS_PER_TICK
+        self._turn = 0  # where this tick's round starts among the readable sockets (no client starves another)
         self.engaged = 0  # e-stops engaged through the door (for the tests and the log)
 
     # ---- the loop's side ---------------------------------------------------------------------------------
+    def new_tick(self) -> None:
+        """A new tick: READS_PER_TICK socket operations again, every socket waited on."""
+        self._budget = READS_PER_TICK
+        self._update_sockets()
+
     def serve(self, readable) -> None:
-        """Handle the readable sockets among `readable` (others are ignored); drop handshakes that took too long."""
+        """Handle the readable sockets among `readable` (others are ignored) while this tick's budget lasts; drop
+        handshakes that took too long. The readable sockets take turns: each tick's round starts one further."""
+        readable = list(readable)
+        if len(readable) > 1:
+            k = self._turn % len(readable)
+            readable = readable[k:] + readable[:k]
+        self._turn += 1
         for sock in readable:
+            if self._budget <= 0:
+                break
+            if sock is self._listener or sock in self._clients:
+                self._budget -= 1
             if sock is self._listener:
                 self._accept()
             else:
@@ -91,9 +111,13 @@ class EstopDoor:
                     self._read(client)
         if self._clients:
             self._expire(time.monotonic())
+        if self._budget <= 0:
+            self.sockets = ()  # spent: nothing more this tick (the loop does not wake for these sockets)
 
     def poll(self) -> None:
         """serve() whatever is readable now (no wait)."""
+        if not self.sockets:
+            return
         readable, _, _ = select.select(self.sockets, (), (), 0.0)
         if readable or self._clients:
             self.serve(readable)
@@ -102,6 +126,7 @@ class EstopDoor:
         for client in list(self._clients.values()):
             self._drop(client)
         self._listener.close()
+        self._budget = 0
         self.sockets = ()
 
     # ---- connections ---------------------------------------------------------------------------------------
@@ -119,15 +144,18 @@ class EstopDoor:
         sock.setblocking(False)
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._clients[sock] = _Client(sock, time.monotonic())
-        self.sockets = (self._listener, *self._clients)
+        self._update_sockets()
 
     def _drop(self, client: _Client) -> None:
         self._clients.pop(client.sock, None)
-        self.sockets = (self._listener, *self._clients)
+        self._update_sockets()
         try:
             client.sock.close()
         except OSError:
             pass
+
+    def _update_sockets(self) -> None:
+        self.sockets = (self._listener, *self._clients) if self._budget > 0 else ()
 
     def _expire(self, now: float) -> None:
         for client in list(self._clients.values()):

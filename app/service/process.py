@@ -173,7 +173,9 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     def between_ticks() -> None:
         handle_estop()
         if door is not None:
-            door.poll()
+            door.new_tick()
+            if loop.speed is None:  # as fast as possible: no waits between ticks, so here (paced: in wait())
+                door.poll()
         handle_commands()
         publish()
 

@@ -12,7 +12,8 @@ import pytest
 from websockets.exceptions import ConnectionClosed, ConnectionClosedError, InvalidHandshake, InvalidStatus
 from websockets.sync.client import connect
 
-from app.service.estop_door import MAX_CLIENTS, MAX_MESSAGE_BYTES, EstopDoor, EstopDoorConfig
+from app.service.estop_door import (MAX_CLIENTS, MAX_MESSAGE_BYTES, READS_PER_TICK, RECV_BYTES, EstopDoor,
+                                   EstopDoorConfig)
 
 PAGE = "http://127.0.0.1:8000"  # an origin of the console's page (any port of an allowed host)
 
@@ -37,13 +38,20 @@ class Served:
                                already_engaged=self.calls > 1)
 
     def _run(self) -> None:
-        while not self._stop.is_set():
-            readable, _, _ = select.select(self.door.sockets, (), (), 0.01)
-            self.door.serve(readable)
+        while not self._stop.is_set():  # a 5 ms "tick": its budget, then what is readable within it
+            self.door.new_tick()
+            deadline = time.monotonic() + 0.005
+            while (left := deadline - time.monotonic()) > 0:
+                readable, _, _ = select.select(self.door.sockets, (), (), left)
+                self.door.serve(readable)
 
-    def close(self) -> None:
+    def close_thread_only(self) -> None:
+        """Stop serving from the thread (the test serves the door itself from now on)."""
         self._stop.set()
         self._thread.join(timeout=2.0)
+
+    def close(self) -> None:
+        self.close_thread_only()
         self.door.close()
 
 
@@ -168,3 +176,66 @@ def test_an_engage_that_fails_is_said_and_the_door_goes_on():
             assert estop(ws)["ok"]
     finally:
         s.close()
+
+
+def test_a_flood_is_served_a_bounded_share_per_tick_and_the_rest_waits_for_the_next_ticks():
+    """At most READS_PER_TICK socket operations per tick, each of at most RECV_BYTES: 200 e-stops sent at once are
+    answered over several ticks, never more per tick than those reads hold (a client's e-stop frame is 21 bytes: 15, a 2-byte header, a 4-byte mask),
+    and once the budget is spent the door gives the loop nothing to wait on until the next tick."""
+    s = Served(EstopDoorConfig())
+    ws = connect(s.url, origin=PAGE)
+    s.close_thread_only()
+    try:
+        for _ in range(200):
+            ws.send('{"estop": true}')
+        time.sleep(0.2)  # all of them in the door's socket buffer
+        per_tick = []
+        for _ in range(1000):
+            before = s.calls
+            s.door.new_tick()
+            while s.door.sockets:
+                readable, _, _ = select.select(s.door.sockets, (), (), 0.05)
+                if not readable:
+                    break
+                s.door.serve(readable)
+            per_tick.append(s.calls - before)
+            if s.calls == 200:
+                break
+        assert s.calls == 200  # every one answered in the end
+        assert max(per_tick) <= READS_PER_TICK * (RECV_BYTES // 21 + 1), per_tick
+        assert len(per_tick) >= 200 / (READS_PER_TICK * (RECV_BYTES // 21 + 1))
+        replies = [json.loads(ws.recv(timeout=2.0)) for _ in range(200)]
+        assert all(r["ok"] for r in replies)
+    finally:
+        s.door.close()  # first: the client's close then finds the connection gone, not waiting for an answer
+        ws.close()
+
+
+def test_clients_flooding_it_do_not_starve_another_clients_estop():
+    """Four clients with 200 junk messages each queued, then one e-stop from a fifth: the readable sockets take
+    turns, so the e-stop is answered within two ticks of its arrival, not after the junk."""
+    s = Served(EstopDoorConfig())
+    floods = [connect(s.url, origin=PAGE) for _ in range(4)]
+    page = connect(s.url, origin=PAGE)
+    s.close_thread_only()
+    try:
+        for ws in floods:
+            for _ in range(200):
+                ws.send("x" * 20)
+        page.send('{"estop": true}')
+        time.sleep(0.2)
+        for tick in range(1, 100):
+            s.door.new_tick()
+            while s.door.sockets:
+                readable, _, _ = select.select(s.door.sockets, (), (), 0.05)
+                if not readable:
+                    break
+                s.door.serve(readable)
+            if s.calls:
+                break
+        assert s.calls == 1 and tick <= 2, f"the e-stop was answered at tick {tick}"
+        assert json.loads(page.recv(timeout=2.0))["ok"]
+    finally:
+        s.door.close()
+        for ws in (*floods, page):
+            ws.close()
