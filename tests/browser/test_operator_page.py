@@ -867,9 +867,9 @@ def test_the_camera_view_updates(page, artifacts):
     # how soon is a speed goal, the page-rates benchmark's (camera >= 10 Hz shown), not this test's
     print(f"a second camera frame shown {time.monotonic() - t0:.2f} s after the first")
     # the size of a decoded image (read while the next frame loads, a blank one may be read: wait for one)
-    size = wait_until(lambda: (s := page.evaluate("(() => { const i = document.getElementById('camera-img'); "
-                                                   "return i.complete ? [i.naturalWidth, i.naturalHeight] : null; })()"))
-                      and s, 10.0, "a decoded camera image")
+    decoded = ("(() => { const i = document.getElementById('camera-img'); "
+               "return i.complete ? [i.naturalWidth, i.naturalHeight] : null; })()")
+    size = wait_until(lambda: page.evaluate(decoded), 10.0, "a decoded camera image")
     assert size == [320, 240] and later["meta"]["camera"] == "wide"
     playwright_api.expect(page.locator("#camera-info")).to_contain_text("Hz")
     estop = page.get_by_role("button", name="E-STOP", exact=True).bounding_box()
