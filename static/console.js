@@ -16,6 +16,10 @@ const el = (tag, attrs = {}, ...children) => {
   for (const c of children) e.append(c);
   return e;
 };
+// Writes only what changed. The browser lays the page out again after any write, an unchanged one too, and this
+// page's thread does that work in the way of its input: the E-STOP's pointer-down waits behind it.
+function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
+function setClass(node, cls) { if (node.className !== cls) node.className = cls; }
 
 // ---- the token and the client id (contract with the API): from the page's own URL, kept in memory -----------
 const TOKEN = new URLSearchParams(location.search).get("token");
@@ -224,13 +228,13 @@ function watchStaleness() {
   const offline = age > STALE_MS;
   document.body.classList.toggle("offline", offline);
   $("offline").hidden = !offline;
-  $("conn").className = offline ? "bad" : "";
+  setClass($("conn"), offline ? "bad" : "");
   if (offline) {
     const why = lastState === null ? "no state received yet." : `the last state is ${(age / 1000).toFixed(1)} s old.`;
-    $("offline-why").textContent = why;
-    $("conn").textContent = "connection lost";
+    setText($("offline-why"), why);
+    setText($("conn"), "connection lost");
   } else {
-    $("conn").textContent = `live (${telemetryMode})`;
+    setText($("conn"), `live (${telemetryMode})`);
   }
 }
 setInterval(watchStaleness, 100);
@@ -250,22 +254,22 @@ function onState(s) {
   if (!prev || s.tick !== prev.tick || s.time !== prev.time) lastFreshAt = performance.now();
   lastState = s;
   const em = s.emergency || {};
-  $("s-time").textContent = `${fmt(s.time)} s (tick ${s.tick})`;
+  setText($("s-time"), `${fmt(s.time)} s (tick ${s.tick})`);
 
-  $("s-hard").textContent = em.hard_stop ? "ENGAGED" : "off";
-  $("s-hard").className = "st" + (em.hard_stop ? " alarm" : "");
+  setText($("s-hard"), em.hard_stop ? "ENGAGED" : "off");
+  setClass($("s-hard"), "st" + (em.hard_stop ? " alarm" : ""));
   setStop("stop-hard", !!em.hard_stop);
-  $("s-motion").textContent = em.motion_stop ? `STOPPED (${em.motion_stop_reason || "?"})` : "off";
+  setText($("s-motion"), em.motion_stop ? `STOPPED (${em.motion_stop_reason || "?"})` : "off");
   setStop("stop-motion", !!em.motion_stop);
-  $("s-walkstop").textContent = em.walking_stop ? "STOPPING in place" : "off";
+  setText($("s-walkstop"), em.walking_stop ? "STOPPING in place" : "off");
   setStop("stop-walking", !!em.walking_stop);
-  $("s-ststop").textContent = em.stabilizer_stop ? "STOPPED" : "running";
+  setText($("s-ststop"), em.stabilizer_stop ? "STOPPED" : "running");
   setStop("stop-stabilizer", !!em.stabilizer_stop);
 
-  $("banner").hidden = !em.hard_stop;
-  $("banner-why").textContent = em.hard_stop
+  if ($("banner").hidden !== !em.hard_stop) $("banner").hidden = !em.hard_stop;
+  setText($("banner-why"), em.hard_stop
     ? [em.hard_stop_reason && `reason: ${em.hard_stop_reason}`, em.fault && `fault: ${em.fault}`,
-       "Release is the green control in the hard row."].filter(Boolean).join("; ") : "";
+       "Release is the green control in the hard row."].filter(Boolean).join("; ") : "");
 
   // latched stops (not the operator's own): raised as an alert until acknowledged
   let latched = null;
@@ -278,29 +282,29 @@ function onState(s) {
   }
   const showLatched = latched !== null && latched.key !== acknowledged;
   $("latched").hidden = !showLatched;
-  if (showLatched) $("latched-text").textContent = latched.text;
+  if (showLatched) setText($("latched-text"), latched.text);
   $("latched").dataset.key = latched ? latched.key : "";
 
-  $("s-fallen").textContent = s.fallen ? "FALLEN" : "no";
-  $("s-fallen").className = s.fallen ? "alarm" : "";
-  $("s-fault").textContent = em.fault || "none";
-  $("s-fault").className = em.fault ? "alarm" : "";
-  $("s-height").textContent = s.base ? `${fmt(s.base.pos[2])} m` : "-";
-  $("s-rpy-est").textContent = s.estimate ? s.estimate.rpy_deg.map((v) => fmt(v, 1)).join(", ") + " deg" : "-";
-  $("s-support").textContent = `${s.walking ? "walking" : "standing"}, support ${s.support}`;
+  setText($("s-fallen"), s.fallen ? "FALLEN" : "no");
+  setClass($("s-fallen"), s.fallen ? "alarm" : "");
+  setText($("s-fault"), em.fault || "none");
+  setClass($("s-fault"), em.fault ? "alarm" : "");
+  setText($("s-height"), s.base ? `${fmt(s.base.pos[2])} m` : "-");
+  setText($("s-rpy-est"), s.estimate ? s.estimate.rpy_deg.map((v) => fmt(v, 1)).join(", ") + " deg" : "-");
+  setText($("s-support"), `${s.walking ? "walking" : "standing"}, support ${s.support}`);
   const cp = s.capture_point || {};
   if (cp.error) {
-    $("s-cp").textContent = `${fmt(cp.error_norm * 1000, 1)} mm (x ${fmt(cp.error[0] * 1000, 1)}, ` +
-      `y ${fmt(cp.error[1] * 1000, 1)}; threshold ${fmt(cp.cp_threshold_m * 1000, 1)} mm)`;
+    setText($("s-cp"), `${fmt(cp.error_norm * 1000, 1)} mm (x ${fmt(cp.error[0] * 1000, 1)}, ` +
+      `y ${fmt(cp.error[1] * 1000, 1)}; threshold ${fmt(cp.cp_threshold_m * 1000, 1)} mm)`);
   }
-  $("s-flag").textContent = em.flag ? "RAISED" : "off";
-  $("s-flag").className = em.flag ? "alarm" : "";
-  $("s-chain").textContent = s.chain || "-";
+  setText($("s-flag"), em.flag ? "RAISED" : "off");
+  setClass($("s-flag"), em.flag ? "alarm" : "");
+  setText($("s-chain"), s.chain || "-");
 
   const op = s.operation && s.operation.points && s.operation.points[selected];
   const limited = op ? op.limited : null;
-  $("limited").textContent = limited || "no";
-  $("limited").className = limited ? "alarm" : "";
+  setText($("limited"), limited || "no");
+  setClass($("limited"), limited ? "alarm" : "");
 
   if (prev) {
     const pe = prev.emergency || {};
@@ -414,6 +418,9 @@ function updateRuns(runs) {
     knownRuns.set(r.id, r.state);
   }
   const shown = runs.slice(-4);
+  const key = JSON.stringify(shown.map((r) => [r.id, r.state, Math.round(100 * r.progress), r.message]));
+  if (key === box.dataset.key) return;  // unchanged: not built again
+  box.dataset.key = key;
   box.replaceChildren(...shown.map((r) => el("div", {class: "run", "data-run": r.id},
     el("span", {text: `run ${r.id} ${r.behavior}: ${r.state} (${Math.round(100 * r.progress)} %) ${r.message || ""}`}),
     r.state === "running" ? el("button", {type: "button", text: "Cancel",
@@ -545,7 +552,7 @@ let gamepadDeadman = false;
 function selectPoint(p) {
   selected = p;
   for (const b of $("points").children) b.setAttribute("aria-checked", String(b.dataset.point === p));
-  $("sel-point").textContent = p;
+  setText($("sel-point"), p);
 }
 for (const [k, p] of POINTS.entries()) {
   $("points").append(el("button", {type: "button", role: "radio", "data-point": p, "aria-checked": "false",
@@ -629,10 +636,10 @@ function streamTick() {
       if (sentAt.length > 200) sentAt.shift();
     }
   }
-  $("stream-state").textContent = !opWs ? "not connected" : sending ? `streaming ${selected} at ${STREAM_HZ} Hz` : "idle";
+  setText($("stream-state"), !opWs ? "not connected" : sending ? `streaming ${selected} at ${STREAM_HZ} Hz` : "idle");
   if (rtts.length) {
     const sorted = [...rtts].sort((x, y) => x - y);
-    $("latency").textContent = `${sorted[Math.floor(sorted.length / 2)].toFixed(1)} ms (median of ${sorted.length})`;
+    setText($("latency"), `${sorted[Math.floor(sorted.length / 2)].toFixed(1)} ms (median of ${sorted.length})`);
   }
 }
 setInterval(streamTick, 1000 / STREAM_HZ);
@@ -704,7 +711,7 @@ function readGamepad() {
     gpPrev = pressed;
     gamepadDeadman = GP.deadman.some((i) => pressed[i]);
     gamepadAxes = [-ax(1), -ax(0), btn(GP.lt) - btn(GP.rt), -ax(3), -ax(2), btn(GP.dpadLeft) - btn(GP.dpadRight)];
-    $("gamepad").textContent = `gamepad: ${gp.id || "connected"}; dead-man ${gamepadDeadman ? "HELD" : "released"}`;
+    setText($("gamepad"), `gamepad: ${gp.id || "connected"}; dead-man ${gamepadDeadman ? "HELD" : "released"}`);
   } else {
     gamepadDeadman = false;
   }
@@ -823,12 +830,13 @@ function updateLock(lock) {
   const mine = holder === CLIENT_ID;
   const watching = holder !== null && !mine;
   const st = $("lock-state");
-  st.textContent = holder === null ? "control: free (anyone)" : mine ? "control: YOU" : `control: ${holder} (watching)`;
-  st.className = holder === null ? "" : mine ? "mine" : "other";
-  $("lock-btn").textContent = mine ? "Release control" : "Take control";
-  $("lock-btn").title = mine ? "Give the operator lock back: any client may control again"
+  setText(st, holder === null ? "control: free (anyone)" : mine ? "control: YOU" : `control: ${holder} (watching)`);
+  setClass(st, holder === null ? "" : mine ? "mine" : "other");
+  setText($("lock-btn"), mine ? "Release control" : "Take control");
+  const title = mine ? "Give the operator lock back: any client may control again"
     : watching ? `${holder} holds control; taking it is refused until they release it or leave`
     : "Take the operator lock: the others can only watch (and press E-STOP)";
+  if ($("lock-btn").title !== title) $("lock-btn").title = title;
   if (watching !== document.body.classList.contains("watching")) {
     document.body.classList.toggle("watching", watching);
     for (const sec of document.querySelectorAll("#controls > section")) sec.inert = watching;
@@ -878,8 +886,8 @@ function showCameraFrame(blob, meta) {
       cameraTimes.push(now);
       while (cameraTimes.length && cameraTimes[0] < now - 2000) cameraTimes.shift();
       const hz = cameraTimes.length > 1 ? 1000 * (cameraTimes.length - 1) / (now - cameraTimes[0]) : 0;
-      $("camera-info").textContent = `wide head camera 93.6 x 70.8 deg: ${hz.toFixed(1)} Hz` +
-        (meta ? `, t ${fmt(meta.time_s, 2)} s` : "");
+      setText($("camera-info"), `wide head camera 93.6 x 70.8 deg: ${hz.toFixed(1)} Hz` +
+        (meta ? `, t ${fmt(meta.time_s, 2)} s` : ""));
       if (meta) drawRecognitions(meta);
     }
     if (cameraNext) { const n = cameraNext; cameraNext = null; showCameraFrame(n.blob, n.meta); }
@@ -900,7 +908,7 @@ function startCamera() {
       let d = {};
       try { d = JSON.parse(m.data); } catch (e) { return; }
       if (d.ok && d.seq !== undefined) meta = d;
-      else if (d.ok === false) $("camera-info").textContent = `wide head camera: ${d.detail}`;
+      else if (d.ok === false) setText($("camera-info"), `wide head camera: ${d.detail}`);
       return;
     }
     showCameraFrame(m.data, meta);
@@ -930,8 +938,8 @@ function drawRecognitions(meta) {
       popups.set(r.name, p);
     }
     const status = r.status || "estimated";
-    p.box.className = `rec-box ${status}`;
-    p.pop.className = `rec-pop ${status}`;
+    setClass(p.box, `rec-box ${status}`);
+    setClass(p.pop, `rec-pop ${status}`);
     const key = JSON.stringify([r.position_m, status, r.time_s]);
     if (key !== p.key && !p.editing) {
       if (p.key === null || JSON.parse(p.key)[2] !== r.time_s) {  // a new recognition: into the history too
@@ -1028,10 +1036,14 @@ class TimePlot {
       });
       g.stroke();
     });
-    this.legend.replaceChildren(...this.series.map((s, i) => {
-      const x = this.v[i][this.v[i].length - 1];
-      return el("span", {style: `color:${s.color}; margin-right: 0.8em`, text: `${s.label} ${fmt(x, this.digits)} ${this.unit}`});
-    }), el("span", {text: `t ${fmt(t1, 2)} s`}));
+    if (this.legend.children.length !== this.series.length + 1) {
+      this.legend.replaceChildren(...this.series.map((s) => el("span", {style: `color:${s.color}; margin-right: 0.8em`})),
+                                  el("span"));
+    }
+    this.series.forEach((s, i) => {
+      setText(this.legend.children[i], `${s.label} ${fmt(this.v[i][this.v[i].length - 1], this.digits)} ${this.unit}`);
+    });
+    setText(this.legend.children[this.series.length], `t ${fmt(t1, 2)} s`);
   }
 }
 const PLOTS = {
