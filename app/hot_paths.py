@@ -9,6 +9,7 @@ import json
 import re
 
 from app.service import OperatorService, ServiceError
+from app.service.host import estop_press_error
 from app.state import with_console_state
 
 _JSON = [(b"content-type", b"application/json")]
@@ -22,8 +23,16 @@ async def _send(send, status: int, body: bytes) -> None:
 
 def estop_reply(ack) -> dict:
     """The POST /api/estop answer (app.schemas.EstopResponse) for the loop's acknowledgement."""
-    return {"ok": True, "message": "hard e-stop already engaged" if ack.already_engaged else "hard e-stop engaged",
-            "tick": ack.tick, "sim_time_s": ack.sim_time_s, "engaged_at_monotonic_s": ack.engaged_at_monotonic_s}
+    return {"ok": True, "message": ack.message, "tick": ack.tick, "sim_time_s": ack.sim_time_s,
+            "engaged_at_monotonic_s": ack.engaged_at_monotonic_s, "duplicate": ack.duplicate}
+
+
+def estop_press_header(scope) -> str | None:
+    """The request's X-Estop-Press header (None: absent); its value is checked by the caller."""
+    for name, value in scope.get("headers", ()):
+        if name == b"x-estop-press":
+            return value.decode("latin-1")
+    return None
 
 
 class HotPaths:
@@ -73,8 +82,12 @@ class HotPaths:
                     await _send(send, 200, body)
                     return
             elif service is not None and key == ("POST", "/api/estop"):
+                press = estop_press_header(scope)
+                if estop_press_error(press) is not None:
+                    await self.api(scope, receive, send)  # FastAPI's route says what is wrong with it
+                    return
                 try:
-                    ack = service.estop()
+                    ack = service.estop(press)
                 except ServiceError:
                     pass
                 else:

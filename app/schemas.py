@@ -184,6 +184,8 @@ class EstopResponse(Ok):
     sim_time_s: float = Field(description="simulated time then [s]")
     engaged_at_monotonic_s: float = Field(description="when the loop engaged it, on the machine's monotonic clock "
                                                       "(CLOCK_MONOTONIC, as Python's time.monotonic) [s]")
+    duplicate: bool = Field(False, description="this press (its X-Estop-Press id) was already handled by another "
+                                               "way in: nothing was engaged again; tick and times are the first's")
 
 
 class RunCounters(BaseModel):

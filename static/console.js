@@ -82,10 +82,15 @@ let lastEstopAt = -1e9;
 const estopsOnWs = [];  // the e-stops sent on the stick stream, answered in order
 // the e-stops this page sent: input event time (epoch [ms]) and the loop's reply (the e-stop benchmark reads it)
 window.hrp2Estops = [];
+let presses = 0;
 function estop(source, eventTimeStamp) {
   lastEstopAt = performance.now();
   const now = performance.now();
-  const record = {source, event_epoch_ms: performance.timeOrigin + (eventTimeStamp ?? now),
+  // one id for the press on all three ways: the first to arrive engages; a copy arriving after a quick release
+  // is that press again, not a new one (it engages nothing)
+  const press = `${CLIENT_ID}:${++presses}`;
+  const message = JSON.stringify({estop: true, press});
+  const record = {source, press, event_epoch_ms: performance.timeOrigin + (eventTimeStamp ?? now),
                   handled_epoch_ms: performance.timeOrigin + now, reply: null};
   window.hrp2Estops.push(record);
   if (window.hrp2Estops.length > 1000) window.hrp2Estops.shift();
@@ -93,13 +98,13 @@ function estop(source, eventTimeStamp) {
   // the console), the stick stream's open socket (no new request to set up) and a POST
   if (doorWs && doorWs.readyState === WebSocket.OPEN) {
     estopsOnDoor.push(record);
-    doorWs.send('{"estop": true}');
+    doorWs.send(message);
   }
   if (opWs && opWs.readyState === WebSocket.OPEN) {
     estopsOnWs.push(record);
-    opWs.send('{"estop": true}');
+    opWs.send(message);
   }
-  fetch("/api/estop", {method: "POST", headers: headers(false), keepalive: true})
+  fetch("/api/estop", {method: "POST", headers: {...headers(false), "X-Estop-Press": press}, keepalive: true})
     .then((r) => r.json().then((d) => {
       if (record.reply === null) record.reply = d;
       if (!r.ok) log(`E-STOP (${source}): ${r.status} ${d.detail}`, "bad");

@@ -3,9 +3,9 @@ the EmergencyStopper's parameters (hrpsys EmergencyStopperService)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Header
 
 from app.deps import ServiceDep
 from app.errors import errors
@@ -13,6 +13,7 @@ from app.hot_paths import estop_reply
 from app.params_http import ES_PARAMS, EsChangesBody, es_changes, es_changes_schema, es_document
 from app.schemas import EstopResponse, Ok
 from app.service import InvalidArgument
+from app.service.host import ESTOP_PRESS_PATTERN
 
 router = APIRouter(prefix="/api/estop", tags=["emergency"])
 
@@ -20,11 +21,14 @@ router = APIRouter(prefix="/api/estop", tags=["emergency"])
 @router.post("", response_model=EstopResponse, responses=errors(),
              summary="Engage the hard e-stop: freeze the joint command now; everything upstream holds (walking "
                      "stops in place, the sequence stops). Any page may send it, with or without a body.")
-async def engage(service: ServiceDep) -> EstopResponse:
+async def engage(service: ServiceDep, x_estop_press: Annotated[str | None, Header(
+        pattern=ESTOP_PRESS_PATTERN, description="this press's id (1-64 of A-Z a-z 0-9 _ . : -), the same on each "
+        "way the page sends it (its e-stop door, its stick stream, this POST): the first to arrive engages, the "
+        "others answer `duplicate` and engage nothing, also after a release")] = None) -> EstopResponse:
     # on the event loop itself (no thread-pool hop that other requests could fill), through the robot's own
     # e-stop pipe; it answers once the loop has engaged it (a millisecond or so)
     # (app.hot_paths answers this path before FastAPI does; this route documents it and answers its errors)
-    return EstopResponse(**estop_reply(service.estop()))
+    return EstopResponse(**estop_reply(service.estop(x_estop_press)))
 
 
 @router.post("/release", response_model=Ok, responses=errors(409),

@@ -22,6 +22,7 @@ from app.operator_lock import Locked
 from app.params_http import params_changes_body, params_document
 from app.schemas import LockRequest, OperatorAck, OperatorLockState, OperatorVelocityRequest
 from app.service import ServiceError, ignored_message
+from app.service.estop_door import estop_message
 from app.service.setpoints import Setpoint, SetpointAck
 from app.state import jsonable
 from app.ws import MAX_MESSAGE_BYTES, receive_message, ws_client
@@ -39,20 +40,21 @@ def setpoint_of(req: OperatorVelocityRequest) -> Setpoint:
                     getattr(req, "max_stride", None), getattr(req, "foot_distance", None))
 
 
-ESTOP_MESSAGE = {"estop": True}
-
-
 async def _estop_message(text: str, service, send) -> bool:
     """`{"estop": true}` on the stream: the hard e-stop, as POST /api/estop (never refused by the operator
     lock), answered with its reply and `"estop": true`; the page's open socket is a faster way in than a new
     request. False: not that message (a setpoint's validation will say what is wrong)."""
     try:
-        if json.loads(text) != ESTOP_MESSAGE:
-            return False
+        is_estop, press, why = estop_message(json.loads(text))
     except ValueError:
         return False
+    if not is_estop:
+        return False
+    if why is not None:
+        await send(_error(why, field="press", estop=True))
+        return True
     try:
-        reply = estop_reply(service.estop())
+        reply = estop_reply(service.estop(press))
     except ServiceError as exc:
         await send(_error(str(exc), reason=getattr(exc, "reason", None), estop=True))
         return True
@@ -152,7 +154,8 @@ async def operator_stream(ws: WebSocket) -> None:
     the robot ignored (the hard e-stop) says {"ok": false, "ignored": true, "reason": "hard_stop" or
     "before_release", ...}; one refused by the operator lock {"reason": "locked", "holder"}. The message
     {"estop": true} engages the hard e-stop (POST /api/estop's answer with "estop": true; any client, the lock
-    never refuses it). `?client=<id>`:
+    never refuses it); {"estop": true, "press": "<id>"} with the press's id, as POST /api/estop's X-Estop-Press.
+    `?client=<id>`:
     this connection keeps its client's operator lock (app.operator_lock)."""
     try:
         service = get_service(ws)

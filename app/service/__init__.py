@@ -13,7 +13,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError, Unavailable
-from app.service.host import EstopAck, Observation, Published
+from app.service.host import EstopAck, Observation, Published, estop_press_error
 from app.service.setpoints import Setpoint, SetpointAck
 from app.service.verbs import (
     CancelRun,
@@ -78,7 +78,7 @@ class RobotBackend(Protocol):
     @property
     def alive(self) -> bool: ...
     def submit(self, verb: Verb): ...
-    def estop(self, timeout_s: float = 1.0) -> EstopAck: ...
+    def estop(self, press: str | None = None, timeout_s: float = 1.0) -> EstopAck: ...
     def latest(self) -> Published | None: ...
     def info(self) -> RobotInfo: ...
     def refresh_info(self, timeout_s: float = 10.0) -> RobotInfo: ...
@@ -117,9 +117,13 @@ class OperatorService:
             raise Unavailable(f"the robot did not answer {verb.name} within {timeout_s:g} s") from None
 
     # ---- safety ----------------------------------------------------------------------------------------
-    def estop(self) -> EstopAck:
-        """The hard e-stop, through its own channel: returns once the loop has engaged it."""
-        return self.robot.estop()
+    def estop(self, press: str | None = None) -> EstopAck:
+        """The hard e-stop, through its own channel: returns once the loop has engaged it. `press`: the press's
+        id (app.service.host.estop_press_error), which makes its other copies no-ops."""
+        why = estop_press_error(press)
+        if why is not None:
+            raise InvalidArgument(why)
+        return self.robot.estop(press)
 
     def release_estop(self) -> str:
         """Release the hard e-stop: nothing the operator streamed before the release runs after it."""

@@ -9,7 +9,9 @@ MAX_CLIENTS connections, messages of at most MAX_MESSAGE_BYTES, a handshake with
 tick at most READS_PER_TICK socket operations (an accept, or a read of at most RECV_BYTES): a client flooding it
 (four of them sent 25,000 messages a second) made the loop's ticks up to 38 ms late before; the rest waits in the
 sockets for the next tick. The same Host, Origin and token rules as the console's own door
-(app.security); one message, `{"estop": true}`, answered as POST /api/estop is. The WebSocket protocol is
+(app.security); one message, `{"estop": true}` or `{"estop": true, "press": "<id>"}` (the press's id, with which
+its copies sent the other ways engage nothing: app.service.host.ESTOP_PRESS_PATTERN), answered as POST /api/estop
+is. The WebSocket protocol is
 websockets' sans-I/O implementation; no thread, no event loop: the loop's select() waits on these sockets too.
 """
 
@@ -31,6 +33,7 @@ from websockets.protocol import State
 from websockets.server import ServerProtocol
 
 from app.security import host_name, origin_host
+from app.service.host import estop_press_error
 
 log = logging.getLogger(__name__)
 
@@ -39,7 +42,6 @@ MAX_MESSAGE_BYTES = 256
 HANDSHAKE_TIMEOUT_S = 2.0
 RECV_BYTES = 512  # a browser's handshake takes two reads; an e-stop frame is 21 bytes (15 and its framing)
 READS_PER_TICK = 4
-ESTOP_MESSAGE = {"estop": True}
 
 
 @dataclass(frozen=True)
@@ -67,7 +69,7 @@ class EstopDoor:
     sim_time_s, engaged_at_monotonic_s, already_engaged); `serve(readable)` handles the sockets select() found
     readable, `poll()` looks without waiting; `sockets` is what to wait on."""
 
-    def __init__(self, config: EstopDoorConfig, engage: Callable[[], object],
+    def __init__(self, config: EstopDoorConfig, engage: Callable[[str | None], object],
                  handshake_timeout_s: float = HANDSHAKE_TIMEOUT_S) -> None:
         self.config = config
         self._engage = engage
@@ -226,18 +228,29 @@ class EstopDoor:
             message = json.loads(frame.data)
         except (ValueError, UnicodeDecodeError):
             message = None
-        if message != ESTOP_MESSAGE:
+        is_estop, press, why = estop_message(message)
+        if not is_estop:
             return json.dumps({"ok": False, "estop": True, "detail": _ONLY})
+        if why is not None:
+            return json.dumps({"ok": False, "estop": True, "detail": why, "field": "press"})
         try:
-            ack = self._engage()
+            ack = self._engage(press)
         except Exception as exc:  # noqa: BLE001 - said to the client; the loop goes on (the other doors too)
             log.error("e-stop door: engaging failed: %s", exc)
             return json.dumps({"ok": False, "estop": True, "detail": f"the e-stop could not be engaged: {exc}"})
         self.engaged += 1
-        return json.dumps({"ok": True, "estop": True, "via": "door",
-                           "message": "hard e-stop already engaged" if ack.already_engaged else "hard e-stop engaged",
-                           "tick": ack.tick, "sim_time_s": ack.sim_time_s,
+        return json.dumps({"ok": True, "estop": True, "via": "door", "message": ack.message,
+                           "duplicate": ack.duplicate, "tick": ack.tick, "sim_time_s": ack.sim_time_s,
                            "engaged_at_monotonic_s": ack.engaged_at_monotonic_s})
 
 
-_ONLY = 'this door takes one message, {"estop": true}'
+_ONLY = 'this door takes one message, {"estop": true} (with its press\'s id: {"estop": true, "press": "<id>"})'
+
+
+def estop_message(message: object) -> tuple[bool, str | None, str | None]:
+    """`message` (decoded JSON) as an e-stop: (whether it is one, its press id, what is wrong with that id).
+    `{"estop": true}`, or `{"estop": true, "press": "<id>"}` (app.service.host.estop_press_error)."""
+    if not isinstance(message, dict) or message.get("estop") is not True or not set(message) <= {"estop", "press"}:
+        return False, None, None
+    press = message.get("press")
+    return True, press if isinstance(press, str) else None, estop_press_error(press)

@@ -116,10 +116,10 @@ class LocalRobot:
     def setpoint_seq(self) -> int:
         return self._setpoints.last_seq
 
-    def estop(self, timeout_s: float = 1.0) -> EstopAck:
+    def estop(self, press: str | None = None, timeout_s: float = 1.0) -> EstopAck:
         if self.loop.running:
-            return self.loop.call(self.host.engage_estop, timeout_s=timeout_s)
-        return self.host.engage_estop()
+            return self.loop.call(lambda: self.host.engage_estop(press), timeout_s=timeout_s)
+        return self.host.engage_estop(press)
 
     def latest(self) -> Published:
         snap = self.loop.snapshot

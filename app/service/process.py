@@ -132,8 +132,8 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
 
     def handle_estop() -> None:
         while estop.poll():
-            request = estop.recv()
-            estop.send((request, host.engage_estop()))
+            request, press = estop.recv()
+            estop.send((request, host.engage_estop(press)))
 
     def handle_commands() -> None:
         while cmd.poll():
@@ -349,14 +349,15 @@ class RobotProcess:
             fut.set_exception(Unavailable(f"the robot process cannot be reached: {exc}"))
         return fut
 
-    def estop(self, timeout_s: float = 1.0) -> EstopAck:
-        """Engage the hard e-stop through its own pipe; returns when the loop has engaged it."""
+    def estop(self, press: str | None = None, timeout_s: float = 1.0) -> EstopAck:
+        """Engage the hard e-stop through its own pipe; returns when the loop has engaged it. `press`: the
+        press's id (checked by the caller)."""
         self._require_alive()
         with self._estop_lock:
             request = next(self._ids)
             conn = self._estop_conn
             try:
-                conn.send(request)
+                conn.send((request, press))
                 deadline = time.monotonic() + timeout_s
                 while True:
                     remaining = deadline - time.monotonic()

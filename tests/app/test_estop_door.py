@@ -6,7 +6,6 @@ import select
 import socket
 import threading
 import time
-from types import SimpleNamespace
 
 import pytest
 from websockets.exceptions import ConnectionClosed, ConnectionClosedError, InvalidHandshake, InvalidStatus
@@ -20,6 +19,7 @@ from app.service.estop_door import (
     EstopDoor,
     EstopDoorConfig,
 )
+from app.service.host import EstopAck
 
 PAGE = "http://127.0.0.1:8000"  # an origin of the console's page (any port of an allowed host)
 
@@ -29,6 +29,7 @@ class Served:
 
     def __init__(self, config: EstopDoorConfig, fail: bool = False, handshake_timeout_s: float = 2.0) -> None:
         self.calls = 0
+        self.presses: list[str | None] = []  # the press id of each call
         self.fail = fail
         self.door = EstopDoor(config, self._engage, handshake_timeout_s=handshake_timeout_s)
         self.url = f"ws://127.0.0.1:{self.door.port}/"
@@ -36,12 +37,13 @@ class Served:
         self._thread = threading.Thread(target=self._run, daemon=True)
         self._thread.start()
 
-    def _engage(self):
+    def _engage(self, press=None):
         self.calls += 1
+        self.presses.append(press)
         if self.fail:
             raise RuntimeError("the loop is gone")
-        return SimpleNamespace(tick=42, sim_time_s=0.21, engaged_at_monotonic_s=time.monotonic(),
-                               already_engaged=self.calls > 1)
+        return EstopAck(tick=42, sim_time_s=0.21, engaged_at_monotonic_s=time.monotonic(),
+                        already_engaged=self.calls > 1)
 
     def _run(self) -> None:
         while not self._stop.is_set():  # a 5 ms "tick": its budget, then what is readable within it
@@ -81,6 +83,23 @@ def test_an_estop_on_the_door_engages_and_is_answered_as_post_api_estop(served):
     assert first["ok"] and first["estop"] and first["via"] == "door" and first["message"] == "hard e-stop engaged"
     assert first["tick"] == 42 and first["sim_time_s"] == 0.21 and first["engaged_at_monotonic_s"] > 0.0
     assert second["message"] == "hard e-stop already engaged"
+
+
+def test_a_press_id_is_handed_to_the_loop_and_a_bad_one_is_refused_naming_it(served):
+    with connect(served.url, origin=PAGE) as ws:
+        ws.send(json.dumps({"estop": True, "press": "page-ab12:7"}))
+        good = json.loads(ws.recv(timeout=2.0))
+        bad = []
+        for press in ["", "x" * 65, "a b", 7, ["p"]]:
+            ws.send(json.dumps({"estop": True, "press": press}))
+            bad.append(json.loads(ws.recv(timeout=2.0)))
+        ws.send(json.dumps({"estop": True, "press": "p", "more": 1}))
+        other = json.loads(ws.recv(timeout=2.0))
+    assert good["ok"] and good["duplicate"] is False
+    assert served.presses == ["page-ab12:7"]  # nothing else reached the loop
+    for reply in bad:
+        assert not reply["ok"] and reply["field"] == "press" and "1 to 64 characters" in reply["detail"], reply
+    assert not other["ok"] and "one message" in other["detail"]
 
 
 def test_a_script_without_an_origin_may_press_it(served):
@@ -131,7 +150,8 @@ def test_any_other_message_is_answered_with_what_it_takes_and_engages_nothing(se
     with connect(served.url, origin=PAGE) as ws:
         ws.send(message)
         reply = json.loads(ws.recv(timeout=2.0))
-        assert reply == {"ok": False, "estop": True, "detail": 'this door takes one message, {"estop": true}'}
+        assert reply == {"ok": False, "estop": True, "detail": 'this door takes one message, {"estop": true} (with '
+                                                              'its press\'s id: {"estop": true, "press": "<id>"})'}
         assert estop(ws)["ok"]  # the same connection still works
     assert served.calls == 1
 
