@@ -35,11 +35,11 @@ SCREENSHOT = ROOT / "docs" / "img" / "operator_page.png"
 # [m] BODY travel from the walking stop to standing, walking at 0.1 m/s (a step ~0.08 m): measured 0.04-0.06 m
 WALK_STOP_TRAVEL_M = 0.10
 #: [s] of control time from the page's release to a zero velocity at the robot, with the robot's dead-man
-#: lengthened to DEADMAN_LONG_S so that only the page's own zero can pass it. The issue asks 0.25 s: met with the
-#: machine otherwise idle; under load the browser's and the console's scheduling take more (measured up to
-#: 0.51 s with two busy processes beside this suite, 0.49 s in a CI run; a Python client beside the open page,
-#: up to 0.21 s), so the bound is the loaded figure with a 2x margin, well under DEADMAN_LONG_S.
-ZERO_WITHIN_S = 1.0
+#: lengthened to DEADMAN_LONG_S so that only the page's own zero can pass it: the issue's 0.25 s. Measured since
+#: the page writes only what changed (its thread was busy laying itself out): 0-45 ms idle; 0-140 ms in 15 of 16
+#: releases with two busy processes beside the browser and the console on this 2-core machine, one 295 ms.
+#: (Before that: up to 0.49 s in a CI run, 0.51 s loaded.)
+ZERO_WITHIN_S = 0.25
 DEADMAN_LONG_S = 3.0  # [s] the dead-man's timeout while a test times the page's zero (default 0.2 s)
 
 
@@ -407,6 +407,12 @@ def test_estop_click_engages_the_hard_stop_the_banner_shows_and_release_works(pa
         raise AssertionError("the release did not reach the loop; the page says: "
                              + page.locator("#history").inner_text()[-600:]) from None
     playwright_api.expect(page.locator("#banner")).to_be_hidden()
+    # the press went three ways with one id: its other copies (answered or still on their way) engage nothing
+    # after the release (before the ids, one arriving late re-engaged the stop)
+    time.sleep(0.5)
+    assert not hrp2_console.state()["emergency"]["hard_stop"], "a copy of the press engaged the stop again"
+    rec = page.evaluate("window.hrp2Estops[window.hrp2Estops.length - 1]")
+    assert re.fullmatch(r"page-\w+:\d+", rec["press"]), rec
 
 
 def joint_deg(c: Console, name: str) -> float:
