@@ -7,6 +7,8 @@ import math
 
 import numpy as np
 
+from controller.kinematics.rotations import wrap_rad  # noqa: F401 (behaviours import it from here)
+
 
 def toward(error: np.ndarray, gain_1_s: float, max_speed: float) -> np.ndarray:
     """Velocity that closes `error` at `gain_1_s` times the error, its norm capped at `max_speed` (the
@@ -35,11 +37,6 @@ def rotation_vector(R_from: np.ndarray, R_to: np.ndarray) -> np.ndarray:
     k[(i + 1) % 3] = math.copysign(k[(i + 1) % 3], R[i, (i + 1) % 3] + R[(i + 1) % 3, i])
     k[(i + 2) % 3] = math.copysign(k[(i + 2) % 3], R[i, (i + 2) % 3] + R[(i + 2) % 3, i])
     return k / np.linalg.norm(k) * angle
-
-
-def wrap_rad(angle: float) -> float:
-    """`angle` in [-pi, pi)."""
-    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def rot_z(yaw_rad: float) -> np.ndarray:

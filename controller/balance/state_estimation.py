@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from controller.balance.leg_odometry import LegOdometry, OdometryEstimate
 from controller.core.types import Estimate, Reference, read_only
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rows_mul, rows_tmul
@@ -128,6 +129,9 @@ class ActualStateEstimator:
         self._anchor_weights: tuple[float, float] | None = None  # the planned contacts' weights last tick
         self._soles_key: tuple[bytes, bytes, bytes] | None = None  # the reference posture of _soles
         self._soles: np.ndarray | None = None
+        #: where the feet are in the world (leg odometry), beside the plan's frame the anchoring above uses
+        self.odometry = LegOdometry()
+        self.last_odometry: OdometryEstimate | None = None
 
     def reference_soles(self, ref: Reference) -> np.ndarray:
         """World positions of the two sole sensors in the reference posture, (2, 3), read-only.
@@ -140,6 +144,18 @@ class ActualStateEstimator:
             read_only(soles)
             self._soles, self._soles_key = soles, key
         return self._soles
+
+    def _odometry(self, est: Estimate, pos: list, wrench_rows: list, p_body, walking: bool) -> None:
+        """One tick of leg odometry (the measured soles from BODY and their loads, BODY as this estimate places
+        it), published in the Estimate. pos, wrench_rows: est.sensor_pos_from_base and est.wrenches_ext_world
+        as lists."""
+        r, left = FOOT_SENSORS
+        if not any(pos[r]) and not any(pos[left]):  # no kinematics measured yet (the loop's first snapshot)
+            return
+        R = est.sensor_R_world.tolist()
+        self.last_odometry = est.odometry = self.odometry.update(
+            (pos[r], pos[left]), (R[r], R[left]), (wrench_rows[r][2], wrench_rows[left][2]), p_body,
+            walking)
 
     def __call__(self, sensors, est: Estimate, ref: Reference) -> tuple[np.ndarray, np.ndarray]:
         if ref.gait is not None:  # the AutoBalancer says where the soles are meant to be
@@ -158,6 +174,7 @@ class ActualStateEstimator:
         w = np.array((fz0 / fz_sum, fz1 / fz_sum)) if fz_sum > 2 * CONTACT_FZ_N else _EQUAL_WEIGHTS
         offset = w @ (ref_soles - meas_soles)
         self.base_pos_world = offset
+        self._odometry(est, est.sensor_pos_from_base.tolist(), rows, offset.tolist(), False)
         cog = est.com_from_base + offset
         soles = meas_soles + offset
         zmp = zmp_from_foot_wrenches(soles, foot_wrenches, float(w @ soles[:, 2]))
@@ -191,6 +208,7 @@ class ActualStateEstimator:
         cog = np.array((cx + ox, cy + oy, cz + oz))
         soles = ((mrx + ox, mry + oy, mrz + oz), (mlx + ox, mly + oy, mlz + oz))
         wrenches = est.wrenches_ext_world.tolist()
+        self._odometry(est, pos, wrenches, (ox, oy, oz), gait.walking)
         zmp = zmp_from_foot_wrenches(soles, (wrenches[FOOT_SENSORS[0]], wrenches[FOOT_SENSORS[1]]),
                                      w0 * soles[0][2] + w1 * soles[1][2])
         if zmp is not None:

@@ -16,6 +16,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from controller.balance.fall_detector import FallDetector, foot_load_n
+from controller.balance.leg_odometry import OdometryEstimate
 from controller.core.chain import Chain, TickTimer
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Status
@@ -67,6 +68,9 @@ class Snapshot:
     layer_tick_ms: dict[str, float]  # wall time of each layer's tick [ms]
     safety: Safety
     loop_ms: float  # wall time of the whole tick (chain + physics) [ms]
+    #: leg odometry: the feet and the controller's frame in the world (controller.balance.leg_odometry); None
+    #: when no state estimator ran
+    odometry: OdometryEstimate | None = None
 
     @property
     def fault(self) -> str | None:
@@ -257,7 +261,7 @@ class ControlLoop:
             base_rpy_est_rad=frozen_array(est.base_rpy_rad), wrenches_ext=frozen_array(est.wrenches_ext),
             cog_world=frozen_array(cog), zmp_world=frozen_array(zmp), layers=layers,
             layer_tick_ms={name: t.last_ms for name, t in timers.items()},
-            safety=safety, loop_ms=loop_ms,
+            safety=safety, loop_ms=loop_ms, odometry=est.odometry,
         )
 
     # ---- synchronous running ----------------------------------------------------------------

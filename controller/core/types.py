@@ -3,12 +3,16 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from controller.operation.points import WalkCommand
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
+
+if TYPE_CHECKING:
+    from controller.balance.leg_odometry import OdometryEstimate
 
 __all__ = ["BalanceEstimate", "Estimate", "GaitState", "Ports", "Reference", "TickContext", "frozen_array",
            "read_only"]
@@ -130,6 +134,8 @@ class Estimate:
     cog_world: np.ndarray | None = None
     cog_vel_world: np.ndarray | None = None
     zmp_world: np.ndarray | None = None
+    # the state estimator's leg odometry: the feet and the plan's frame in the world (None when it did not run)
+    odometry: OdometryEstimate | None = None
 
     @staticmethod
     def for_tick() -> Estimate:

@@ -7,6 +7,11 @@ import math
 import numpy as np
 
 
+def wrap_rad(angle: float) -> float:
+    """`angle` [rad] in [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
+
+
 def rpy_to_matrix(rpy: np.ndarray) -> np.ndarray:
     """R = Rz(yaw) Ry(pitch) Rx(roll)."""
     return np.array(rpy_to_rows(*np.asarray(rpy, dtype=float).tolist()))

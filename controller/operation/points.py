@@ -17,6 +17,7 @@ The waist's x-y and the COM are never commanded: balance is the controller's ([O
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -143,3 +144,19 @@ class OperationView:
     #: the CollisionDetector holds the last collision-free posture (these body pairs would collide): the
     #: poses above are the reference, not where the robot is
     collision_pairs: tuple[tuple[str, str], ...] = ()
+
+    def placed_in_world(self, world_from_control) -> OperationView:
+        """This view with its world coordinates (the feet frame F, the points' world poses) moved from the
+        controller's frame (the gait plan's) into the world by leg odometry's `world_from_control` (x, y, z
+        [m], yaw [rad]; controller.balance.leg_odometry); what is relative to F is unchanged."""
+        x, y, z, yaw = (float(v) for v in world_from_control)
+        c, s = math.cos(yaw), math.sin(yaw)
+        Rz = np.array(((c, -s, 0.0), (s, c, 0.0), (0.0, 0.0, 1.0)))
+        t = np.array((x, y, z))
+        points = {name: PointPose(p_world_m=frozen_array(Rz @ pose.p_world_m + t),
+                                  R_world_point=frozen_array(Rz @ pose.R_world_point),
+                                  p_feet_m=pose.p_feet_m, R_feet_point=pose.R_feet_point)
+                  for name, pose in self.points.items()}
+        yaw_f = math.atan2(math.sin(self.feet_yaw_rad + yaw), math.cos(self.feet_yaw_rad + yaw))
+        return dataclasses.replace(self, feet_p_world_m=frozen_array(Rz @ self.feet_p_world_m + t),
+                                   feet_yaw_rad=yaw_f, points=points)
