@@ -21,6 +21,7 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
+from controller.balance.leg_odometry import OdometryEstimate
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Params
 from controller.operation.points import OperationView, Twist, WalkCommand
@@ -59,7 +60,7 @@ class Capture:
     time_s: float  # control time of the state the image shows [s]
     q_meas_rad: np.ndarray  # (30,) encoders
     base_rpy_est_rad: np.ndarray  # (3,) KalmanFilter attitude
-    cog_world_m: np.ndarray  # (3,) estimated COG (anchored at the planned soles) [m]
+    odometry: OdometryEstimate  # leg odometry: the stance sole and the controller's frame in the world
     ready: Callable[[], bool]  # whether `frames`' result enters at this boundary (ask from its due time on):
     #     as fast as possible it is waited for when due, so a seeded run is the same every time; paced, only
     #     once it is done, so no tick waits for the camera (RobotHost.capture_ready)
@@ -101,7 +102,7 @@ class Commands(Protocol):
 
     def capture(self, camera: str, analyse: tuple | None = None) -> Capture:
         """Render `camera` from the state of this tick boundary, off the control thread. `analyse` = (fn, args):
-        the capture's `frames` is then fn(frames, camera, time_s, q_meas_rad, base_rpy_est_rad, cog_world_m,
+        the capture's `frames` is then fn(frames, camera, time_s, q_meas_rad, base_rpy_est_rad, odometry,
         *args), computed where the image is rendered (fn a module-level function)."""
         ...
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import logging
 from collections import OrderedDict
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
@@ -72,14 +72,18 @@ class _Run:
                          nominal_duration_s=b.nominal_duration_s())
 
 
-def _view(op: OperationPort | None) -> OperationView | None:
-    """The op layer's view, or None (no layer, or none yet: before its first tick)."""
+def _view(op: OperationPort | None, world_from_control: Callable[[], Sequence[float] | None] | None = None
+          ) -> OperationView | None:
+    """The op layer's view, or None (no layer, or none yet: before its first tick); placed in the world by
+    `world_from_control()` (leg odometry: the controller's frame in the world) when that gives one."""
     if op is None:
         return None
     try:
-        return op.view()
+        view = op.view()
     except (InvalidState, InvalidCommand):
         return None
+    placement = None if world_from_control is None else world_from_control()
+    return view if placement is None else view.placed_in_world(placement)
 
 
 class BehaviorRunner:
@@ -88,8 +92,12 @@ class BehaviorRunner:
     `op()` returns the operation layer (None when the chain has none: behaviours that need a point are
     refused). Two runs may not drive the same point: the later one is refused, naming the running one."""
 
-    def __init__(self, op: Callable[[], OperationPort | None], commands: Commands, dt_s: float) -> None:
+    def __init__(self, op: Callable[[], OperationPort | None], commands: Commands, dt_s: float,
+                 world_from_control: Callable[[], Sequence[float] | None] | None = None) -> None:
         self._op = op
+        #: the controller's frame in the world (x, y, z, yaw), or None: the views the behaviours get are placed
+        #: in the world with it, where perception and the map's places are
+        self._world_from_control = world_from_control
         self.commands = commands
         self.dt_s = float(dt_s)
         self._next_id = 1
@@ -119,7 +127,7 @@ class BehaviorRunner:
                 raise InvalidState(f"{behavior.name} refused: {shared} driven by run {other.id} "
                                    f"({other.behavior.name}); cancel it or wait until it ends")
         run = _Run(self._next_id, behavior, now, points, resources)
-        behavior.start(self._context(run, now, _view(op)))  # may raise: the run is refused
+        behavior.start(self._context(run, now, _view(op, self._world_from_control)))  # may raise: the run is refused
         self._next_id += 1
         self._running[run.id] = run
         self.version += 1
@@ -182,7 +190,7 @@ class BehaviorRunner:
         if not self._running and not self._zero_walk:
             return
         op = self._op()
-        view = _view(op)  # once for every run: the op layer's FK costs ~0.2 ms
+        view = _view(op, self._world_from_control)  # once for every run: the op layer's FK costs ~0.2 ms
         outputs: list[Mapping[str, Twist]] = []
         walk: WalkCommand | None = None
         for run in list(self._running.values()):
@@ -234,7 +242,7 @@ class BehaviorRunner:
     def _end(self, run: _Run, state: str, message: str, interrupted: bool) -> None:
         """Finish a run. Its twists are no longer summed from the next tick on (set_behavior holds for one
         tick only), so nothing it commanded keeps moving; an interrupted run's `stop` runs first."""
-        ctx = self._context(run, self._time_s, _view(self._op()) if interrupted else None)
+        ctx = self._context(run, self._time_s, _view(self._op(), self._world_from_control) if interrupted else None)
         if interrupted:
             try:
                 run.behavior.stop(ctx)

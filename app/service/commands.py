@@ -82,14 +82,16 @@ class HostCommands:
     def capture(self, camera: str, analyse: tuple | None = None) -> Capture:
         host = self.host
         snap = host.loop.snapshot
-        time_s, q, rpy, cog = float(snap.time_s), snap.q_meas_rad, snap.base_rpy_est_rad, snap.cog_world
+        time_s, q, rpy, odometry = float(snap.time_s), snap.q_meas_rad, snap.base_rpy_est_rad, snap.odometry
+        if odometry is None:  # no state estimator ran (a chain without one): no place in the world to see from
+            raise Refused("state", "the robot has no estimate of its place in the world (no state estimator ran)")
         if analyse is not None:  # run where the image is rendered, with what the robot knew of itself now
             fn, args = analyse
-            analyse = (fn, (camera, time_s, q, rpy, cog, *args))
+            analyse = (fn, (camera, time_s, q, rpy, odometry, *args))
         frames = host.cameras().request_state_of(host.plant.data, cameras=(camera,), analyse=analyse)
         host.captures += 1
         return Capture(camera=camera, frames=frames, time_s=time_s, q_meas_rad=q, base_rpy_est_rad=rpy,
-                       cog_world_m=cog, ready=functools.partial(host.capture_ready, host.captures, frames))
+                       odometry=odometry, ready=functools.partial(host.capture_ready, host.captures, frames))
 
     def remember(self, object_name: str, recognition: Mapping[str, Any]) -> None:
         self.host.recognitions[object_name] = dict(recognition)

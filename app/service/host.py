@@ -178,7 +178,8 @@ class RobotHost:
         #: a replay's schedule of the results the recording took late: capture number -> "result_late" (not
         #: entered yet) or "result_entered"; None when not replaying
         self.replayed_captures: dict[int, str] | None = None
-        self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s)
+        self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s,
+                                     world_from_control=self.world_from_control)
         self.start_auto_balancer = start_auto_balancer
         self.recorder: SessionRecorder | None = None  # the session being recorded, if any
         self.last_recorder: SessionRecorder | None = None  # the last one stopped (its file may still be finishing)
@@ -195,6 +196,12 @@ class RobotHost:
 
     def _operation_layer(self):
         return self.loop.chain.layers.get("op")
+
+    def world_from_control(self) -> tuple[float, float, float, float] | None:
+        """The controller's frame in the world after the last tick (leg odometry), or None before one."""
+        snap = self.loop.snapshot
+        odometry = None if snap is None else snap.odometry
+        return None if odometry is None else odometry.world_from_control
 
     def _before_tick(self, time_s: float) -> None:
         if self.loop.hard_stop_engaged:  # whatever engaged it (the operator, a fault, a fall)

@@ -1,18 +1,25 @@
-"""The robot's own estimate of a head camera's pose: encoders, the KalmanFilter attitude, the gait plan's odometry."""
+"""The robot's own estimate of a head camera's pose: encoders, the KalmanFilter attitude, leg odometry."""
 
-# Nothing here reads the simulator. BODY's attitude is the KalmanFilter's (roll and pitch from gyro and
-# accelerometer, yaw integrated from the gyro); BODY's position is the one the controller's state estimator
-# anchors to the planned soles (the support foot does not slip: the gait plan's odometry), recovered from the
-# snapshot's COG as cog_world - R(rpy) com_BODY(q). The head link follows from the encoders (forward
-# kinematics of the controller's model), the camera from its mounting on the head (the robot's calibration,
-# robot.generate.CAMERAS). Errors of any of these pass straight into T_world_camera and so into perception.
+# Nothing here reads the simulator. BODY's roll and pitch are the KalmanFilter's (gyro and accelerometer); its
+# place and heading in the world come from leg odometry (controller.balance.leg_odometry: the stance sole, placed
+# in the world step by step through the encoders), with BODY placed from that sole by the encoders. The head
+# link follows from the encoders (forward kinematics of the controller's model), the camera from its mounting on
+# the head (the robot's calibration, robot.generate.CAMERAS). Errors of any of these pass straight into
+# T_world_camera and so into perception. The controller's own frame (the gait plan's, which a walk's landing
+# errors move off the world: 19 mm after 1.0 m) is not used: a behaviour that acts on a location takes it into
+# the plan's frame through the odometry's world_from_control.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from controller.balance.leg_odometry import OdometryEstimate, yaw_of
+from controller.balance.state_estimation import FOOT_SENSORS
 from controller.kinematics.model import RobotKinematics
 from robot.generate import CAMERAS
+from robot.names import FORCE_SENSOR_NAMES
 
 #: The link the head cameras are mounted on.
 HEAD_LINK = "HEAD_LINK1"
@@ -31,36 +38,44 @@ def T_head_camera(camera: str) -> np.ndarray:
     return T
 
 
-def _checked(q_rad, base_rpy_rad, cog_world_m) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _checked(q_rad, base_rpy_rad, odometry) -> tuple[np.ndarray, np.ndarray, OdometryEstimate]:
     q = np.asarray(q_rad, dtype=float)
     rpy = np.asarray(base_rpy_rad, dtype=float)
-    cog = np.asarray(cog_world_m, dtype=float)
-    if q.shape != (30,) or rpy.shape != (3,) or cog.shape != (3,):
-        raise ValueError(f"q_rad (30,), base_rpy_rad (3,) and cog_world_m (3,) expected, got {q.shape}, "
-                         f"{rpy.shape}, {cog.shape}")
-    return q, rpy, cog
+    if q.shape != (30,) or rpy.shape != (3,):
+        raise ValueError(f"q_rad (30,) and base_rpy_rad (3,) expected, got {q.shape}, {rpy.shape}")
+    if not isinstance(odometry, OdometryEstimate):
+        raise ValueError(f"odometry must be the state estimator's OdometryEstimate (the snapshot's), got "
+                         f"{type(odometry).__name__}")
+    return q, rpy, odometry
 
 
-def T_world_body_estimate(kin: RobotKinematics, q_rad, base_rpy_rad, cog_world_m) -> np.ndarray:
+def T_world_body_estimate(kin: RobotKinematics, q_rad, base_rpy_rad, odometry: OdometryEstimate) -> np.ndarray:
     """BODY in the world (4, 4) as the robot estimates it; leaves `kin` at that configuration.
 
-    q_rad (30,) encoders, JOINT_NAMES order; base_rpy_rad (3,) the KalmanFilter's BODY attitude; cog_world_m (3,)
-    the controller's estimated COG (encoders + attitude, anchored at the planned soles) [m]."""
-    q, rpy, cog = _checked(q_rad, base_rpy_rad, cog_world_m)
-    kin.update_rpy(np.zeros(3), rpy, q)  # BODY at the origin, world axes: the COG offset from BODY
-    base_pos_world = cog - kin.com_world()
-    kin.update_rpy(base_pos_world, rpy, q)
+    q_rad (30,) encoders, JOINT_NAMES order; base_rpy_rad (3,) the KalmanFilter's BODY attitude; odometry: the
+    leg odometry of the same tick (the stance sole's place and heading in the world). BODY is placed so that
+    the encoders put the stance sole where the odometry has it, turned about the vertical by the odometry's
+    heading minus the KalmanFilter's for that sole."""
+    q, rpy, odo = _checked(q_rad, base_rpy_rad, odometry)
+    kin.update_rpy(np.zeros(3), rpy, q)  # BODY at the origin, the attitude estimate's axes
+    p_sole, R_sole = kin.frame_pose(FORCE_SENSOR_NAMES[FOOT_SENSORS[odo.stance]])
+    dyaw = odo.stance_yaw_rad - yaw_of(R_sole)
+    c, s = math.cos(dyaw), math.sin(dyaw)
+    base_pos_world = np.asarray(odo.p_stance_world_m) - np.array(
+        (c * p_sole[0] - s * p_sole[1], s * p_sole[0] + c * p_sole[1], p_sole[2]))
+    kin.update_rpy(base_pos_world, (rpy[0], rpy[1], rpy[2] + dyaw), q)  # Rz(dyaw) Rz(y) Ry(p) Rx(r)
     T = np.eye(4)
     T[:3, :3] = kin.frame_pose("BODY")[1]
     T[:3, 3] = base_pos_world
     return T
 
 
-def T_world_camera_estimate(kin: RobotKinematics, q_rad, base_rpy_rad, cog_world_m, camera: str) -> np.ndarray:
+def T_world_camera_estimate(kin: RobotKinematics, q_rad, base_rpy_rad, odometry: OdometryEstimate,
+                            camera: str) -> np.ndarray:
     """The camera's optical frame in the world (4, 4) as the robot estimates it (arguments as
     T_world_body_estimate's)."""
     T_head_cam = T_head_camera(camera)
-    T_world_body_estimate(kin, q_rad, base_rpy_rad, cog_world_m)
+    T_world_body_estimate(kin, q_rad, base_rpy_rad, odometry)
     p_head, R_head = kin.frame_pose(HEAD_LINK)
     T_world_head = np.eye(4)
     T_world_head[:3, :3] = R_head
@@ -69,5 +84,5 @@ def T_world_camera_estimate(kin: RobotKinematics, q_rad, base_rpy_rad, cog_world
 
 
 def T_world_camera_from_snapshot(kin: RobotKinematics, snapshot, camera: str) -> np.ndarray:
-    """T_world_camera_estimate from a controller Snapshot (q_meas_rad, base_rpy_est_rad, cog_world)."""
-    return T_world_camera_estimate(kin, snapshot.q_meas_rad, snapshot.base_rpy_est_rad, snapshot.cog_world, camera)
+    """T_world_camera_estimate from a controller Snapshot (q_meas_rad, base_rpy_est_rad, odometry)."""
+    return T_world_camera_estimate(kin, snapshot.q_meas_rad, snapshot.base_rpy_est_rad, snapshot.odometry, camera)

@@ -17,6 +17,7 @@ import numpy as np
 from behaviors.base import Commands
 from behaviors.perception.head_pose import T_world_camera_estimate
 from behaviors.perception.locate import Recognition, locate_can, locate_trash_box
+from controller.balance.leg_odometry import OdometryEstimate
 from controller.kinematics.model import RobotKinematics
 
 #: Simulated time from a capture to its result [s]: the rendering and the fit take 0.1-0.2 s of wall time on
@@ -36,13 +37,13 @@ def prepare() -> None:
 
 
 def recognise_image(frames, camera: str, time_s: float, q_meas_rad: np.ndarray, base_rpy_est_rad: np.ndarray,
-                    cog_world_m: np.ndarray, object_name: str) -> tuple[Recognition | None, Any]:
+                    odometry: OdometryEstimate, object_name: str) -> tuple[Recognition | None, Any]:
     """The analysis of a capture (Commands.capture's `analyse`): the robot's own estimate of the camera's pose
     from what it knew at the capture, and the object's model fitted to the image. (Recognition or None, the
     camera's intrinsics)."""
     prepare()
     image = frames[camera]
-    T_world_camera = T_world_camera_estimate(_kin, q_meas_rad, base_rpy_est_rad, cog_world_m, camera)
+    T_world_camera = T_world_camera_estimate(_kin, q_meas_rad, base_rpy_est_rad, odometry, camera)
     locate = LOCATORS[object_name]
     return locate(image.rgb, image.depth_m, image.intrinsics, T_world_camera, time_s=time_s), image.intrinsics
 

@@ -90,6 +90,7 @@ class FakeCommands:
         self.refuse: str | None = None
         self.now = 0.0
         self.walk_s = 0.0
+        self.walk_gain = 1.0  # the fake's steps take the goal this many times (a real walk lands a little long)
 
     def _check(self) -> None:
         if self.refuse:
@@ -110,7 +111,7 @@ class FakeCommands:
         self.log.append(("go_pos", x_m, y_m, theta_rad))
         if self.op is not None:  # the fake walks at once
             R = _rot_z(self.op.feet_yaw)
-            self.op.feet_p = self.op.feet_p + R @ np.array([x_m, y_m, 0.0])
+            self.op.feet_p = self.op.feet_p + R @ (self.walk_gain * np.array([x_m, y_m, 0.0]))
             self.op.feet_yaw += theta_rad
         return self.walk_s
 

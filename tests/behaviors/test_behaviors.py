@@ -115,12 +115,26 @@ def test_walk_to_sends_one_go_pos_relative_to_the_feet_frame_and_checks_where_it
     assert status.nominal_duration_s == pytest.approx(6.0)
 
 
-def test_walk_to_that_ends_off_the_goal_fails_and_a_cancel_stops_walking():
+def test_walk_to_walks_again_for_what_a_walk_left_as_the_feet_frame_measures_it():
     h = harness()
-    h.commands.op = None  # the fake does not walk
+    h.commands.walk_s = 4.0
+    h.commands.walk_gain = 1.04  # each walk ends 4 % long: 40 mm on the first, then 1.6 mm
     rid = h.runner.run(make("walk_to", {"x_m": 1.0}))
     status = h.run_until_done(rid)
-    assert status.state == "failed" and "100.0 cm" in status.message
+    walks = [entry for entry in h.commands.log if entry[0] == "go_pos"]
+    assert [w[1] for w in walks] == pytest.approx([1.0, -0.04])
+    assert status.state == "succeeded" and status.result["corrections"] == 1 and "1 correction" in status.message
+    assert status.result["error_m"] == pytest.approx(0.0016)
+    assert status.nominal_duration_s == pytest.approx(4.0 + 2.0 + 4.0 + 2.0)  # each walk and its settling
+
+
+def test_walk_to_that_ends_off_the_goal_fails_after_its_corrections_and_a_cancel_stops_walking():
+    h = harness()
+    h.commands.op = None  # the fake does not walk
+    rid = h.runner.run(make("walk_to", {"x_m": 1.0, "corrections": 2}))
+    status = h.run_until_done(rid)
+    assert status.state == "failed" and "100.0 cm" in status.message and "after 2 correction" in status.message
+    assert sum(entry[0] == "go_pos" for entry in h.commands.log) == 3
     h.op.walking = True
     rid = h.runner.run(make("walk_to", {"x_m": 1.0}))
     h.tick(10)

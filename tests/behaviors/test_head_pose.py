@@ -51,17 +51,26 @@ def test_standing_the_estimate_is_where_the_simulator_has_the_camera():
     assert rotation_angle_deg(T_est[:3, :3].T @ R_true) < STANDING_ANGLE_TOLERANCE_DEG
 
 
-def test_body_is_placed_so_that_the_estimated_cog_is_the_snapshots():
+def test_body_is_placed_so_that_the_encoders_put_the_stance_sole_where_the_odometry_has_it():
     robot = LocalRobot("expo")
     snap = robot.run_for(0.2).snapshot
+    odo = snap.odometry
     kin = RobotKinematics()
-    T = T_world_body_estimate(kin, snap.q_meas_rad, snap.base_rpy_est_rad, snap.cog_world)
-    np.testing.assert_allclose(kin.com_world(), snap.cog_world, atol=1e-12)
+    T = T_world_body_estimate(kin, snap.q_meas_rad, snap.base_rpy_est_rad, odo)
+    p_sole, R_sole = kin.frame_pose(("rfsensor", "lfsensor")[odo.stance])
+    np.testing.assert_allclose(p_sole, odo.p_stance_world_m, atol=1e-12)
+    assert math.atan2(R_sole[1, 0], R_sole[0, 0]) == pytest.approx(odo.stance_yaw_rad, abs=1e-12)
     np.testing.assert_allclose(T[:3, 3], kin.frame_pose("BODY")[0], atol=1e-12)
+    # roll and pitch stay the KalmanFilter's
+    R = T[:3, :3]
+    assert math.atan2(R[2, 1], R[2, 2]) == pytest.approx(snap.base_rpy_est_rad[0], abs=1e-9)
+    assert math.asin(-R[2, 0]) == pytest.approx(snap.base_rpy_est_rad[1], abs=1e-9)
 
 
 def test_unknown_cameras_and_bad_shapes_are_refused_with_what_would_work():
     with pytest.raises(ValueError, match="narrow_left"):
         T_head_camera("eye")
     with pytest.raises(ValueError, match=r"q_rad \(30,\)"):
-        T_world_camera_estimate(RobotKinematics(), np.zeros(3), np.zeros(3), np.zeros(3), "wide")
+        T_world_camera_estimate(RobotKinematics(), np.zeros(3), np.zeros(3), None, "wide")
+    with pytest.raises(ValueError, match="OdometryEstimate"):
+        T_world_camera_estimate(RobotKinematics(), np.zeros(30), np.zeros(3), np.zeros(3), "wide")

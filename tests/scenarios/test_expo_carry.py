@@ -23,7 +23,8 @@ pytestmark = pytest.mark.slow
 EDGE_X_M = 0.78
 CAN_XY_M = (EDGE_X_M + 0.15, -0.22)
 WALK_M = 1.4
-#: Required [issue 11]: < 5 mm; measured 3.28 mm max (1.7 mm margin).
+#: Required [issue 11]: < 5 mm; measured 3.49 mm max (1.5 mm margin; 3.28 mm before leg odometry and the grasp
+#: closing 10 mm past the can's centre, take_can.GRASP_PAST_CENTRE_M).
 SLIP_LIMIT_M = 0.005
 
 
@@ -59,7 +60,7 @@ def test_a_grasped_can_slips_less_than_5_mm_through_a_1_4_m_walk():
     assert status.state == "succeeded", status.message
     ref = can_in_hand(plant)
     slips = []
-    feet = robot.chain["op"].view().feet_p_world_m
+    feet = robot.chain["op"].view().placed_in_world(robot.host.world_from_control()).feet_p_world_m  # the world
     on_tick = lambda: slips.append(float(np.linalg.norm(can_in_hand(plant) - ref)))  # noqa: E731
     turn = {"x_m": float(feet[0]), "y_m": float(feet[1]), "theta_deg": -90.0}
     status = run_to_end(robot, service, service.run_behavior("walk_to", turn), on_tick=on_tick)

@@ -1,6 +1,6 @@
 """Perception in the EXPO scene [OP VI] as the robot does it: it walks to the table, turns its head, renders
 its narrow camera, and places what it sees through its own estimate of the camera pose (encoders, KalmanFilter
-attitude, the gait plan's odometry). The simulator's poses only measure the error.
+attitude, leg odometry). The simulator's poses only measure the error.
 
 1. The robot stands 2.5 s, walks 1.0 m towards the table (go_pos) and stops, BODY 1.0 m from the near edge.
 2. For each of five head yaws (pitch 25 deg down) it settles, takes its camera-pose estimate from the snapshot,
@@ -8,9 +8,10 @@ attitude, the gait plan's odometry). The simulator's poses only measure the erro
    and runs locate_can. Per placement the view with the most can pixels not cut by the border counts.
 3. It walks 0.4 m on and turns 90 deg right to face the trash box about 2 m away, and locates the hole.
 
-Errors are stated two ways: in the robot's own frame (where the can is relative to BODY, estimated vs true:
-what reaching for it needs; the odometry error cancels) and in the world (which adds the odometry error of the
-walk, measured 17 mm after 1.0 m; no locate_table corrects it yet)."""
+Errors are stated two ways: in the world (what the issue asks, and what the map and the operator's 3D view
+share; it includes the leg odometry's error over the walk) and in the robot's own frame (where the can is
+relative to BODY, estimated vs true: what reaching for it needs; the odometry error cancels). Before leg
+odometry the world errors were the gait plan's: 17 mm for the can after 1.0 m, 38 mm for the box."""
 
 from __future__ import annotations
 
@@ -38,18 +39,24 @@ HEAD_SETTLE_S = 0.5
 PLACEMENTS = 20
 PLACEMENT_SEED = 2005
 #: Measured over the 20 seeded placements, in the robot's frame: median 0.2 mm, max 0.2 mm (ideal depth); in the
-#: world median 17.2 mm, max 17.3 mm (the walk's odometry error, 17.4 mm).
+#: world median 2.3 mm, max 3.0 mm (leg odometry after the 1.0 m walk: BODY 0.8 mm off, and its heading
+#: 0.04 deg; with the gait plan's odometry it was 17.2 / 17.3 mm).
 #: Required [issue 11]: < 15 mm.
 CAN_ERROR_LIMIT_M = 0.015
+#: What the world error may grow to before this test says so: the 3.0 mm measured plus 2 mm.
+CAN_WORLD_ERROR_BOUND_M = 0.005
 #: The first 5 placements again with 1 px of stereo disparity noise (9 mm of depth noise at 1.2 m): max 3.5 mm.
 NOISY_PLACEMENTS = 5
 DISPARITY_NOISE_PX = 1.0
 #: To the trash box: walk 0.4 m on to (1.4, 0) and turn -90 deg; head pitched 20 deg down, about 2 m away.
 BOX_WALK = (0.4, 0.0, -math.pi / 2)
 BOX_HEAD_PITCH_DEG = 20.0
-#: Measured from 1.98 m: hole centre 0.2 mm off in the robot's frame (37.7 mm in the world: the odometry of
-#: 1.4 m and a 90 deg turn); required [issue 11]: < 20 mm. Yaw allowed 1 deg.
+#: Measured from 1.98 m after 1.4 m and a 90 deg turn: hole centre 4.6 mm off in the world, 2.4 mm relative to
+#: the estimated BODY (with the gait plan's odometry: 37.7 mm and 0.2 mm); required [issue 11]: < 20 mm. Yaw
+#: allowed 1 deg.
 BOX_ERROR_LIMIT_M = 0.020
+#: What the world error may grow to before this test says so: the 4.6 mm measured plus 3.4 mm.
+BOX_WORLD_ERROR_BOUND_M = 0.008
 BOX_YAW_LIMIT_DEG = 1.0
 
 
@@ -95,7 +102,7 @@ class Robot:
     def estimates(self) -> tuple[np.ndarray, np.ndarray]:
         """(T_world_camera, T_world_body) as the robot estimates them now: the snapshot's, no ground truth."""
         snap = self.sim.host.observation.snapshot
-        args = (snap.q_meas_rad, snap.base_rpy_est_rad, snap.cog_world)
+        args = (snap.q_meas_rad, snap.base_rpy_est_rad, snap.odometry)
         return T_world_camera_estimate(self.kin, *args, CAMERA), T_world_body_estimate(self.kin, *args)
 
     @property
@@ -176,10 +183,9 @@ def test_the_can_is_located_within_15_mm_at_20_random_places_on_the_table(expo_r
                f"world: median {1e3 * np.median(world_m):.1f} mm, max {1e3 * world_m.max():.1f} mm; "
                f"BODY odometry error {1e3 * odometry_m.max():.1f} mm")
     print(figures)
-    assert float(np.median(errors_m)) < CAN_ERROR_LIMIT_M, figures
     assert float(errors_m.max()) < CAN_ERROR_LIMIT_M, figures
-    # in the world the walk's odometry error adds on, and nothing more
-    assert np.all(world_m < CAN_ERROR_LIMIT_M + odometry_m), figures
+    assert float(world_m.max()) < CAN_ERROR_LIMIT_M, figures
+    assert float(world_m.max()) < CAN_WORLD_ERROR_BOUND_M, figures
 
 
 def test_the_can_is_located_within_15_mm_with_stereo_depth_noise(expo_run):
@@ -233,6 +239,7 @@ def test_the_trash_box_hole_is_located_within_20_mm_from_about_2_m(expo_run):
     print(f"trash box from {distance_m:.2f} m: hole centre {1e3 * error_m:.1f} mm off in the robot's frame, "
           f"{1e3 * np.linalg.norm(r.position_world_m - hole_m):.1f} mm in the world")
     assert error_m < BOX_ERROR_LIMIT_M
+    assert np.linalg.norm(r.position_world_m - hole_m) < min(BOX_ERROR_LIMIT_M, BOX_WORLD_ERROR_BOUND_M)
     body_yaw_est = math.atan2(box["T_world_body"][1, 0], box["T_world_body"][0, 0])
     body_yaw_true = math.atan2(box["T_world_body_true"][1, 0], box["T_world_body_true"][0, 0])
     yaw_error = (r.yaw_rad - body_yaw_est) - (0.0 - body_yaw_true)  # the hole's long side relative to BODY
