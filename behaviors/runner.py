@@ -127,7 +127,7 @@ class BehaviorRunner:
                 raise InvalidState(f"{behavior.name} refused: {shared} driven by run {other.id} "
                                    f"({other.behavior.name}); cancel it or wait until it ends")
         run = _Run(self._next_id, behavior, now, points, resources)
-        behavior.start(self._context(run, now, _view(op, self._world_from_control)))  # may raise: the run is refused
+        behavior.start(self._context(run, now, self._placed_view(op)))  # may raise: the run is refused
         self._next_id += 1
         self._running[run.id] = run
         self.version += 1
@@ -190,7 +190,7 @@ class BehaviorRunner:
         if not self._running and not self._zero_walk:
             return
         op = self._op()
-        view = _view(op, self._world_from_control)  # once for every run: the op layer's FK costs ~0.2 ms
+        view = self._placed_view(op)  # once for every run: the op layer's FK costs ~0.2 ms
         outputs: list[Mapping[str, Twist]] = []
         walk: WalkCommand | None = None
         for run in list(self._running.values()):
@@ -235,6 +235,9 @@ class BehaviorRunner:
             op.set_behavior(sum_per_point(*outputs), walk)
 
     # ---- pieces ----------------------------------------------------------------------------------------------------
+    def _placed_view(self, op: OperationPort | None) -> OperationView | None:
+        return _view(op, self._world_from_control)
+
     def _context(self, run: _Run, time_s: float, view: OperationView | None) -> Context:
         return Context(time_s=float(time_s), elapsed_s=float(time_s) - run.started_s, dt_s=self.dt_s,
                        view=view, commands=self.commands)
@@ -242,7 +245,7 @@ class BehaviorRunner:
     def _end(self, run: _Run, state: str, message: str, interrupted: bool) -> None:
         """Finish a run. Its twists are no longer summed from the next tick on (set_behavior holds for one
         tick only), so nothing it commanded keeps moving; an interrupted run's `stop` runs first."""
-        ctx = self._context(run, self._time_s, _view(self._op(), self._world_from_control) if interrupted else None)
+        ctx = self._context(run, self._time_s, self._placed_view(self._op()) if interrupted else None)
         if interrupted:
             try:
                 run.behavior.stop(ctx)

@@ -57,12 +57,12 @@ class WalkTo(Behavior):
     def _go(self, ctx: Context, d: np.ndarray, dtheta: float) -> None:
         """One goPos to the goal as the feet frame sees it now."""
         self.walk_plan_s = float(ctx.commands.go_pos(float(d[0]), float(d[1]), float(dtheta)))
-        self.plan_s += self.walk_plan_s + (SETTLE_S if self.plan_s > 0.0 else 0.0)
+        self.plan_s += self.walk_plan_s
         self.walk_started_s = ctx.elapsed_s
         self.seen_walking = False
 
-    def nominal_duration_s(self) -> float:
-        return getattr(self, "plan_s", 0.0) + SETTLE_S
+    def nominal_duration_s(self) -> float:  # each walk and its settling
+        return getattr(self, "plan_s", 0.0) + SETTLE_S * (1 + getattr(self, "corrections_made", 0))
 
     def progress(self, ctx: Context) -> float:
         if ctx.view is None or self.distance0_m == 0.0:

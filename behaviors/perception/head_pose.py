@@ -11,15 +11,11 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from controller.balance.leg_odometry import OdometryEstimate, yaw_of
-from controller.balance.state_estimation import FOOT_SENSORS
+from controller.balance.leg_odometry import OdometryEstimate
 from controller.kinematics.model import RobotKinematics
 from robot.generate import CAMERAS
-from robot.names import FORCE_SENSOR_NAMES
 
 #: The link the head cameras are mounted on.
 HEAD_LINK = "HEAD_LINK1"
@@ -53,16 +49,11 @@ def T_world_body_estimate(kin: RobotKinematics, q_rad, base_rpy_rad, odometry: O
     """BODY in the world (4, 4) as the robot estimates it; leaves `kin` at that configuration.
 
     q_rad (30,) encoders, JOINT_NAMES order; base_rpy_rad (3,) the KalmanFilter's BODY attitude; odometry: the
-    leg odometry of the same tick (the stance sole's place and heading in the world). BODY is placed so that
-    the encoders put the stance sole where the odometry has it, turned about the vertical by the odometry's
-    heading minus the KalmanFilter's for that sole."""
+    leg odometry of the same tick, which hangs BODY from the stance sole by these encoders and turns it about
+    the vertical by its heading less the KalmanFilter's (world_from_control's yaw)."""
     q, rpy, odo = _checked(q_rad, base_rpy_rad, odometry)
-    kin.update_rpy(np.zeros(3), rpy, q)  # BODY at the origin, the attitude estimate's axes
-    p_sole, R_sole = kin.frame_pose(FORCE_SENSOR_NAMES[FOOT_SENSORS[odo.stance]])
-    dyaw = odo.stance_yaw_rad - yaw_of(R_sole)
-    c, s = math.cos(dyaw), math.sin(dyaw)
-    base_pos_world = np.asarray(odo.p_stance_world_m) - np.array(
-        (c * p_sole[0] - s * p_sole[1], s * p_sole[0] + c * p_sole[1], p_sole[2]))
+    base_pos_world = np.array(odo.p_body_world_m)
+    dyaw = odo.world_from_control[3]
     kin.update_rpy(base_pos_world, (rpy[0], rpy[1], rpy[2] + dyaw), q)  # Rz(dyaw) Rz(y) Ry(p) Rx(r)
     T = np.eye(4)
     T[:3, :3] = kin.frame_pose("BODY")[1]

@@ -38,8 +38,10 @@ class OdometryEstimate:
     stance: int  # the foot carrying the robot: 0 the right sole, 1 the left (the force sensors' order)
     p_stance_world_m: tuple[float, float, float]  # its sole sensor's origin in the world [m]
     stance_yaw_rad: float  # its yaw in the world [rad]
+    p_body_world_m: tuple[float, float, float]  # BODY hung from the stance sole by the encoders [m]
     #: the controller's frame (the gait plan's) placed in the world: (x [m], y [m], z [m], yaw [rad]); a point p
-    #: of the plan is at Rz(yaw) p + (x, y, z) in the world (control_to_world)
+    #: of the plan is at Rz(yaw) p + (x, y, z) in the world (control_to_world). The yaw is also BODY's heading
+    #: in the world less the KalmanFilter's
     world_from_control: tuple[float, float, float, float]
     switches: int  # stance changes since the start (a step is one)
 
@@ -101,10 +103,9 @@ class LegOdometry:
         (px, py, pz), (wx, wy, wz) = p_soles_from_body_m[s], self.p_stance_world_m
         bx, by, bz = wx - (c * px - si * py), wy - (si * px + c * py), wz - pz
         cx, cy, cz = (float(v) for v in p_body_control_m)
-        world_from_control = (bx - (c * cx - si * cy), by - (si * cx + c * cy), bz - cz, dyaw)
         return OdometryEstimate(stance=s, p_stance_world_m=self.p_stance_world_m,
-                                stance_yaw_rad=self.stance_yaw_rad,
-                                world_from_control=tuple(float(v) for v in world_from_control),
+                                stance_yaw_rad=self.stance_yaw_rad, p_body_world_m=(bx, by, bz),
+                                world_from_control=(bx - (c * cx - si * cy), by - (si * cx + c * cy), bz - cz, dyaw),
                                 switches=self.switches)
 
     def _maybe_switch(self, p_soles, R_soles, fz, z_body_control_m: float) -> None:

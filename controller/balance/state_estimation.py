@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from controller.balance.leg_odometry import LegOdometry, OdometryEstimate
+from controller.balance.leg_odometry import LegOdometry
 from controller.core.types import Estimate, Reference, read_only
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import rows_mul, rows_tmul
@@ -131,7 +131,6 @@ class ActualStateEstimator:
         self._soles: np.ndarray | None = None
         #: where the feet are in the world (leg odometry), beside the plan's frame the anchoring above uses
         self.odometry = LegOdometry()
-        self.last_odometry: OdometryEstimate | None = None
 
     def reference_soles(self, ref: Reference) -> np.ndarray:
         """World positions of the two sole sensors in the reference posture, (2, 3), read-only.
@@ -153,7 +152,7 @@ class ActualStateEstimator:
         if not any(pos[r]) and not any(pos[left]):  # no kinematics measured yet (the loop's first snapshot)
             return
         R = est.sensor_R_world.tolist()
-        self.last_odometry = est.odometry = self.odometry.update(
+        est.odometry = self.odometry.update(
             (pos[r], pos[left]), (R[r], R[left]), (wrench_rows[r][2], wrench_rows[left][2]), p_body,
             walking)
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.core.errors import InvalidCommand
+from controller.kinematics.rotations import wrap_rad
 from robot.sensors import frozen_array
 
 #: The operational points, in the order they are solved and reported.
@@ -157,6 +158,5 @@ class OperationView:
                                   R_world_point=frozen_array(Rz @ pose.R_world_point),
                                   p_feet_m=pose.p_feet_m, R_feet_point=pose.R_feet_point)
                   for name, pose in self.points.items()}
-        yaw_f = math.atan2(math.sin(self.feet_yaw_rad + yaw), math.cos(self.feet_yaw_rad + yaw))
         return dataclasses.replace(self, feet_p_world_m=frozen_array(Rz @ self.feet_p_world_m + t),
-                                   feet_yaw_rad=yaw_f, points=points)
+                                   feet_yaw_rad=wrap_rad(self.feet_yaw_rad + yaw), points=points)
