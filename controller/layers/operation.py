@@ -372,8 +372,10 @@ class OperationLayer(Layer):
                         continue
                     twist = ZERO_TWIST  # slowing down to rest
                 if point not in self._targets:
-                    if not seeded:
-                        self.kin.update(p_body, R_body, ref.q_rad)  # FK in F of the posture as balanced
+                    if not seeded:  # FK in F of the posture as balanced, the upper body as last operated
+                        operated = self._last_out if self._targets and self._last_out is not None else None
+                        q_seed = ref.q_rad if operated is None else np.where(_IS_UPPER, operated.q_rad, ref.q_rad)
+                        self.kin.update(p_body, R_body, q_seed)
                         seeded = True
                     self._targets[point] = self._seed(point, anchor, float(F.p[2]) - self._ground_z(gait, F))
                 limited = limit_twist(twist, *self._speed_limits(point))

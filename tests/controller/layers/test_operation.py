@@ -233,3 +233,19 @@ def test_the_view_is_the_full_forward_kinematics_of_the_output_and_computed_once
     later = op.view()
     assert later is not view and later.time_s == pytest.approx(30 * DT)
     assert later.points["rhand"].p_world_m[0] > view.points["rhand"].p_world_m[0]  # it moved on
+
+
+def test_a_hand_taken_up_while_the_other_moved_the_torso_starts_where_the_view_shows_it(shared_ik):
+    """The second hand's first target is its pose in the posture as operated (the torso the first hand's IK
+    turned), not in the input reference's: the behaviours plan from the view, and a target seeded from the
+    reference put the hand off by what the torso had moved (10 mm measured: take_can's first reach)."""
+    op = layer(shared_ik)
+    move = Twist.of((0.15, 0.15, 0.1))  # the left hand forward, out and up: the torso helps
+    run(op, 400, before=lambda k, t: op.set_motion("lhand", move, t))
+    torso = np.degrees(np.abs(op._last_out.q_rad[12:14]))
+    assert torso.max() > 2.0, torso  # the torso did move (chest yaw, pitch [deg])
+    seen = np.array(op.view().points["rhand"].p_feet_m)
+    nudge = Twist.of((1e-4, 0.0, 0.0))
+    run(op, 1, t0=400 * DT, before=lambda k, t: op.set_motion("rhand", nudge, t))
+    target = np.array(op.status().to_dict()["points"]["rhand"]["target"][:3])
+    assert np.linalg.norm(target - seen) < 1e-4  # within the nudge's few um of the view
