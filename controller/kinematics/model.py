@@ -102,14 +102,16 @@ class RobotKinematics:
         return M.translation.copy(), M.rotation.copy()
 
     def joint_below(self, sensor: str) -> int:
-        """The pinocchio joint id whose subtree is the part below a force sensor (its `data.mass[j]` and
-        `data.com[j]` are that part's mass and COM after an update)."""
+        """The pinocchio joint id whose subtree is the part below a force sensor (its `data.mass[j]` is that
+        part's mass, and `data.com[j]` its COM in the joint's own frame, after an update: pinocchio keeps the
+        subtree COMs of j > 0 in the joint frame, only com[0] in the world; `mass_below` gives it in the world)."""
         return self._below_joint[sensor]
 
     def mass_below(self, sensor: str) -> tuple[float, np.ndarray]:
         """Mass [kg] and world COM [m] of the links below a force sensor."""
         j = self._below_joint[sensor]
-        return float(self.data.mass[j]), self.data.com[j].copy()
+        M = self.data.oMi[j]
+        return float(self.data.mass[j]), M.rotation @ self.data.com[j] + M.translation
 
     def frame_jacobian(self, frame_id: int, base_pos_world, base_R_world, q_rad,
                        reference=pin.LOCAL) -> tuple[pin.SE3, np.ndarray]:
