@@ -55,10 +55,13 @@ LEFT_HAND_SHIFT_M = (0.05, 0.05, 0.05)  # [m] the left hand forward, out and up,
 #: standing up stops on that limit at hand height 0.57 m. Out to the right and back while the hand turns -30 deg
 #: about the vertical, the forearm turns back and the elbow bends. Planned on the robot's kinematic model: a
 #: joint-space line from the lift's arm posture to a solution of the last pose with RARM_JOINT4 at 14 deg (the
-#: object within 12 deg of upright along it), sampled at fifths.
+#: object within 12 deg of upright along it), sampled at fifths; then the fourth point moved 1 cm forward and the
+#: fifth 1 cm up: on the line itself the elbow (RARM_LINK3) passed 10 mm from the chest, 5 mm outside the
+#: CollisionDetector's margin, and a 1 cm change of the approach either way could stop the task; from the moved
+#: points the arm turns over away from the chest (its 8 neighbours 5-10 mm off all succeed).
 UNWIND_WAYPOINTS = (((0.266, -0.369, 0.287), (-6.6, -5.5, -5.2)), ((0.281, -0.382, 0.303), (-13.1, -9.0, -7.6)),
-                    ((0.281, -0.377, 0.311), (-19.1, -9.5, -7.2)), ((0.262, -0.358, 0.309), (-24.6, -6.7, -4.5)),
-                    ((0.22, -0.33, 0.30), (-30.0, 0.0, 0.0)))
+                    ((0.281, -0.377, 0.311), (-19.1, -9.5, -7.2)), ((0.272, -0.358, 0.309), (-24.6, -6.7, -4.5)),
+                    ((0.22, -0.33, 0.31), (-30.0, 0.0, 0.0)))
 CARRY_YAW_RAD = math.radians(-30.0)  # the hand turned this far about the vertical to carry and place
 #: The held object's centre [m]: as the robot stands up, then raised behind the table's near edge (its front
 #: corner behind the edge), then its bottom above the table top

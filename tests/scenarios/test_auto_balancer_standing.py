@@ -33,9 +33,9 @@ def test_arms_forward_keeps_the_simulated_com_over_the_feet_only_with_the_auto_b
     assert snap.truth.com_world[0] - mid[0] > 0.03
 
 
-#: [m] |measured ZMP x - feet middle| under the 50 N pull with Eq. 6: measured 6.8 mm (README: 7 mm),
-#: margin 3.2 mm (~50 %).
-PULL_ZMP_ERROR_M = 0.010
+#: [m] |measured ZMP x - feet middle| under the 50 N pull with Eq. 6: measured 2.0 mm (README; 6.8 mm while the
+#: F/T weight compensation read a phantom moment at the wrist), margin 3 mm.
+PULL_ZMP_ERROR_M = 0.005
 
 
 def pull_one_hand_down(use_hand_force_offset: bool = True):
@@ -71,8 +71,8 @@ def test_a_50_newton_downward_pull_at_one_hand_is_balanced_by_offsetting_the_cog
     assert abs((mid[0] - gait.cog_world[0]) - 0.0582) < 0.006
     # so the measured ZMP stays near the middle of the feet
     assert abs(snap.zmp_world[0] - mid[0]) < PULL_ZMP_ERROR_M
-    # [deg] measured 0.96, margin 30 % (0.83 before issue 13.1's KalmanFilter gyro trust)
-    assert worst < 1.25
+    # [deg] measured 0.89, margin 30 % (0.83 before issue 13.1's KalmanFilter gyro trust)
+    assert worst < 1.16
     assert not snap.fallen
 
 
@@ -83,5 +83,5 @@ def test_without_eq_6_the_same_pull_moves_the_zmp_forward_past_the_bound():
     assert abs(mid[0] - gait.cog_world[0]) < 1e-3  # no COG offset
     err = snap.zmp_world[0] - mid[0]
     assert err > PULL_ZMP_ERROR_M
-    assert err > 0.030  # [m] measured 41 mm forward, margin 25 %
+    assert err > 0.034  # [m] measured 45.6 mm forward, margin 25 %
     assert not snap.fallen

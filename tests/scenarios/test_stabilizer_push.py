@@ -29,27 +29,27 @@ def push_and_watch(impulse_ns: np.ndarray, stabilizer: bool = True, seconds: flo
 #: Bounds are the measured figure times this (30 % margin): the simulation is deterministic on one machine;
 #: the margin is for another machine's floating point and for small changes of the controller.
 MARGIN = 1.3
-#: [m] the CP error once the robot has settled: measured 1.2-2.3 mm over the pushes below (standing still
-#: it stays under 2 mm), margin 50 %.
-SETTLED_CP_ERROR_M = 0.0035
+#: [m] the CP error once the robot has settled: measured 0.4-2.0 mm over the pushes below (1.2-2.3 mm before
+#: the F/T sensors' weight compensation took the weight about the world COM), margin 50 %.
+SETTLED_CP_ERROR_M = 0.0030
 
 
-@pytest.mark.parametrize("impulse, measured_tilt_deg", [((20.0, 0.0, 0.0), 2.75), ((0.0, 30.0, 0.0), 4.02),
-                                                         ((-15.0, 0.0, 0.0), 2.60)],
+@pytest.mark.parametrize("impulse, measured_tilt_deg", [((20.0, 0.0, 0.0), 2.68), ((0.0, 30.0, 0.0), 3.98),
+                                                         ((-15.0, 0.0, 0.0), 2.31)],
                          ids=["forward-20Ns", "left-30Ns", "backward-15Ns"])
 def test_a_push_on_body_is_absorbed_with_the_stabilizer_on(impulse, measured_tilt_deg):
     fallen, worst, snaps = push_and_watch(np.array(impulse))
     assert not fallen
     assert worst < MARGIN * measured_tilt_deg, f"worst tilt {worst:.2f} deg, measured {measured_tilt_deg} deg"
-    # and it comes back: 4 s after the push the capture-point error is that of standing again (measured 1.2,
-    # 1.8, 2.0 mm)
+    # and it comes back: 4 s after the push the capture-point error is that of standing again (measured 0.4,
+    # 0.9, 1.4 mm)
     assert snaps[-1].layers["st"].cp_error_norm < SETTLED_CP_ERROR_M
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("impulse, stabilizer, measured_tilt_deg", [
-    ((26.0, 0.0, 0.0), True, 5.51), ((0.0, 40.0, 0.0), True, 11.22), ((0.0, -40.0, 0.0), True, 11.06),
-    ((-20.0, 0.0, 0.0), True, 5.19),
+    ((26.0, 0.0, 0.0), True, 5.48), ((0.0, 40.0, 0.0), True, 11.29), ((0.0, -40.0, 0.0), True, 11.17),
+    ((-20.0, 0.0, 0.0), True, 5.08),
     ((22.0, 0.0, 0.0), False, 4.16), ((0.0, 40.0, 0.0), False, 10.18), ((0.0, -40.0, 0.0), False, 10.19)],
     ids=["st-forward-26Ns", "st-left-40Ns", "st-right-40Ns", "st-backward-20Ns", "no-st-forward-22Ns",
          "no-st-left-40Ns", "no-st-right-40Ns"])
@@ -64,7 +64,7 @@ def test_the_largest_pushes_the_readme_claims_are_absorbed(impulse, stabilizer, 
     assert not fallen
     assert snaps[-1].layers["abc"].emergency_steps == ()
     assert worst < MARGIN * measured_tilt_deg, f"worst tilt {worst:.2f} deg, measured {measured_tilt_deg} deg"
-    settled = max(s.layers["st"].cp_error_norm for s in snaps[-200:])  # the last second (measured 1.6-2.3 mm)
+    settled = max(s.layers["st"].cp_error_norm for s in snaps[-200:])  # the last second (measured 0.9-1.7 mm)
     assert settled < SETTLED_CP_ERROR_M
 
 
@@ -96,8 +96,9 @@ def test_a_20ns_forward_push_settles_without_ringing():
     # issue 13.1: the capture-point error crosses the threshold once, the measured ZMP never reaches the heel
     # edge, and the error is under 10 mm from 1 s after its peak on. Measured: 1 crossing (4 before the
     # attitude estimate trusted the gyro while BODY turns and the standing pitch damping was 300), ZMP at
-    # least 26.5 mm in front of the heel edge (it sat on it for 0.45 s before), 6.0 mm (62 mm before); with
-    # the accelerometer's tilt instead of the soles' (before issue 13.2) 16.7 mm and 5.1 mm.
+    # least 24.1 mm in front of the heel edge (it sat on it for 0.45 s before), 6.2 mm (62 mm before); with
+    # the accelerometer's tilt instead of the soles' (before issue 13.2) 16.7 mm and 5.1 mm; with the soles'
+    # tilt but the F/T sensors' weight compensation about the wrong COM, 26.5 and 6.0 mm.
     from controller.balance.capture_point import HRP2_RIGHT_SOLE
 
     fallen, _, snaps = push_and_watch(np.array([20.0, 0.0, 0.0]), seconds=3.0)
@@ -109,7 +110,7 @@ def test_a_20ns_forward_push_settles_without_ringing():
     ankle_x = snaps[0].reference.gait.p_rsole_world[0]
     zmp_from_ankle_x = np.array([s.zmp_world[0] for s in snaps]) - ankle_x
     heel_clearance_m = zmp_from_ankle_x.min() + HRP2_RIGHT_SOLE.rear_m
-    assert heel_clearance_m > 0.0265 / MARGIN, f"measured ZMP {heel_clearance_m * 1e3:.1f} mm from the heel edge"
+    assert heel_clearance_m > 0.0241 / MARGIN, f"measured ZMP {heel_clearance_m * 1e3:.1f} mm from the heel edge"
     peak = int(np.argmax(errors))
     late = errors[peak + int(1.0 / (snaps[1].time_s - snaps[0].time_s)):]
-    assert late.max() < MARGIN * 0.0060, f"|CP error| {late.max() * 1e3:.1f} mm 1 s after its peak"
+    assert late.max() < MARGIN * 0.0062, f"|CP error| {late.max() * 1e3:.1f} mm 1 s after its peak"

@@ -10,18 +10,18 @@ prediction; now 0.11-0.13 at most):
 
 | walk | CP p99 | CP max | pitch max | roll max |
 |---|---|---|---|---|
-| goPos 3 m forward | 14.3 (25.0; 82.3) | 19.6 (26.3; 104.9) | 0.06 (0.82) | 0.12 (0.63) |
-| goPos 1 m left | 17.5 (20.7; 57.6) | 24.8 (29.0; 65.2) | 0.04 (0.52) | 0.15 (0.82) |
-| goPos turn 180 deg | 16.2 (18.7; 42.5) | 18.4 (21.2; 45.9) | 0.05 (0.39) | 0.14 (0.79) |
-| goVelocity 20 s, three velocities | 18.4 (23.9; 65.9) | 22.8 (26.3; 100.0) | 0.06 (0.77) | 0.14 (0.66) |
-| toe 20 / heel 10 deg footsteps | 17.4 (31.4; 53.4) | 17.8 (33.4; 62.4) | 0.09 (1.22) | 0.11 (0.81) |
+| goPos 3 m forward | 14.4 (25.0; 82.3) | 18.9 (26.3; 104.9) | 0.06 (0.82) | 0.12 (0.63) |
+| goPos 1 m left | 17.4 (20.7; 57.6) | 22.0 (29.0; 65.2) | 0.04 (0.52) | 0.15 (0.82) |
+| goPos turn 180 deg | 16.1 (18.7; 42.5) | 18.1 (21.2; 45.9) | 0.05 (0.39) | 0.14 (0.79) |
+| goVelocity 20 s, three velocities | 18.2 (23.9; 65.9) | 21.9 (26.3; 100.0) | 0.06 (0.77) | 0.14 (0.66) |
+| toe 20 / heel 10 deg footsteps | 17.1 (31.4; 53.4) | 17.4 (33.4; 62.4) | 0.09 (1.22) | 0.11 (0.81) |
 
 The issue's goal (p99 <= 25 mm, max <= 40 mm) is met by every walk; none raises the flag (40 mm), nor do 100 m
-of mixed goVelocity walking (CP error max 21.8 mm; 29.3 before the prediction).
+of mixed goVelocity walking (CP error max 21.7 mm; 29.3 before the prediction).
 
 Pushes on BODY (0.1 s) during a 0.1 m/s walk: whether the robot stands depends on the phase of the step.
-Pushed 3 s into the walk, 20 N s backward (CP error peak 66 mm), 20 N s to the right (57 mm) and 15 N s
-forward (64 mm) raise the flag, the walk stops in place and the robot stands (with the flag off, before,
+Pushed 3 s into the walk, 20 N s backward (CP error peak 66 mm), 20 N s to the right (59 mm) and 15 N s
+forward (65 mm) raise the flag, the walk stops in place and the robot stands (with the flag off, before,
 these stood too and walked on). 20 N s forward, or to the left at 3 s, or backward at 3.5 s, fall with the flag
 and without it: the emergency step of issue 13.3 is for those.
 """
@@ -38,7 +38,7 @@ THRESHOLD_M = StabilizerParams().cp_threshold_m
 #: for another machine's floating point and small controller changes (every max + margin stays <= 40 mm)
 CP_MARGIN_M = 0.005
 #: [m] the CP error max over the 100 m mixed walk (test_a_hundred_metres_of_mixed_walking_raise_no_flag)
-MIXED_MEASURED_MAX_M = 0.0218  # measured 21.8 mm (29.3 before the LIP prediction)
+MIXED_MEASURED_MAX_M = 0.0217  # measured 21.7 mm (29.3 before the LIP prediction)
 #: [deg] the KalmanFilter's roll and pitch error while walking: measured 0.13 deg at most (0.11-0.13 over the
 #: walks; 0.04-0.15 before the LIP prediction; 0.39-1.22 with the accelerometer's tilt), margin 0.1 deg
 MAX_ATTITUDE_ERROR_DEG = 0.23
@@ -108,11 +108,11 @@ def walk(name: str) -> WalkWatch:
 
 
 WALKS = [  # name, measured CP error p99, max [m]
-    pytest.param("toe-heel", 0.0174, 0.0178, id="toe-heel"),
-    pytest.param("3m-forward", 0.0143, 0.0196, id="3m-forward", marks=pytest.mark.slow),
-    pytest.param("1m-left", 0.0175, 0.0248, id="1m-left", marks=pytest.mark.slow),
-    pytest.param("turn-180", 0.0162, 0.0184, id="turn-180", marks=pytest.mark.slow),
-    pytest.param("go-velocity", 0.0184, 0.0228, id="go-velocity", marks=pytest.mark.slow),
+    pytest.param("toe-heel", 0.0171, 0.0174, id="toe-heel"),
+    pytest.param("3m-forward", 0.0144, 0.0189, id="3m-forward", marks=pytest.mark.slow),
+    pytest.param("1m-left", 0.0174, 0.0220, id="1m-left", marks=pytest.mark.slow),
+    pytest.param("turn-180", 0.0161, 0.0181, id="turn-180", marks=pytest.mark.slow),
+    pytest.param("go-velocity", 0.0182, 0.0219, id="go-velocity", marks=pytest.mark.slow),
 ]
 
 
@@ -144,7 +144,7 @@ STANDING_TILT_DEG = 0.5
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("impulse_ns", "measured_peak_m"), [((-20.0, 0.0, 0.0), 0.066), ((0.0, -20.0, 0.0), 0.057)],
+@pytest.mark.parametrize(("impulse_ns", "measured_peak_m"), [((-20.0, 0.0, 0.0), 0.066), ((0.0, -20.0, 0.0), 0.059)],
                          ids=["backward-20Ns", "right-20Ns"])
 def test_a_push_during_a_walk_raises_the_flag_and_the_robot_stops_and_stands(impulse_ns, measured_peak_m):
     system = make_system()
@@ -209,7 +209,7 @@ MIXED_CYCLE = (((0.15, 0.0, 0.0), 20.0), ((0.1, 0.03, np.radians(10.0)), 15.0), 
 def test_a_hundred_metres_of_mixed_walking_raise_no_flag():
     """goVelocity forward, turning both ways, backward and sideways, stopping after each cycle, until BODY has
     covered 100 m (its position every 2 s, a step pair, so the sway does not count). Measured: CP error max
-    21.8 mm (29.3 before the LIP prediction), no flag, no fall."""
+    21.7 mm (29.3 before the LIP prediction), no flag, no fall."""
     system = make_system()
     loop = system.loop
     abc = system.chain["abc"]
