@@ -135,11 +135,11 @@ class AutoBalancerParams(Params):
     emergency_step_zmp_margin_m: float = field(default=0.015, metadata={"unit": "m", "min": 0.0, "max": 0.05})
     emergency_step_initial_double_support_s: float = field(default=0.05, metadata={"unit": "s", "min": 0.005,
                                                                                    "max": 0.5})
-    emergency_step_time_s: float = field(default=0.45, metadata={"unit": "s", "min": 0.2, "max": 1.5})
+    emergency_step_time_s: float = field(default=0.3, metadata={"unit": "s", "min": 0.2, "max": 1.5})
     emergency_step_double_support_ratio: float = field(default=0.2, metadata={"unit": "-", "min": 0.05, "max": 0.5})
     emergency_step_final_double_support_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.2, "max": 5.0})
     emergency_step_height_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.01, "max": 0.1})
-    emergency_step_max_forward_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.0, "max": 0.7})
+    emergency_step_max_forward_m: float = field(default=0.55, metadata={"unit": "m", "min": 0.0, "max": 0.7})
     emergency_step_max_backward_m: float = field(default=0.4, metadata={"unit": "m", "min": 0.0, "max": 0.7})
     emergency_step_min_width_m: float = field(default=0.16, metadata={"unit": "m", "min": 0.14, "max": 0.4})
     emergency_step_max_width_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.16, "max": 0.7})

@@ -42,13 +42,13 @@ class EmergencyStepParams(Params):
     # double support before the swing (the ZMP goes to the stance sole), the step (swing and the double support
     # after it), the share of the step after the landing, the double support that ends standing
     initial_double_support_s: float = field(default=0.05, metadata={"unit": "s", "min": 0.005, "max": 0.5})
-    step_time_s: float = field(default=0.45, metadata={"unit": "s", "min": 0.2, "max": 1.5})
+    step_time_s: float = field(default=0.3, metadata={"unit": "s", "min": 0.2, "max": 1.5})
     double_support_ratio: float = field(default=0.2, metadata={"unit": "-", "min": 0.05, "max": 0.5})
     final_double_support_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.2, "max": 5.0})
     step_height_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.01, "max": 0.1})
     # the landing sole relative to the stance sole, in its frame: reach forward and backward, and sideways at
     # least min_width_m (the soles do not overlap nor cross) and at most max_width_m
-    max_forward_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.0, "max": 0.7})
+    max_forward_m: float = field(default=0.55, metadata={"unit": "m", "min": 0.0, "max": 0.7})
     max_backward_m: float = field(default=0.4, metadata={"unit": "m", "min": 0.0, "max": 0.7})
     min_width_m: float = field(default=0.16, metadata={"unit": "m", "min": 0.14, "max": 0.4})
     max_width_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.16, "max": 0.7})

@@ -57,3 +57,16 @@ def test_disabled_limiter_is_identity():
     el.enabled = False
     ref = Reference.from_arrays(np.full(N, 9.0))
     assert el.tick(make_ctx(q=np.zeros(N)), ref) is ref
+
+
+def test_while_the_auto_balancer_takes_an_emergency_step_the_legs_have_their_own_velocity_limit():
+    p = SoftErrorLimiterParams(velocity_limit_rad_s=3.5, emergency_step_velocity_limit_rad_s=4.5, error_limit_rad=3.0)
+    dt = 0.005
+    for stepping, legs_rad_s in ((False, 3.5), (True, 4.5), (False, 3.5)):
+        el = SoftErrorLimiter(LO, HI, np.zeros(N), p)
+        ctx = make_ctx(q=np.zeros(N), dt=dt)
+        ctx.ports.emergency_step = stepping  # the AutoBalancer's port, set earlier in the same tick
+        out = el.tick(ctx, Reference.from_arrays(np.full(N, 0.5)))
+        assert np.allclose(out.q_rad[:12], legs_rad_s * dt)  # RLEG, LLEG
+        assert np.allclose(out.q_rad[12:], 3.5 * dt)  # the torso, head and arms keep the everyday limit
+        assert len(el.status().limited.velocity) == N
