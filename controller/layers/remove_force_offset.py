@@ -19,6 +19,10 @@ read_only(_ZERO3)
 _NO_OFFSETS = bytes(8 * 6 * len(FORCE_SENSOR_NAMES))  # the bytes of all-zero offsets (a cheap test)
 
 
+#: [1/rad] the COM below a sensor is recomputed when a joint further down (the jaw) moves by 1e-4 rad: the jaw's
+#: encoder jitters by ~1e-8 rad every tick, and 1e-4 rad moves the hand's COM by 0.33 um (a moment of 3 uN m)
+_COM_KEY_PER_RAD = 1e4
+
 @dataclass(frozen=True)
 class RemoveForceOffsetParams(Params):
     gravity_m_s2: float = field(default=GRAVITY_M_S2, metadata={"unit": "m/s^2", "min": 0.0, "max": 20.0})
@@ -60,6 +64,12 @@ class RemoveForceOffset(Layer):
         self._frame_ids: list[int] | None = None  # sensor frames and the joints below them, FORCE_SENSOR_NAMES order
         self._below_joints: list[int] = []
         self._masses: list[float] = []
+        # per sensor: the joint below it, the mass below it, the q indices of the joints further down, sensor <-
+        # joint rotation and the sensor's origin in the joint frame; the COMs in the sensor frames and the joint
+        # values they are for
+        self._below: list[tuple[int, float, list[int], np.ndarray, np.ndarray]] = []
+        self._coms: list[tuple[float, float, float]] = []
+        self._com_keys: list[tuple | None] = []
         self._offsets_status = SharedStatus()
 
     def set_params(self, params: RemoveForceOffsetParams) -> None:
@@ -79,14 +89,13 @@ class RemoveForceOffset(Layer):
         est = ctx.estimate
         kin = self.kin
         kin.update_joints_rpy(_ZERO3, est.base_rpy_rad, ctx.sensors.q_rad)  # only the sensor frames are read
-        data = kin.data
         frame = kin.frame_homogeneous
         H = np.array([frame(fid) for fid in self._sensor_frame_ids()])  # (n, 4, 4) world <- sensor
         est.sensor_pos_from_base = H[:, :3, 3]  # sensor origins, world axes from BODY [m]
         est.sensor_R_world = H[:, :3, :3]
         H_rows = H.tolist()  # per sensor, rows of [R | p] as floats
         if self.enabled:
-            ext_rows = self._external_wrenches(H_rows, ctx.sensors.wrenches.tolist(), data)
+            ext_rows = self._external_wrenches(H_rows, ctx.sensors.wrenches.tolist())
             if self._calibrating:
                 self._calibrate_step(ext_rows, ctx.dt_s)
             if self.offsets.tobytes() != _NO_OFFSETS:  # ext - offsets (none before a calibration: x - 0 is x)
@@ -106,20 +115,30 @@ class RemoveForceOffset(Layer):
         est.com_from_base = kin.com_world()
         return ref
 
-    def _external_wrenches(self, H_rows: list, raw_rows: list, data) -> list[tuple[float, ...]]:
+    def _external_wrenches(self, H_rows: list, raw_rows: list) -> list[tuple[float, ...]]:
         """Each raw wrench minus the weight of the part below its sensor (gravity_wrench_in_sensor on floats:
-        f = R^T (0, 0, -m g), tau = R^T ((c - p) x f_world), the products with zero left out). The part's COM c
-        is pinocchio's subtree COM, which it keeps in the joint's frame: placed in the world by oMi[j] (taken
-        as a world COM it was 0.34 m off at the wrists, 0.09 m at the ankles: 2.7 and 1.5 N m of moment that
-        was not there)."""
+        f = R^T (0, 0, -m g), tau = R^T ((c - p) x f_world), the products with zero left out), with c - p = R c_s
+        from the part's COM in the sensor frame, c_s. pinocchio keeps a subtree's COM (data.com[j], j > 0) in its
+        joint's frame (taken as a world COM it was 0.34 m off at the wrists, 0.09 m at the ankles: 2.7 and 1.5 N m
+        of moment that was not there); the sensor is fixed in that joint's frame, so c_s only moves with the joints
+        further down (the gripper's jaw): recomputed when they move by 1 / _COM_KEY_PER_RAD (their encoders jitter
+        every tick)."""
         g = self.params.gravity_m_s2
+        q = self.kin.q
+        coms, keys = self._coms, self._com_keys
         out = []
-        for h, raw_i, j, mass in zip(H_rows, raw_rows, self._below_joints, self._masses, strict=True):
-            (a00, a01, a02, p0), (a10, a11, a12, p1), (a20, a21, a22, _), _ = h
+        for i, (h, raw_i, (j, mass, moving, s_R_j, j_p_s)) in enumerate(zip(H_rows, raw_rows, self._below,
+                                                                             strict=True)):
+            if moving:
+                key = [int(q.item(k) * _COM_KEY_PER_RAD) for k in moving]
+                if key != keys[i]:
+                    coms[i] = tuple((s_R_j @ (self.kin.data.com[j] - j_p_s)).tolist())
+                    keys[i] = key
+            s0, s1, s2 = coms[i]
+            (a00, a01, a02, _), (a10, a11, a12, _), (a20, a21, a22, _), _ = h
             fz = -mass * g
-            M = data.oMi[j]
-            c0, c1, _ = (M.rotation @ data.com[j] + M.translation).tolist()
-            t0, t1 = (c1 - p1) * fz, -((c0 - p0) * fz)  # (c - p) x (0, 0, fz), world; its z is 0
+            d0, d1 = a00 * s0 + a01 * s1 + a02 * s2, a10 * s0 + a11 * s1 + a12 * s2  # c - p, world, x and y
+            t0, t1 = d1 * fz, -(d0 * fz)  # (c - p) x (0, 0, fz), world; its z is 0
             out.append((raw_i[0] - a20 * fz, raw_i[1] - a21 * fz, raw_i[2] - a22 * fz,
                         raw_i[3] - (a00 * t0 + a10 * t1), raw_i[4] - (a01 * t0 + a11 * t1),
                         raw_i[5] - (a02 * t0 + a12 * t1)))
@@ -144,6 +163,15 @@ class RemoveForceOffset(Layer):
             self._below_joints = [kin.joint_below(s) for s in FORCE_SENSOR_NAMES]
             # a subtree's mass does not depend on the configuration: read once (after an update)
             self._masses = [float(kin.data.mass[j]) for j in self._below_joints]
+            model, data = kin.model, kin.data
+            self._below, self._coms = [], []
+            for fid, j, mass in zip(ids, self._below_joints, self._masses, strict=True):
+                j_M_s = model.frames[fid].placement  # the sensor in its joint's frame (fixed)
+                s_R_j, j_p_s = j_M_s.rotation.T.copy(), j_M_s.translation.copy()
+                moving = [int(model.joints[k].idx_q) for k in model.subtrees[j] if k != j]
+                self._below.append((j, mass, moving, s_R_j, j_p_s))
+                self._coms.append(tuple((s_R_j @ (data.com[j] - j_p_s)).tolist()))  # fixed if nothing moves
+            self._com_keys = [None] * len(ids)
         return ids
 
     def status(self) -> RemoveForceOffsetStatus:
