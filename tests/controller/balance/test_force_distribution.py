@@ -198,3 +198,24 @@ def test_changing_alpha_on_a_built_qp_gives_the_same_answer_as_a_new_qp():
         fresh = ForceDistributionQP(both_feet(), alpha).solve(np.array([0.01, -0.02]), MG)
         assert np.allclose(reused.fz_n, fresh.fz_n, atol=1e-9)
         assert np.allclose(reused.n_xy_nm, fresh.n_xy_nm, atol=1e-9)
+
+
+def test_a_target_projected_onto_the_edge_between_two_far_apart_heels_is_still_distributed():
+    """Measured in a sideways emergency step: the feet 0.45 m apart, a ZMP target beyond the edge from the right
+    heel to the left heel, alpha 0 (the right foot's weight 1e6 times the left's) while the target needs the right
+    foot's load: daqp found no forces (a controller fault); the fallback solver distributes them."""
+    right = np.array([[-0.0841096, -0.174], [0.1330904, -0.174], [0.1330904, -0.036], [-0.0841096, -0.036]])
+    left = np.array([[-0.0763037, 0.2744397], [0.1408963, 0.2744397], [0.1408963, 0.4124397],
+                     [-0.0763037, 0.4124397]])
+    qp = ForceDistributionQP([FootPolygon(right, right.mean(axis=0)), FootPolygon(left, left.mean(axis=0))])
+    qp.set_alpha(0.0)
+    for target in ((-0.0780, 0.35), (-0.0774, 0.3515), (-0.09, 0.1)):
+        forces = qp.solve(np.array(target), 560.0)
+        assert forces.projected
+        assert forces.fz_n.sum() == pytest.approx(560.0)
+        assert forces.fz_n[0] > 1.0  # the right foot carries its share
+        assert all((fs >= 0.0).all() for fs in forces.vertex_fz_n)
+        # the realised ZMP is on the edge: the nearest point of the hull
+        on_edge = np.array((-0.0841096, -0.036)) + np.array((0.0078059, 0.4484397)) * (
+            (target[1] + 0.036) / 0.4484397)
+        assert np.linalg.norm(forces.zmp_world_xy - on_edge) < 1e-3
