@@ -23,6 +23,7 @@ _NO_OFFSETS = bytes(8 * 6 * len(FORCE_SENSOR_NAMES))  # the bytes of all-zero of
 #: encoder jitters by ~1e-8 rad every tick, and 1e-4 rad moves the hand's COM by 0.33 um (a moment of 3 uN m)
 _COM_KEY_PER_RAD = 1e4
 
+
 @dataclass(frozen=True)
 class RemoveForceOffsetParams(Params):
     gravity_m_s2: float = field(default=GRAVITY_M_S2, metadata={"unit": "m/s^2", "min": 0.0, "max": 20.0})
@@ -62,14 +63,12 @@ class RemoveForceOffset(Layer):
         self.offsets = np.zeros((len(FORCE_SENSOR_NAMES), 6))
         self._calibrating: dict[str, list] = {}
         self._frame_ids: list[int] | None = None  # sensor frames and the joints below them, FORCE_SENSOR_NAMES order
-        self._below_joints: list[int] = []
-        self._masses: list[float] = []
         # per sensor: the joint below it, the mass below it, the q indices of the joints further down, sensor <-
         # joint rotation and the sensor's origin in the joint frame; the COMs in the sensor frames and the joint
         # values they are for
         self._below: list[tuple[int, float, list[int], np.ndarray, np.ndarray]] = []
         self._coms: list[tuple[float, float, float]] = []
-        self._com_keys: list[tuple | None] = []
+        self._com_keys: list[list[int] | None] = []
         self._offsets_status = SharedStatus()
 
     def set_params(self, params: RemoveForceOffsetParams) -> None:
@@ -160,12 +159,11 @@ class RemoveForceOffset(Layer):
         if ids is None:
             kin = self.kin
             ids = self._frame_ids = [kin.frame_ids[s] for s in FORCE_SENSOR_NAMES]
-            self._below_joints = [kin.joint_below(s) for s in FORCE_SENSOR_NAMES]
-            # a subtree's mass does not depend on the configuration: read once (after an update)
-            self._masses = [float(kin.data.mass[j]) for j in self._below_joints]
             model, data = kin.model, kin.data
             self._below, self._coms = [], []
-            for fid, j, mass in zip(ids, self._below_joints, self._masses, strict=True):
+            for fid, sensor in zip(ids, FORCE_SENSOR_NAMES, strict=True):
+                j = kin.joint_below(sensor)
+                mass = float(data.mass[j])  # a subtree's mass does not depend on the configuration: read once
                 j_M_s = model.frames[fid].placement  # the sensor in its joint's frame (fixed)
                 s_R_j, j_p_s = j_M_s.rotation.T.copy(), j_M_s.translation.copy()
                 moving = [int(model.joints[k].idx_q) for k in model.subtrees[j] if k != j]
