@@ -9,7 +9,6 @@ import json
 import re
 
 from app.service import OperatorService, ServiceError
-from app.service.host import estop_press_error
 from app.state import with_console_state
 
 _JSON = [(b"content-type", b"application/json")]
@@ -19,12 +18,6 @@ async def _send(send, status: int, body: bytes) -> None:
     await send({"type": "http.response.start", "status": status,
                 "headers": [*_JSON, (b"content-length", str(len(body)).encode())]})
     await send({"type": "http.response.body", "body": body})
-
-
-def estop_reply(ack) -> dict:
-    """The POST /api/estop answer (app.schemas.EstopResponse) for the loop's acknowledgement."""
-    return {"ok": True, "message": ack.message, "tick": ack.tick, "sim_time_s": ack.sim_time_s,
-            "engaged_at_monotonic_s": ack.engaged_at_monotonic_s, "duplicate": ack.duplicate}
 
 
 def estop_press_header(scope) -> str | None:
@@ -82,15 +75,11 @@ class HotPaths:
                     await _send(send, 200, body)
                     return
             elif service is not None and key == ("POST", "/api/estop"):
-                press = estop_press_header(scope)
-                if estop_press_error(press) is not None:
-                    await self.api(scope, receive, send)  # FastAPI's route says what is wrong with it
-                    return
                 try:
-                    ack = service.estop(press)
+                    ack = service.estop(estop_press_header(scope))
                 except ServiceError:
-                    pass
+                    pass  # FastAPI's route answers with the error
                 else:
-                    await _send(send, 200, json.dumps(estop_reply(ack)).encode())
+                    await _send(send, 200 if ack.engaged else 409, json.dumps(ack.reply()).encode())
                     return
         await self.api(scope, receive, send)

@@ -184,8 +184,12 @@ class EstopResponse(Ok):
     sim_time_s: float = Field(description="simulated time then [s]")
     engaged_at_monotonic_s: float = Field(description="when the loop engaged it, on the machine's monotonic clock "
                                                       "(CLOCK_MONOTONIC, as Python's time.monotonic) [s]")
-    duplicate: bool = Field(False, description="this press (its X-Estop-Press id) was already handled by another "
-                                               "way in: nothing was engaged again; tick and times are the first's")
+    engaged: bool = Field(description="the loop has the hard e-stop engaged (ok says the same)")
+    late_copy: bool = Field(False, description="a copy of a press already released, arrived within the copy "
+                                               "window of its first copy: nothing was engaged again")
+    press_ignored: str | None = Field(None, description="the press id given was malformed and not used (the stop "
+                                                        "engaged all the same)")
+    reason: str | None = Field(None, description="why it did not engage: late_copy")
 
 
 class RunCounters(BaseModel):

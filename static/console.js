@@ -107,7 +107,7 @@ function estop(source, eventTimeStamp) {
   fetch("/api/estop", {method: "POST", headers: {...headers(false), "X-Estop-Press": press}, keepalive: true})
     .then((r) => r.json().then((d) => {
       if (record.reply === null) record.reply = d;
-      if (!r.ok) log(`E-STOP (${source}): ${r.status} ${d.detail}`, "bad");
+      if (!r.ok && !d.late_copy) log(`E-STOP (${source}): ${r.status} ${d.detail || d.message}`, "bad");
     }))
     .catch((e) => log(`E-STOP (${source}) not sent: ${e}`, "bad"));
   log(`E-STOP pressed (${source})`, "bad");
@@ -133,7 +133,7 @@ function connectDoor() {
     try { d = JSON.parse(m.data); } catch (e) { return; }
     if (rec) rec.door_reply = d;
     if (rec && rec.reply === null) rec.reply = d;
-    if (d.ok === false) log(`E-STOP door: ${d.detail}`, "bad");
+    if (d.ok === false && !d.late_copy) log(`E-STOP door: ${d.detail || d.message}`, "bad");
   };
   ws.onclose = () => {
     if (doorWs === ws) doorWs = null;

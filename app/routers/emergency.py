@@ -6,29 +6,32 @@ from __future__ import annotations
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Header
+from fastapi.responses import JSONResponse
 
 from app.deps import ServiceDep
 from app.errors import errors
-from app.hot_paths import estop_reply
 from app.params_http import ES_PARAMS, EsChangesBody, es_changes, es_changes_schema, es_document
 from app.schemas import EstopResponse, Ok
 from app.service import InvalidArgument
-from app.service.host import ESTOP_PRESS_PATTERN
+from app.service.estop import COPY_WINDOW_S
 
 router = APIRouter(prefix="/api/estop", tags=["emergency"])
 
 
-@router.post("", response_model=EstopResponse, responses=errors(),
-             summary="Engage the hard e-stop: freeze the joint command now; everything upstream holds (walking "
-                     "stops in place, the sequence stops). Any page may send it, with or without a body.")
+@router.post("", response_model=EstopResponse, responses=errors(409),
+             summary="Engage the hard e-stop: freeze the joint command now (in a swing: land the step, then "
+                     "freeze); everything upstream holds. Any page may send it, with or without a body. Answered "
+                     "200 only when the loop has it engaged; 409 `late_copy` for a copy of a press already released")
 async def engage(service: ServiceDep, x_estop_press: Annotated[str | None, Header(
-        pattern=ESTOP_PRESS_PATTERN, description="this press's id (1-64 of A-Z a-z 0-9 _ . : -), the same on each "
-        "way the page sends it (its e-stop door, its stick stream, this POST): the first to arrive engages, the "
-        "others answer `duplicate` and engage nothing, also after a release")] = None) -> EstopResponse:
+        description="this press's id (1-64 of A-Z a-z 0-9 _ . : -), the same on each way the page sends it (its "
+        "e-stop door, its stick stream, this POST): a copy arriving after that press was released, within "
+        f"{COPY_WINDOW_S:g} s of its first copy, engages nothing (409 late_copy); any other press engages. A "
+        "malformed id is ignored (the stop engages, press_ignored says why)")] = None) -> Any:
     # on the event loop itself (no thread-pool hop that other requests could fill), through the robot's own
-    # e-stop pipe; it answers once the loop has engaged it (a millisecond or so)
+    # e-stop pipe; it answers once the loop has handled it (a millisecond or so)
     # (app.hot_paths answers this path before FastAPI does; this route documents it and answers its errors)
-    return EstopResponse(**estop_reply(service.estop(x_estop_press)))
+    ack = service.estop(x_estop_press)
+    return JSONResponse(ack.reply(), status_code=200 if ack.engaged else 409)
 
 
 @router.post("/release", response_model=Ok, responses=errors(409),

@@ -17,12 +17,10 @@ from pydantic import TypeAdapter, ValidationError
 from app.deps import LockDep, ServiceDep, get_service
 from app.deps import get_lock as lock_of
 from app.errors import errors
-from app.hot_paths import estop_reply
 from app.operator_lock import Locked
 from app.params_http import params_changes_body, params_document
 from app.schemas import LockRequest, OperatorAck, OperatorLockState, OperatorVelocityRequest
-from app.service import ServiceError, ignored_message
-from app.service.estop_door import estop_message
+from app.service import ServiceError, estop, ignored_message
 from app.service.setpoints import Setpoint, SetpointAck
 from app.state import jsonable
 from app.ws import MAX_MESSAGE_BYTES, receive_message, ws_client
@@ -41,20 +39,14 @@ def setpoint_of(req: OperatorVelocityRequest) -> Setpoint:
 
 
 async def _estop_message(text: str, service, send) -> bool:
-    """`{"estop": true}` on the stream: the hard e-stop, as POST /api/estop (never refused by the operator
-    lock), answered with its reply and `"estop": true`; the page's open socket is a faster way in than a new
-    request. False: not that message (a setpoint's validation will say what is wrong)."""
-    try:
-        is_estop, press, why = estop_message(json.loads(text))
-    except ValueError:
+    """An e-stop on the stream (app.service.estop.parse_text: any JSON object whose "estop" is true): the hard
+    e-stop, as POST /api/estop (never refused by the operator lock), answered with its reply and `"estop": true`;
+    the page's open socket is a faster way in than a new request. False: not an e-stop."""
+    request = estop.parse_text(text)
+    if request is None:
         return False
-    if not is_estop:
-        return False
-    if why is not None:
-        await send(_error(why, field="press", estop=True))
-        return True
     try:
-        reply = estop_reply(service.estop(press))
+        reply = service.estop(request).reply()
     except ServiceError as exc:
         await send(_error(str(exc), reason=getattr(exc, "reason", None), estop=True))
         return True
@@ -219,7 +211,7 @@ async def operator_stream(ws: WebSocket) -> None:
             if len(text) > MAX_MESSAGE_BYTES:
                 await send(_error(f"message of {len(text)} bytes; the limit is {MAX_MESSAGE_BYTES}", field="body"))
                 continue
-            if text.startswith('{"estop"') and await _estop_message(text, service, send):
+            if await _estop_message(text, service, send):
                 continue
             try:
                 req = _REQUEST.validate_json(text)

@@ -4,6 +4,7 @@ or this one) to run at a tick boundary, and returns the result or the service's 
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 from collections.abc import Mapping, Sequence
@@ -13,7 +14,9 @@ from typing import Any, Protocol
 import numpy as np
 
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError, Unavailable
-from app.service.host import EstopAck, Observation, Published, estop_press_error
+from app.service.estop import EstopAck, EstopRequest
+from app.service.estop import request_of as estop_request_of
+from app.service.host import Observation, Published
 from app.service.setpoints import Setpoint, SetpointAck
 from app.service.verbs import (
     CancelRun,
@@ -117,13 +120,13 @@ class OperatorService:
             raise Unavailable(f"the robot did not answer {verb.name} within {timeout_s:g} s") from None
 
     # ---- safety ----------------------------------------------------------------------------------------
-    def estop(self, press: str | None = None) -> EstopAck:
-        """The hard e-stop, through its own channel: returns once the loop has engaged it. `press`: the press's
-        id (app.service.host.estop_press_error), which makes its other copies no-ops."""
-        why = estop_press_error(press)
-        if why is not None:
-            raise InvalidArgument(why)
-        return self.robot.estop(press)
+    def estop(self, press: EstopRequest | object = None) -> EstopAck:
+        """The hard e-stop, through its own channel: returns once the loop has handled it (app.service.estop: it
+        engages unless it is a late copy of a press already released). A malformed `press` id does not stop the
+        stop: it engages, and the answer says the id was ignored."""
+        request = press if isinstance(press, EstopRequest) else estop_request_of(press)
+        ack = self.robot.estop(request.press)
+        return ack if request.press_ignored is None else dataclasses.replace(ack, press_ignored=request.press_ignored)
 
     def release_estop(self) -> str:
         """Release the hard e-stop: nothing the operator streamed before the release runs after it."""

@@ -6,9 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import re
 import time
-from collections import OrderedDict
 from collections.abc import Mapping
 from concurrent.futures import Future
 from dataclasses import dataclass
@@ -19,6 +17,7 @@ import numpy as np
 from app.service.commands import HostCommands
 from app.service.data_logger import DataLogger
 from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
+from app.service.estop import EstopAck, PressLog
 from app.service.session_recorder import SessionRecorder
 from app.service.setpoints import LocalSource, Setpoint, SetpointAck
 from app.service.verbs import RobotInfo, SetParams, Verb
@@ -62,40 +61,6 @@ class RunStats:
     def summary(self) -> dict[str, Any]:
         return {"ticks": self.ticks, "max_loop_ms": self.max_loop_ms, "fallen": self.fallen,
                 "faults": sorted(self.faults)}
-
-
-@dataclass(frozen=True)
-class EstopAck:
-    """The hard e-stop engaged (or found engaged) in the loop: at which tick, and when (monotonic clock).
-    `duplicate`: another copy of a press already handled (this ack is that first one's), not engaged again."""
-
-    tick: int
-    sim_time_s: float
-    engaged_at_monotonic_s: float
-    already_engaged: bool
-    duplicate: bool = False
-
-    @property
-    def message(self) -> str:
-        return ("this press was already handled (not engaged again)" if self.duplicate
-                else "hard e-stop already engaged" if self.already_engaged else "hard e-stop engaged")
-
-
-#: A press's id: the page sends each E-STOP press three ways (the e-stop's door, its stick stream, a POST), all
-#: with one id; the first to arrive engages, the others are that press again. Without it, a copy that arrived
-#: after a quick release engaged the stop again: something sent before the release acting after it.
-ESTOP_PRESS_PATTERN = r"^[A-Za-z0-9_.:-]{1,64}$"
-_PRESS = re.compile(ESTOP_PRESS_PATTERN)
-PRESSES_REMEMBERED = 256  # the newest press ids kept (a press's copies arrive within a second or so)
-
-
-def estop_press_error(press: object) -> str | None:
-    """What is wrong with `press` as an e-stop press id (None: nothing; an absent id is allowed)."""
-    if press is None:
-        return None
-    if not isinstance(press, str) or not _PRESS.match(press):
-        return "press: 1 to 64 characters of A-Z a-z 0-9 _ . : - (one id per press, the same on each way it is sent)"
-    return None
 
 
 @dataclass(frozen=True, slots=True)
@@ -166,7 +131,7 @@ class RobotHost:
         self.setpoints = setpoints if setpoints is not None else LocalSource()
         self.setpoint_acks: dict[str, SetpointAck] = {}
         self.release_barrier_seq = 0  # setpoints numbered up to this were sent before the last e-stop release
-        self._presses: OrderedDict[str, EstopAck] = OrderedDict()  # the newest e-stop presses handled, by id
+        self._presses = PressLog()  # the e-stop presses of the last moment: a late copy does not re-engage
         self._info: RobotInfo | None = None
         self._runs_cache: tuple[int, tuple] = (-1, ())
         self.recognitions: dict[str, dict] = {}  # object -> its latest recognition (behaviours remember them)
@@ -408,26 +373,20 @@ class RobotHost:
 
     # ---- the e-stop path -----------------------------------------------------------------------------
     def engage_estop(self, press: str | None = None) -> EstopAck:
-        """Engage the hard e-stop; `press` (an id, estop_press_error) makes another copy of the same press a
-        no-op answered with the first one's ack (`duplicate`), even after a release."""
-        if press is not None:
-            first = self._presses.get(press)
-            if first is not None:
-                return dataclasses.replace(first, duplicate=True)
+        """Engage the hard e-stop (app.service.estop: every press engages but a late copy of one released)."""
         loop = self.loop
+        now = time.monotonic()
         already = loop.hard_stop_engaged
-        if not already:
+        late = not already and self._presses.is_late_copy(press, now)
+        if not already and not late:
             loop.safe_stop("operator")
+        self._presses.pressed(press, now)
+        result = "late copy" if late else "already engaged" if already else "engaged"
         if self.recorder is not None:
             self.recorder.input("estop", "boundary", "estop", loop.plant.time_s, None,
-                                {"ok": True, "result": "already engaged" if already else "engaged"})
-        ack = EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s),
-                       engaged_at_monotonic_s=time.monotonic(), already_engaged=already)
-        if press is not None:
-            self._presses[press] = ack
-            while len(self._presses) > PRESSES_REMEMBERED:
-                self._presses.popitem(last=False)
-        return ack
+                                {"ok": not late, "result": result})
+        return EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s), engaged_at_monotonic_s=now,
+                        engaged=loop.hard_stop_engaged, already_engaged=already, late_copy=late)
 
     def release_estop(self, setpoints_before: int = 0) -> None:
         """Release the hard e-stop; the operator's setpoints numbered up to `setpoints_before` (sent before the
@@ -440,6 +399,7 @@ class RobotHost:
             raise Refused("diverged", f"the simulation has diverged ({diverged}); only a reset recovers "
                                       "(POST /api/sim/reset)")
         self.layer("hes").release()  # InvalidState (-> 409) when not engaged
+        self._presses.released(time.monotonic())
         self.release_barrier_seq = max(self.release_barrier_seq, int(setpoints_before))
         op = self._operation_layer()
         if op is not None:

@@ -8,7 +8,8 @@ from concurrent.futures import Future
 import numpy as np
 
 from app.service.errors import ServiceError
-from app.service.host import EstopAck, Published, RobotHost
+from app.service.estop import EstopAck
+from app.service.host import Published, RobotHost
 from app.service.setpoints import Setpoint, SetpointTable
 from app.service.verbs import Reset, RobotInfo, StopRecording, Verb
 

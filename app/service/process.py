@@ -25,8 +25,9 @@ import numpy as np
 from app.service.board import Board, attach
 from app.service.data_logger import DataLogger
 from app.service.errors import ServiceError, Unavailable
+from app.service.estop import EstopAck, press_error
 from app.service.estop_door import EstopDoor, EstopDoorConfig
-from app.service.host import EstopAck, Published, RobotHost
+from app.service.host import Published, RobotHost
 from app.service.setpoints import BOARD_BYTES, BoardSource, Setpoint, SetpointTable
 from app.service.verbs import GetInfo, Reset, RobotInfo, Shutdown, Verb
 
@@ -133,7 +134,8 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
     def handle_estop() -> None:
         while estop.poll():
             request, press = estop.recv()
-            estop.send((request, host.engage_estop(press)))
+            # the console checked the id; should one slip through, the stop engages without it
+            estop.send((request, host.engage_estop(press if press_error(press) is None else None)))
 
     def handle_commands() -> None:
         while cmd.poll():

@@ -59,16 +59,16 @@ def test_the_estop_takes_its_own_path_and_is_confirmed_by_the_loop(robot):
 def test_a_press_id_crosses_the_estop_pipe_and_a_late_copy_of_a_press_engages_nothing(robot):
     service = OperatorService(robot)
     first = service.estop("page-x:1")
-    assert not first.duplicate and not first.already_engaged
+    assert first.engaged and not first.late_copy and not first.already_engaged
     wait_for(lambda: service.state()["emergency"]["hard_stop"])
     service.release_estop()
     wait_for(lambda: not service.state()["emergency"]["hard_stop"])
     late = service.estop("page-x:1")
-    assert late.duplicate and late.tick == first.tick
+    assert late.late_copy and not late.engaged
     t = service.snapshot().time_s
     wait_for(lambda: service.snapshot().time_s > t + 0.05)
     assert not service.state()["emergency"]["hard_stop"]
-    assert not service.estop("page-x:2").duplicate  # the next press
+    assert service.estop("page-x:2").engaged  # the next press
     wait_for(lambda: service.state()["emergency"]["hard_stop"])
     service.release_estop()
     wait_for(lambda: not service.state()["emergency"]["hard_stop"])
