@@ -7,6 +7,7 @@ import json
 import logging
 import math
 import signal
+import socket
 import sys
 import threading
 import time
@@ -191,23 +192,28 @@ def bench(argv: Sequence[str]) -> int:
     return 0
 
 
-def _start_http(app, host: str, port: int, log_level: str):
+def _bind_http(host: str, port: int) -> socket.socket:
+    """The HTTP server's listening socket, bound before the robot starts: its e-stop door lets in pages of this
+    port only (app.security.origin_allowed), so the port must be known first (--port 0 picks a free one)."""
+    try:
+        return socket.create_server((host, port), family=socket.AF_INET6 if ":" in host else socket.AF_INET,
+                                    backlog=2048)
+    except OSError as exc:
+        raise RuntimeError(f"the HTTP server could not listen on {host}:{port}: {exc}") from None
+
+
+def _start_http(app, sock: socket.socket, log_level: str):
     import uvicorn
 
-    server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level=log_level, lifespan="on",
-                                           timeout_keep_alive=30))
-    thread = threading.Thread(target=server.run, name="http", daemon=True)
+    server = uvicorn.Server(uvicorn.Config(app, log_level=log_level, lifespan="on", timeout_keep_alive=30))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, name="http", daemon=True)
     thread.start()
     deadline = time.monotonic() + 15.0
     while not server.started:
         if not thread.is_alive() or time.monotonic() > deadline:
-            raise RuntimeError(f"the HTTP server could not start on {host}:{port} (port in use?)")
+            raise RuntimeError(f"the HTTP server could not start on {sock.getsockname()}")
         time.sleep(0.02)
-    bound = port
-    for s in getattr(server, "servers", []):
-        for sock in getattr(s, "sockets", []):
-            bound = sock.getsockname()[1]
-    return server, thread, bound
+    return server, thread, sock.getsockname()[1]
 
 
 class _StopRequested:
@@ -255,11 +261,12 @@ def run(argv: Sequence[str]) -> int:
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     wall0 = time.perf_counter()
     try:
+        http_sock = _bind_http(args.host, args.port)
         door = EstopDoorConfig(host=args.host, port=args.estop_port, allowed_hosts=allowed_hosts_for(args.host),
-                               token=token)
+                               page_ports=(http_sock.getsockname()[1],), token=token)
         robot = RobotProcess(RobotConfig(scene=args.scene, speed=args.speed, params=args.params, record=args.record,
                                          estop_door=door))
-    except ServiceError as exc:
+    except (ServiceError, RuntimeError) as exc:
         print(f"hrp2-console: error: {exc}", file=sys.stderr)
         return 2
     service = OperatorService(robot)
@@ -281,7 +288,7 @@ def run(argv: Sequence[str]) -> int:
                             test_hooks=test_hooks_from_env())
         app = create_app(settings, service=service)
         try:
-            server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)
+            server, http_thread, http_port = _start_http(app, http_sock, args.log_level)
         except RuntimeError as exc:
             print(f"hrp2-console: error: {exc}", file=sys.stderr)
             return 2

@@ -9,8 +9,8 @@ import ipaddress
 import json
 import logging
 import os
-from collections.abc import Iterable
-from urllib.parse import parse_qs
+from collections.abc import Collection, Iterable
+from urllib.parse import parse_qs, urlsplit
 
 from app.operator_lock import Locked, OperatorLock
 
@@ -29,6 +29,24 @@ TOKEN_PREFIXES = ("/api/", "/ws/")
 TOKEN_ENV = "HRP2_CONSOLE_TOKEN"
 MIN_TOKEN_CHARS = 16
 CLIENT_HEADER = b"x-client-id"
+
+
+#: headers a request may carry once only: with two, which one a check reads and which one a later reader uses
+#: could differ
+SINGLE_HEADERS = frozenset({"host", "origin", "authorization", "content-length", "x-client-id", "x-estop-press",
+                            "sec-websocket-key", "upgrade", "connection", "content-type"})
+
+
+def repeated_header(headers: Iterable[tuple[bytes | str, bytes | str]]) -> str | None:
+    """The first of SINGLE_HEADERS given more than once (None: none)."""
+    seen: set[str] = set()
+    for name, _ in headers:
+        key = (name.decode("latin-1") if isinstance(name, bytes) else name).lower()
+        if key in SINGLE_HEADERS:
+            if key in seen:
+                return key
+            seen.add(key)
+    return None
 
 
 def is_loopback(host: str) -> bool:
@@ -84,12 +102,46 @@ def host_name(host_header: str) -> str:
     return h.rsplit(":", 1)[0] if h.count(":") == 1 else h
 
 
-def origin_host(origin: str) -> tuple[str, str] | None:
-    """(scheme, host name) of an Origin header, or None if it is "null" or malformed."""
-    if "://" not in origin:
+DEFAULT_PORTS = {"http": 80, "https": 443}
+
+
+def split_origin(origin: str) -> tuple[str, str, int] | None:
+    """(scheme, host name, port) of an Origin header ("http://[::1]:8000" -> ("http", "::1", 8000)); None for
+    "null", a scheme other than http(s), or anything malformed."""
+    try:
+        parts = urlsplit(origin.strip())
+        port = parts.port
+    except ValueError:
         return None
-    scheme, rest = origin.split("://", 1)
-    return scheme.lower(), host_name(rest.split("/", 1)[0])
+    scheme = parts.scheme.lower()
+    if scheme not in DEFAULT_PORTS or not parts.hostname or parts.path or parts.query or parts.username:
+        return None
+    return scheme, parts.hostname.lower(), DEFAULT_PORTS[scheme] if port is None else port
+
+
+def origin_allowed(origin: str | None, host_header: str, allowed_hosts: frozenset[str] | None,
+                   ports: Collection[int] | None = None) -> bool:
+    """Whether a request with this Origin comes from one of the console's own pages: scheme http(s), host among
+    `allowed_hosts` (None: the host the request was sent to), port among `ports` (None: the port the request was
+    sent to, i.e. the same origin). No Origin at all: not a browser's cross-origin request (a script). One
+    function for the HTTP API, its WebSockets, the robot's e-stop door and the 3D view."""
+    if origin is None:
+        return True
+    parsed = split_origin(origin)
+    if parsed is None:
+        return False
+    scheme, name, port = parsed
+    try:
+        sent_to = urlsplit("//" + host_header.strip())
+        sent_to_port = sent_to.port or DEFAULT_PORTS[scheme]
+    except ValueError:
+        return False
+    if allowed_hosts is None:
+        if name != (sent_to.hostname or ""):
+            return False
+    elif name not in allowed_hosts:
+        return False
+    return port in ports if ports is not None else port == sent_to_port
 
 
 async def _send_json(send, status: int, detail: str, headers: Iterable[tuple[bytes, bytes]] = ()) -> None:
@@ -140,21 +192,21 @@ class ConsoleGuard:
 
     def _origin_ok(self, headers: dict[bytes, bytes]) -> bool:
         origin = headers.get(b"origin")
-        if origin is None:
-            return True  # not a browser's cross-origin request (curl, scripts, same-origin GET)
-        parsed = origin_host(origin.decode("latin-1"))
-        if parsed is None:
-            return False
-        if self.allowed_hosts is None:
-            # any interface: the page must come from the host it talks to
-            return parsed[1] == host_name(headers.get(b"host", b"").decode("latin-1"))
-        return parsed[1] in self.allowed_hosts
+        return origin_allowed(None if origin is None else origin.decode("latin-1"),
+                              headers.get(b"host", b"").decode("latin-1"), self.allowed_hosts)
 
     async def __call__(self, scope, receive, send) -> None:
         if scope["type"] not in ("http", "websocket"):
             await self.app(scope, receive, send)
             return
         headers = {k.lower(): v for k, v in scope.get("headers", [])}
+        repeated = repeated_header(scope.get("headers", ()))
+        if repeated is not None:
+            if scope["type"] == "websocket":
+                await send({"type": "websocket.close", "code": 1008})
+                return
+            await _send_json(send, 400, f"header {repeated} given more than once; send it once")
+            return
         if not self._host_ok(headers):
             if scope["type"] == "websocket":
                 await send({"type": "websocket.close", "code": 1008})

@@ -233,39 +233,34 @@ def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
     return np.asarray(model.geom_rgba[g])
 
 
-def allowed_ws_origins(host: str, port: int) -> list[str | None]:
-    """Origins the viser websocket accepts: its own page, on the bound host or a loopback name; None (no
-    Origin header) for non-browser clients such as viser's own."""
-    from app.security import LOOPBACK_NAMES, is_loopback
-
-    names = {host, *(LOOPBACK_NAMES if is_loopback(host) else ())}
-    out: list[str | None] = [None]
-    for name in sorted(names):
-        shown = f"[{name}]" if ":" in name else name
-        out.append(f"http://{shown}:{port}")
-    return out
-
-
 class _OriginCheckingServe:
     """Stands in for `websockets.asyncio.server.serve` inside viser: the same call with a request check in
     front of viser's own, so the handshake of a page from another origin is refused (403) before viser sees
-    it. The allowed origins use the port the connection arrived on (viser may pick a free port)."""
+    it (app.security.origin_allowed: the viewer's own port, the port the connection arrived on, or the operator
+    page's, on the bound host or a loopback name)."""
 
-    def __init__(self, serve, host: str, page_origins: set[str]):
+    def __init__(self, serve, host: str, page_ports: set[int]):
+        from app.security import allowed_hosts_for
+
         self._serve = serve
-        self._host = host
-        self._page_origins = page_origins
+        hosts = allowed_hosts_for(host)
+        self._hosts = None if hosts is None else frozenset(hosts)
+        self._page_ports = page_ports
 
     def __call__(self, handler, host, port, **kwargs):
+        from app.security import origin_allowed, repeated_header
+
         inner = kwargs.get("process_request")
-        allowed_host = self._host
-        page_origins = self._page_origins
+        hosts, page_ports = self._hosts, self._page_ports
 
         def process_request(connection, request):
-            if request.headers.get("Upgrade", "").lower() == "websocket":
-                origin = request.headers.get("Origin")
-                if origin not in page_origins and origin not in allowed_ws_origins(allowed_host,
-                                                                                   connection.local_address[1]):
+            headers = request.headers
+            repeated = repeated_header(headers.raw_items())
+            if repeated is not None:
+                return connection.respond(400, f"header {repeated} given more than once\n")
+            if headers.get("Upgrade", "").lower() == "websocket":
+                ports = {connection.local_address[1], *page_ports}
+                if not origin_allowed(headers.get("Origin"), headers.get("Host", ""), hosts, ports):
                     return connection.respond(403, "this viewer only accepts its own page\n")
             return inner(connection, request) if inner is not None else None
 
@@ -273,7 +268,7 @@ class _OriginCheckingServe:
         return self._serve(handler, host, port, **kwargs)
 
 
-def _viser_with_origin_check(host: str, port: int, page_origins: set[str], **kwargs) -> viser.ViserServer:
+def _viser_with_origin_check(host: str, port: int, page_ports: set[int], **kwargs) -> viser.ViserServer:
     """A ViserServer whose websocket checks the Origin header (viser 1.1 has no option for it: its server
     module's reference to websockets' `serve` is wrapped while the server starts)."""
     import types
@@ -283,7 +278,7 @@ def _viser_with_origin_check(host: str, port: int, page_origins: set[str], **kwa
     real = _infra.websockets
     wrapped = types.SimpleNamespace(**{k: getattr(real, k) for k in ("datastructures", "exceptions")})
     wrapped.asyncio = types.SimpleNamespace(server=types.SimpleNamespace(
-        serve=_OriginCheckingServe(real.asyncio.server.serve, host, page_origins),
+        serve=_OriginCheckingServe(real.asyncio.server.serve, host, page_ports),
         ServerConnection=real.asyncio.server.ServerConnection))
     _infra.websockets = wrapped
     try:
@@ -350,8 +345,8 @@ class Viewer:
         self.service = service
         self.rate_hz = float(rate_hz)
         self._host = host
-        self._page_origins: set[str] = set()
-        self.server = _viser_with_origin_check(host, port, self._page_origins)
+        self._page_ports: set[int] = set()
+        self.server = _viser_with_origin_check(host, port, self._page_ports)
         self.port = self.server.get_port()
         self.server.scene.configure_default_lights(enabled=True, cast_shadow=False)
         self.server.scene.set_up_direction("+z")
@@ -372,9 +367,7 @@ class Viewer:
 
     def allow_page(self, port: int) -> None:
         """Accept the websocket of the operator page served on `port` of the same host (its /viewer/ iframe)."""
-        for origin in allowed_ws_origins(self._host, port):
-            if origin is not None:
-                self._page_origins.add(origin)
+        self._page_ports.add(int(port))
 
     # ---- scene --------------------------------------------------------------------------------
     def _build_scene(self) -> None:
@@ -598,7 +591,7 @@ class Viewer:
 
         @self._estop.on_click
         def _(_event) -> None:
-            self._command("e-stop engaged", self.service.estop)
+            self.press_estop()
 
         @self._release.on_click
         def _(_event) -> None:
@@ -618,11 +611,15 @@ class Viewer:
         except ServiceError as exc:
             return str(exc)
 
-    def _command(self, done: str, fn) -> None:
+    def press_estop(self) -> None:
+        """The panel's E-STOP: every click a new press (app.service.estop), the loop's answer shown."""
+        self._command(None, lambda: self.service.estop().message)
+
+    def _command(self, done: str | None, fn) -> None:
         """Runs in viser's thread pool: a verb of the operator service, like an HTTP request."""
         try:
-            fn()
-            self._message.value = done
+            said = fn()
+            self._message.value = done if done is not None else str(said)
         except ServiceError as exc:
             self._message.value = str(exc)
         except Exception as exc:  # noqa: BLE001 - a GUI click never kills anything

@@ -9,14 +9,15 @@ MAX_CLIENTS connections, messages of at most MAX_MESSAGE_BYTES, a handshake with
 tick at most READS_PER_TICK socket operations (an accept, or a read of at most RECV_BYTES): a client flooding it
 (four of them sent 25,000 messages a second) made the loop's ticks up to 38 ms late before; the rest waits in the
 sockets for the next tick. The same Host, Origin and token rules as the console's own door
-(app.security); one message, `{"estop": true}` or `{"estop": true, "press": "<id>"}` (the press's id, with which
-its copies sent the other ways engage nothing: app.service.host.ESTOP_PRESS_PATTERN), answered as POST /api/estop
-is. The WebSocket protocol is
-websockets' sans-I/O implementation; no thread, no event loop: the loop's select() waits on these sockets too.
+(app.security.origin_allowed); one message, `{"estop": true}` or `{"estop": true, "press": "<id>"}` in any JSON
+spelling, with the one semantics of every way in (app.service.estop), answered as POST /api/estop is. The
+WebSocket protocol is websockets' sans-I/O implementation; no thread, no event loop: the loop's select() waits
+on these sockets too. Whatever a client sends, an error in handling it drops that client only.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import hmac
 import json
 import logging
@@ -32,8 +33,8 @@ from websockets.http11 import Request
 from websockets.protocol import State
 from websockets.server import ServerProtocol
 
-from app.security import host_name, origin_host
-from app.service.host import estop_press_error
+from app.security import host_name, origin_allowed, repeated_header
+from app.service import estop
 
 log = logging.getLogger(__name__)
 
@@ -47,12 +48,14 @@ READS_PER_TICK = 4
 @dataclass(frozen=True)
 class EstopDoorConfig:
     """Where the door listens and whom it lets in: `allowed_hosts` as app.security.allowed_hosts_for (None: any
-    Host, the page's Origin then the host it talks to); `token`: required as `?token=` or a Bearer header."""
+    Host, the page's Origin then the host it talks to); `token`: required as `?token=` or a Bearer header; a
+    browser's Origin must be the console's page (app.security.origin_allowed with `page_ports`)."""
 
     host: str = "127.0.0.1"
     port: int = 0  # 0: a free port, chosen at start (the page reads it from GET /api/config)
     allowed_hosts: tuple[str, ...] | None = ("127.0.0.1", "localhost", "::1")
     token: str | None = None
+    page_ports: tuple[int, ...] = ()  # the ports the console's page is served on: the only Origins let in
 
 
 class _Client:
@@ -110,7 +113,7 @@ class EstopDoor:
             else:
                 client = self._clients.get(sock)
                 if client is not None:
-                    self._read(client)
+                    self._serve_client(client)
         if self._clients:
             self._expire(time.monotonic())
         if self._budget <= 0:
@@ -164,6 +167,14 @@ class EstopDoor:
             if client.protocol.state is State.CONNECTING and now - client.since > self._handshake_timeout_s:
                 self._drop(client)
 
+    def _serve_client(self, client: _Client) -> None:
+        """One client's turn. Whatever its bytes do to the parsing, only this client is dropped: the loop goes on."""
+        try:
+            self._read(client)
+        except Exception:  # noqa: BLE001 - a hostile or broken client must never end the robot process
+            log.warning("e-stop door: a client was dropped on an error", exc_info=True)
+            self._drop(client)
+
     def _read(self, client: _Client) -> None:
         protocol = client.protocol
         try:
@@ -204,15 +215,14 @@ class EstopDoor:
     # ---- what it answers -----------------------------------------------------------------------------------
     def _handshake(self, protocol: ServerProtocol, request: Request):
         headers = request.headers
-        if self._allowed is not None and host_name(headers.get("Host", "")) not in self._allowed:
+        repeated = repeated_header(headers.raw_items())
+        if repeated is not None:
+            return protocol.reject(400, f"header {repeated} given more than once\n")
+        host = headers.get("Host", "")
+        if self._allowed is not None and host_name(host) not in self._allowed:
             return protocol.reject(421, "this console does not answer for that Host\n")
-        origin = headers.get("Origin")
-        if origin is not None:
-            parsed = origin_host(origin)
-            allowed = (parsed is not None and (parsed[1] == host_name(headers.get("Host", ""))
-                                                if self._allowed is None else parsed[1] in self._allowed))
-            if not allowed:
-                return protocol.reject(403, "cross-origin e-stops are refused; use the console's own page\n")
+        if not origin_allowed(headers.get("Origin"), host, self._allowed, self.config.page_ports):
+            return protocol.reject(403, "cross-origin e-stops are refused; use the console's own page\n")
         if self._token is not None:
             auth = headers.get("Authorization", "")
             given = auth[7:].strip() if auth[:7].lower() == "bearer " else None
@@ -224,33 +234,18 @@ class EstopDoor:
         return protocol.accept(request)
 
     def _answer(self, frame: Frame) -> str:
-        try:
-            message = json.loads(frame.data)
-        except (ValueError, UnicodeDecodeError):
-            message = None
-        is_estop, press, why = estop_message(message)
-        if not is_estop:
+        request = estop.parse_text(frame.data)
+        if request is None:
             return json.dumps({"ok": False, "estop": True, "detail": _ONLY})
-        if why is not None:
-            return json.dumps({"ok": False, "estop": True, "detail": why, "field": "press"})
         try:
-            ack = self._engage(press)
+            ack = self._engage(request.press)
         except Exception as exc:  # noqa: BLE001 - said to the client; the loop goes on (the other doors too)
             log.error("e-stop door: engaging failed: %s", exc)
             return json.dumps({"ok": False, "estop": True, "detail": f"the e-stop could not be engaged: {exc}"})
         self.engaged += 1
-        return json.dumps({"ok": True, "estop": True, "via": "door", "message": ack.message,
-                           "duplicate": ack.duplicate, "tick": ack.tick, "sim_time_s": ack.sim_time_s,
-                           "engaged_at_monotonic_s": ack.engaged_at_monotonic_s})
+        if request.press_ignored is not None:
+            ack = dataclasses.replace(ack, press_ignored=request.press_ignored)
+        return json.dumps({**ack.reply(via="door"), "estop": True})
 
 
 _ONLY = 'this door takes one message, {"estop": true} (with its press\'s id: {"estop": true, "press": "<id>"})'
-
-
-def estop_message(message: object) -> tuple[bool, str | None, str | None]:
-    """`message` (decoded JSON) as an e-stop: (whether it is one, its press id, what is wrong with that id).
-    `{"estop": true}`, or `{"estop": true, "press": "<id>"}` (app.service.host.estop_press_error)."""
-    if not isinstance(message, dict) or message.get("estop") is not True or not set(message) <= {"estop", "press"}:
-        return False, None, None
-    press = message.get("press")
-    return True, press if isinstance(press, str) else None, estop_press_error(press)
