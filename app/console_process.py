@@ -18,6 +18,7 @@ from pathlib import Path
 from app.stats import percentiles_ms
 
 ROOT = Path(__file__).resolve().parents[1]
+KEPT_LINES = 20000  # of the console's output
 
 
 class Console:
@@ -42,6 +43,15 @@ class Console:
             if time.monotonic() > deadline:
                 self.proc.kill()
                 raise RuntimeError(f"the console did not start in {timeout_s} s:\n{''.join(self.lines)}")
+        # read what it prints from now on, or a full pipe blocks its logging, and its event loop with it
+        self._reader = threading.Thread(target=self._drain, name="console-output", daemon=True)
+        self._reader.start()
+
+    def _drain(self) -> None:
+        for line in self.proc.stdout:
+            self.lines.append(line)
+            if len(self.lines) > KEPT_LINES:
+                del self.lines[:KEPT_LINES // 2]
 
     def __enter__(self) -> Console:
         return self
@@ -75,11 +85,12 @@ class Console:
         if self.proc.poll() is None:
             self.proc.send_signal(sig)
         try:
-            out, _ = self.proc.communicate(timeout=timeout_s)
+            self.proc.wait(timeout=timeout_s)
         except subprocess.TimeoutExpired:
             self.proc.kill()
-            out, _ = self.proc.communicate()
-        return self.proc.returncode, "".join(self.lines) + (out or "")
+            self.proc.wait()
+        self._reader.join(timeout=5.0)
+        return self.proc.returncode, "".join(self.lines)
 
 
 def _operator(port: int, every_s: float, duration_s: float, results) -> None:
