@@ -194,8 +194,12 @@ def bench(argv: Sequence[str]) -> int:
 def _start_http(app, host: str, port: int, log_level: str):
     import uvicorn
 
+    from app.ws import MAX_MESSAGE_BYTES
+
+    # ws_max_size: a WebSocket message over the limit is refused by the server (close 1009) from its frame's
+    # length, before it is read into memory (uvicorn's default is 16 MB)
     server = uvicorn.Server(uvicorn.Config(app, host=host, port=port, log_level=log_level, lifespan="on",
-                                           timeout_keep_alive=30))
+                                           timeout_keep_alive=30, ws_max_size=MAX_MESSAGE_BYTES))
     thread = threading.Thread(target=server.run, name="http", daemon=True)
     thread.start()
     deadline = time.monotonic() + 15.0

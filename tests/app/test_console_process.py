@@ -125,6 +125,29 @@ def test_the_estop_door_of_the_robot_process_engages_even_while_the_console_proc
     wait_state(console, lambda s: not s["emergency"]["hard_stop"])
 
 
+def test_a_websocket_message_over_the_limit_is_refused_by_the_server_with_1009_and_it_serves_on(console):
+    """uvicorn's ws_max_size is the 4 kB message limit: the server closes the socket from the frame's length
+    (1009, message too big) instead of reading the message for the app to refuse (which answers in-process
+    with an error and keeps the socket, tests/app/test_ws_messages.py)."""
+    import json
+
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
+
+    from app.ws import MAX_MESSAGE_BYTES
+
+    url = f"ws://127.0.0.1:{console.port}/ws/operator"
+    with connect(url, open_timeout=5) as ws:
+        ws.send("x" * (16 * MAX_MESSAGE_BYTES))
+        with pytest.raises(ConnectionClosed) as caught:
+            ws.recv(timeout=5.0)
+    assert caught.value.rcvd is not None and caught.value.rcvd.code == 1009, caught.value
+    with connect(url, open_timeout=5) as ws:  # a message at the limit still reaches the app
+        ws.send(json.dumps({"point": "rhand", "linear": [0, 0, 0]}).ljust(MAX_MESSAGE_BYTES))
+        assert json.loads(ws.recv(timeout=5.0))["ok"] is True
+    assert console.request("GET", "/api/health")[0] == 200
+
+
 def test_a_10_mb_body_is_refused_with_413_and_no_tick_is_late_meanwhile(console):
     t0 = time.monotonic()
     status, body = console.request("PUT", "/api/stabilizer/params", body=b"{" + b" " * (10 * 1024 * 1024) + b"}")
