@@ -12,6 +12,7 @@ import threading
 import time
 from collections.abc import Sequence
 
+from app.session.files import KEEP_BYTES, KEEP_COUNT, retention_rule
 from robot.plant import available_scenes
 
 log = logging.getLogger("hrp2-console")
@@ -40,6 +41,26 @@ def _positive_seconds(text: str) -> float:
         value = float("nan")
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a number of seconds > 0")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a whole number >= 1")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a number > 0")
     return value
 
 
@@ -137,7 +158,13 @@ def run_parser() -> argparse.ArgumentParser:
                         f"changes, telemetry) to an MCAP file from the first tick; default path {SESSIONS_DIR}/"
                         "session-<time>.mcap; `hrp2-console replay PATH` replays it")
     p.add_argument("--sessions-dir", default=SESSIONS_DIR, metavar="DIR",
-                   help=f"where POST /api/sessions/start records and GET /api/sessions lists (default {SESSIONS_DIR})")
+                   help=f"where POST /api/sessions/start records and GET /api/sessions lists (default {SESSIONS_DIR}); "
+                        "it keeps " + retention_rule(KEEP_COUNT, KEEP_BYTES)
+                        + " (--sessions-keep, --sessions-max-mb)")
+    p.add_argument("--sessions-keep", type=_positive_int, default=KEEP_COUNT, metavar="N",
+                   help=f"session files --sessions-dir keeps at most (default {KEEP_COUNT})")
+    p.add_argument("--sessions-max-mb", type=_positive_float, default=KEEP_BYTES / 1024**2, metavar="MB",
+                   help=f"their size together at most [MB] (default {KEEP_BYTES / 1024**2:g})")
     p.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     return p
 
@@ -249,6 +276,7 @@ def run(argv: Sequence[str]) -> int:
     from app.service import OperatorService, ServiceError
     from app.service.estop_door import EstopDoorConfig
     from app.service.process import RobotConfig, RobotProcess
+    from app.session.files import prune_sessions
     from app.settings import Settings
     from robot.sensors import is_fallen
 
@@ -282,7 +310,10 @@ def run(argv: Sequence[str]) -> int:
             viewer_port = viewer.port
         settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
                             viewer_port=viewer_port, token=token, sessions_dir=args.sessions_dir,
-                            test_hooks=test_hooks_from_env())
+                            sessions_keep=args.sessions_keep,
+                            sessions_max_bytes=int(args.sessions_max_mb * 1024**2), test_hooks=test_hooks_from_env())
+        prune_sessions(settings.sessions_dir, settings.sessions_keep, settings.sessions_max_bytes,
+                       keep=[args.record] if args.record else [])
         app = create_app(settings, service=service)
         try:
             server, http_thread, http_port = _start_http(app, args.host, args.port, args.log_level)
