@@ -13,6 +13,7 @@ import threading
 import time
 from collections.abc import Sequence
 
+from app.session.files import KEEP_BYTES, KEEP_COUNT, retention_rule
 from robot.plant import available_scenes
 
 log = logging.getLogger("hrp2-console")
@@ -41,6 +42,26 @@ def _positive_seconds(text: str) -> float:
         value = float("nan")
     if not (math.isfinite(value) and value > 0):
         raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a number of seconds > 0")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a whole number >= 1")
+    return value
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a number > 0")
     return value
 
 
@@ -138,7 +159,13 @@ def run_parser() -> argparse.ArgumentParser:
                         f"changes, telemetry) to an MCAP file from the first tick; default path {SESSIONS_DIR}/"
                         "session-<time>.mcap; `hrp2-console replay PATH` replays it")
     p.add_argument("--sessions-dir", default=SESSIONS_DIR, metavar="DIR",
-                   help=f"where POST /api/sessions/start records and GET /api/sessions lists (default {SESSIONS_DIR})")
+                   help=f"where POST /api/sessions/start records and GET /api/sessions lists (default {SESSIONS_DIR}); "
+                        "it keeps " + retention_rule(KEEP_COUNT, KEEP_BYTES)
+                        + " (--sessions-keep, --sessions-max-mb)")
+    p.add_argument("--sessions-keep", type=_positive_int, default=KEEP_COUNT, metavar="N",
+                   help=f"session files --sessions-dir keeps at most (default {KEEP_COUNT})")
+    p.add_argument("--sessions-max-mb", type=_positive_float, default=KEEP_BYTES / 1024**2, metavar="MB",
+                   help=f"their size together at most [MB] (default {KEEP_BYTES / 1024**2:g})")
     p.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     return p
 
@@ -205,7 +232,12 @@ def _bind_http(host: str, port: int) -> socket.socket:
 def _start_http(app, sock: socket.socket, log_level: str):
     import uvicorn
 
-    server = uvicorn.Server(uvicorn.Config(app, log_level=log_level, lifespan="on", timeout_keep_alive=30))
+    from app.ws import MAX_MESSAGE_BYTES
+
+    # ws_max_size: a WebSocket message over the limit is refused by the server (close 1009) from its frame's
+    # length, before it is read into memory (uvicorn's default is 16 MB)
+    server = uvicorn.Server(uvicorn.Config(app, log_level=log_level, lifespan="on", timeout_keep_alive=30,
+                                           ws_max_size=MAX_MESSAGE_BYTES))
     thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, name="http", daemon=True)
     thread.start()
     deadline = time.monotonic() + 15.0
@@ -251,6 +283,7 @@ def run(argv: Sequence[str]) -> int:
     from app.service import OperatorService, ServiceError
     from app.service.estop_door import EstopDoorConfig
     from app.service.process import RobotConfig, RobotProcess
+    from app.session.files import prune_sessions
     from app.settings import Settings
     from robot.sensors import is_fallen
 
@@ -285,7 +318,10 @@ def run(argv: Sequence[str]) -> int:
             viewer_port = viewer.port
         settings = Settings(scene=args.scene, speed=args.speed, host=args.host, port=args.port,
                             viewer_port=viewer_port, token=token, sessions_dir=args.sessions_dir,
-                            test_hooks=test_hooks_from_env())
+                            sessions_keep=args.sessions_keep,
+                            sessions_max_bytes=int(args.sessions_max_mb * 1024**2), test_hooks=test_hooks_from_env())
+        prune_sessions(settings.sessions_dir, settings.sessions_keep, settings.sessions_max_bytes,
+                       keep=[args.record] if args.record else [])
         app = create_app(settings, service=service)
         try:
             server, http_thread, http_port = _start_http(app, http_sock, args.log_level)
@@ -341,7 +377,12 @@ def run(argv: Sequence[str]) -> int:
     print(f"  sim time: {sim_s:.3f} s")
     print(f"  ticks: {summary['ticks']}")
     print(f"  wall time: {wall_s:.3f} s")
-    print(f"  real-time factor: {sim_s / wall_s if wall_s > 0 else float('inf'):.2f}")
+    # the loop's own figure: simulated / wall time since the run began or was last reset (the ticks go on
+    # over a reset, and the wall time counts the start-up)
+    speed = last.timing.speed_run if last is not None else None
+    if speed is None:
+        speed = sim_s / wall_s if wall_s > 0 else float("inf")
+    print(f"  real-time factor: {speed:.2f}")
     print(f"  fallen: {str(fallen).lower()}")
     print(f"  max loop ms: {summary['max_loop_ms']:.3f}")
     if last is not None:

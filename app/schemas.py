@@ -217,6 +217,8 @@ class LoopTimingResponse(BaseModel):
     late_ticks_over_1ms: int = Field(description="ticks that began more than 1 ms late")
     speed_last: float | None = Field(description="simulated / wall time of the last finished 1-s window")
     speed_min: float | None = Field(description="the slowest kept 1-s window")
+    speed_run: float | None = Field(description="simulated / wall time since the run began (its start, its last "
+                                                "reset or speed change)")
     windows: int = Field(description="1-s windows kept")
     paced: bool = Field(description="false when running as fast as possible (lateness is then 0)")
     speed_target: float | None = Field(description="the real-time factor asked for")

@@ -17,6 +17,9 @@ from app.operator_lock import Locked, OperatorLock
 log = logging.getLogger(__name__)
 
 MAX_BODY_BYTES = 64 * 1024
+#: a refused body up to this size is read and discarded before the 413 ends, so that a client that sends its whole
+#: body before reading can read the answer; a larger one is answered at once and the connection closed
+DRAIN_MAX_BYTES = 16 * 1024 * 1024
 UNSAFE_METHODS = frozenset({"POST", "PUT", "PATCH", "DELETE"})
 #: control requests any page may send without a JSON body: they can only make the robot safer
 ALWAYS_ALLOWED = frozenset({("POST", "/api/estop")})
@@ -259,7 +262,9 @@ class ConsoleGuard:
                 await _send_json(send, 400, "invalid Content-Length")
                 return
             if n > self.max_body_bytes:
-                await _send_json(send, 413, f"the body is {n} bytes; the limit is {self.max_body_bytes}")
+                expects_continue = headers.get(b"expect", b"").lower() == b"100-continue"  # nothing sent yet
+                await _refuse_body(receive, send, f"the body is {n} bytes; the limit is {self.max_body_bytes}",
+                                   drain=n <= DRAIN_MAX_BYTES and not expects_continue)
                 return
         if method in UNSAFE_METHODS:
             body = b""
@@ -271,7 +276,8 @@ class ConsoleGuard:
                 body += message.get("body", b"")
                 more = message.get("more_body", False)
                 if len(body) > self.max_body_bytes:
-                    await _send_json(send, 413, f"the body is over the limit of {self.max_body_bytes} bytes")
+                    await _refuse_body(receive, send, f"the body is over the limit of {self.max_body_bytes} bytes",
+                                       drain=more)
                     return
             if body.strip():
                 try:
@@ -313,3 +319,22 @@ class ConsoleGuard:
             if not started:
                 log.exception("request %s %s failed", method, path)
                 await _send_json(send, 500, f"internal error: {type(exc).__name__}: {exc}")
+
+
+async def _refuse_body(receive, send, detail: str, drain: bool) -> None:
+    """413 with `detail`, then the connection is closed. With `drain`, the rest of the body (up to
+    DRAIN_MAX_BYTES) is read and discarded before the answer ends: a server that closes a socket with unread
+    bytes in it resets the connection, and a client still sending its body then never reads the answer."""
+    payload = json.dumps({"detail": detail}).encode()
+    await send({"type": "http.response.start", "status": 413,
+                "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(payload)).encode()),
+                            (b"connection", b"close")]})
+    await send({"type": "http.response.body", "body": payload, "more_body": True})
+    discarded = 0
+    while drain and discarded <= DRAIN_MAX_BYTES:
+        message = await receive()
+        if message["type"] == "http.disconnect":
+            break
+        discarded += len(message.get("body", b""))
+        drain = message.get("more_body", False)
+    await send({"type": "http.response.body", "body": b""})

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from app.session.files import KEEP_BYTES, KEEP_COUNT
+
 
 @dataclass(frozen=True)
 class Settings:
@@ -18,4 +20,6 @@ class Settings:
     lock_lease_s: float = 5.0  # [s] the operator lock of a holder without a WebSocket, after its last request
     lock_grace_s: float = 2.0  # [s] the operator lock after its holder's last WebSocket closed
     sessions_dir: str = "out/sessions"  # where POST /api/sessions/start records and GET /api/sessions lists
+    sessions_keep: int = KEEP_COUNT  # the retention rule (app.session.files.prune_sessions): files kept at most
+    sessions_max_bytes: int = KEEP_BYTES  # [bytes] and their size together at most
     test_hooks: bool = False  # POST /api/sim/fault (a layer that raises, a NaN in the physics): tests only

@@ -1,5 +1,6 @@
-"""Sessions: start recording one (from a fresh simulation: the start resets it), stop it, list the recorded
-files, download one. Replay them with `hrp2-console replay FILE` (or `--view`)."""
+"""Sessions: start recording one (from a fresh simulation: the start resets it; the oldest files beyond the
+retention rule are removed), stop it, list the recorded files, download one. Replay them with
+`hrp2-console replay FILE` (or `--view`)."""
 
 from __future__ import annotations
 
@@ -14,7 +15,7 @@ from app.deps import ServiceDep, SettingsDep
 from app.errors import errors
 from app.schemas import StrictBody
 from app.service.errors import InvalidArgument, NotFound
-from app.session.files import NAME_PATTERN, BadName, checked_name, free_name, list_sessions
+from app.session.files import NAME_PATTERN, BadName, checked_name, free_name, list_sessions, prune_sessions
 
 router = APIRouter(prefix="/api/sessions", tags=["sessions"])
 
@@ -37,7 +38,8 @@ def sessions(service: ServiceDep, settings: SettingsDep) -> dict:
 
 @router.post("/start", responses=errors(409, 422, e409="a session is already being recorded (reason: state)"),
              summary="Reset the simulation (same scene) and record a session from its first tick: the operator's "
-                     "and scripts' inputs with their ticks, behaviour runs, parameter changes, the telemetry")
+                     "and scripts' inputs with their ticks, behaviour runs, parameter changes, the telemetry; "
+                     "`removed`: the oldest files the retention rule removed (--sessions-keep, --sessions-max-mb)")
 def start(service: ServiceDep, settings: SettingsDep,
           req: Annotated[StartSessionRequest | None, Body()] = None) -> dict:
     folder = _folder(settings)
@@ -46,7 +48,11 @@ def start(service: ServiceDep, settings: SettingsDep,
     except BadName as exc:
         raise InvalidArgument("name", str(exc)) from None
     folder.mkdir(parents=True, exist_ok=True)
-    return {"recording": service.start_recording(str(folder / name))}
+    recording = service.start_recording(str(folder / name))
+    last = service.published().last_recording  # a file the writer may still be finishing
+    busy = [folder / name] + ([last["path"]] if last is not None and not last["finished"] else [])
+    removed = prune_sessions(folder, settings.sessions_keep, settings.sessions_max_bytes, keep=busy)
+    return {"recording": recording, "removed": removed}
 
 
 @router.post("/stop", responses=errors(409, e409="no session is being recorded (reason: state)"),

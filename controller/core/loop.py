@@ -110,6 +110,7 @@ class ControlLoop:
         self.tick_timer = TickTimer()
         self.physics_timer = TickTimer()
         self.lateness = LatenessMeter()
+        self.resets = 0  # replace_plant calls: a paced run starts a new schedule at each
         self.nap_s = 0.0  # [s] run_paced waits for the next tick in naps this long (0: one sleep)
         self._fall_detector_factory = fall_detector_factory
         #: called with the control time [s] at the start of every step(), after the command queue is drained
@@ -140,6 +141,7 @@ class ControlLoop:
     def replace_plant(self, plant: Plant) -> None:
         """Swap in a new plant (simulation reset) and rebuild the chain from its sensors."""
         self._attach(plant)
+        self.resets += 1
 
     # ---- commands -------------------------------------------------------------------------
     def submit(self, fn: Callable[[], Any]) -> Future:
@@ -340,24 +342,24 @@ class ControlLoop:
         meter = self.lateness
         meter.clear()
         wall0, sim0 = clock(), self.snapshot.time_s
-        anchored_speed = self.speed
+        anchored_speed, anchored_resets = self.speed, self.resets
         meter.speed_target = self.speed
         while not self._stop_event.is_set():
             speed = self.speed
             t_sim = self.snapshot.time_s
-            if speed != anchored_speed or t_sim < sim0:  # a new speed, or a reset: a new schedule
-                wall0, sim0, anchored_speed = clock(), t_sim, speed
+            if speed != anchored_speed or self.resets != anchored_resets:  # a new speed, or a reset: a new schedule
+                wall0, sim0, anchored_speed, anchored_resets = clock(), t_sim, speed, self.resets
                 meter.clear()
                 meter.speed_target = speed
             if speed is not None:
                 due = wall0 + (t_sim - sim0) / speed
                 delay = due - clock()
-                while delay > 0 and not self._stop_event.is_set() and self.snapshot.time_s == t_sim:
+                while delay > 0 and not self._stop_event.is_set() and self.resets == anchored_resets:
                     sleep(min(delay, self.nap_s) if self.nap_s > 0.0 else delay)
                     delay = due - clock()
                 if self._stop_event.is_set():
                     break
-                if self.snapshot.time_s != t_sim:
+                if self.resets != anchored_resets:
                     continue  # reset while waiting: start the new schedule
                 lateness = -delay
                 if lateness > 0.25:  # far behind (debugger, suspended machine): re-anchor instead of racing
@@ -366,7 +368,7 @@ class ControlLoop:
                 lateness = 0.0
             if between_ticks is not None:
                 between_ticks()
-                if self.snapshot.time_s != t_sim:
+                if self.resets != anchored_resets:
                     continue  # a reset at this boundary: not a tick of the old schedule
             meter.add(lateness, clock(), t_sim)
             try:

@@ -24,6 +24,7 @@ class LoopTiming:
     late_ticks_over_1ms: int
     speed_last: float | None  # simulated / wall time of the last finished 1-s window (None before the first)
     speed_min: float | None  # the slowest of the kept windows
+    speed_run: float | None  # simulated / wall time since the run began (its start, last reset or speed change)
     windows: int
     paced: bool  # False when running as fast as it can (no schedule: lateness is 0)
     speed_target: float | None  # the real-time factor asked for (None = as fast as possible)
@@ -42,16 +43,22 @@ class LatenessMeter:
         self._windows: deque[float] = deque(maxlen=SPEED_WINDOWS)
         self._window_wall0: float | None = None
         self._window_sim0 = 0.0
+        self._run_wall0: float | None = None  # [s] wall and simulated time at the run's first tick, and its last
+        self._run_sim0 = self._last_wall = self._last_sim = 0.0
         self.speed_target: float | None = None
 
     def clear(self) -> None:
         self._n = 0
         self._windows.clear()
         self._window_wall0 = None
+        self._run_wall0 = None
 
     def add(self, lateness_s: float, wall_s: float, sim_s: float) -> None:
         self._buf[self._n % self._size] = lateness_s * 1e3
         self._n += 1
+        self._last_wall, self._last_sim = wall_s, sim_s
+        if self._run_wall0 is None:
+            self._run_wall0, self._run_sim0 = wall_s, sim_s
         if self._window_wall0 is None:
             self._window_wall0, self._window_sim0 = wall_s, sim_s
         elif wall_s - self._window_wall0 >= 1.0:
@@ -76,7 +83,11 @@ class LatenessMeter:
         else:
             p50 = p99 = mx = 0.0
             over = 0
+        speed_run = None
+        if self._run_wall0 is not None and self._last_wall > self._run_wall0:
+            speed_run = round((self._last_sim - self._run_sim0) / (self._last_wall - self._run_wall0), 4)
         return LoopTiming(ticks=n, lateness_p50_ms=round(p50, 4), lateness_p99_ms=round(p99, 4),
                           lateness_max_ms=round(mx, 4), late_ticks_over_1ms=over,
                           speed_last=round(w[-1], 4) if w else None, speed_min=round(min(w), 4) if w else None,
+                          speed_run=speed_run,
                           windows=len(w), paced=self.speed_target is not None, speed_target=self.speed_target)

@@ -287,6 +287,36 @@ def test_chain_reports_order_and_per_layer_timing(client, runtime):
         assert c["timing"][name]["n"] == 20 and c["timing"][name]["p99_ms"] >= c["timing"][name]["p50_ms"]
 
 
+def test_a_reset_then_loop_timing_gives_the_figures_of_the_new_run_only():
+    """Paced at real time for 1.5 s, reset, 0.5 s more: /api/loop/timing?last_s=5 covers the new run's ticks
+    only, none measured against the old run's schedule (that tick was the whole old run late)."""
+    import time
+
+    from fastapi.testclient import TestClient
+
+    from app.main import create_app
+    from app.service import OperatorService
+    from app.service.local import LocalRobot
+    from app.settings import Settings
+
+    robot = LocalRobot(speed=1.0)
+    robot.start()
+    try:
+        app = create_app(Settings(extra_hosts=("testserver",)), service=OperatorService(robot))
+        with TestClient(app, headers={"content-type": "application/json"}) as client:
+            time.sleep(1.5)
+            reset_at = time.monotonic()  # (at the latest: the loop resets before the answer)
+            assert client.post("/api/sim/reset").status_code == 200
+            time.sleep(0.5)
+            t = client.get("/api/loop/timing?last_s=5").json()
+            since_reset_s = time.monotonic() - reset_at
+    finally:
+        robot.stop()
+    assert 0 < t["ticks"] <= since_reset_s / 0.005 + 2, t
+    assert t["lateness_max_ms"] < 1000.0, t  # the old schedule would give ~1500 ms
+    assert t["speed_run"] is not None and t["speed_run"] > 0.2, t
+
+
 def test_log_csv_has_a_header_and_one_row_per_tick(client, runtime):
     step(runtime, 0.05)
     r = client.get("/api/log.csv")

@@ -38,6 +38,14 @@ def test_a_headless_timed_run_exits_zero_and_prints_the_summary():
         assert key in out
 
 
+def test_the_help_states_the_sessions_retention_rule():
+    from app.cli import run_parser
+
+    text = " ".join(run_parser().format_help().split())
+    assert "at most 20 session files and 4096 MB together" in text and "never the one being recorded" in text
+    assert "--sessions-keep N" in text and "--sessions-max-mb MB" in text
+
+
 def test_bench_prints_json_with_every_chain_layer_timed():
     r = run("bench", "--duration", "1")
     assert r.returncode == 0, r.stdout + r.stderr

@@ -2,6 +2,7 @@
 attacked the way a stranger would: bad requests on a kept-alive connection, foreign origins and hosts,
 huge bodies, signals, and pollers."""
 
+import json
 import signal
 import socket
 import time
@@ -125,6 +126,27 @@ def test_the_estop_door_of_the_robot_process_engages_even_while_the_console_proc
     wait_state(console, lambda s: not s["emergency"]["hard_stop"])
 
 
+def test_a_websocket_message_over_the_limit_is_refused_by_the_server_with_1009_and_it_serves_on(console):
+    """uvicorn's ws_max_size is the 4 kB message limit: the server closes the socket from the frame's length
+    (1009, message too big) instead of reading the message for the app to refuse (which answers in-process
+    with an error and keeps the socket, tests/app/test_ws_messages.py)."""
+    from websockets.exceptions import ConnectionClosed
+    from websockets.sync.client import connect
+
+    from app.ws import MAX_MESSAGE_BYTES
+
+    url = f"ws://127.0.0.1:{console.port}/ws/operator"
+    with connect(url, open_timeout=5) as ws:
+        ws.send("x" * (16 * MAX_MESSAGE_BYTES))
+        with pytest.raises(ConnectionClosed) as caught:
+            ws.recv(timeout=5.0)
+    assert caught.value.rcvd is not None and caught.value.rcvd.code == 1009, caught.value
+    with connect(url, open_timeout=5) as ws:  # a message at the limit still reaches the app
+        ws.send(json.dumps({"point": "rhand", "linear": [0, 0, 0]}).ljust(MAX_MESSAGE_BYTES))
+        assert json.loads(ws.recv(timeout=5.0))["ok"] is True
+    assert console.request("GET", "/api/health")[0] == 200
+
+
 def test_a_10_mb_body_is_refused_with_413_and_no_tick_is_late_meanwhile(console):
     t0 = time.monotonic()
     status, body = console.request("PUT", "/api/stabilizer/params", body=b"{" + b" " * (10 * 1024 * 1024) + b"}")
@@ -167,6 +189,30 @@ def test_a_chunked_body_without_a_length_is_cut_off_at_the_limit_with_413(consol
         reply = _read_reply(sock).decode(errors="replace")
     assert reply.startswith("HTTP/1.1 413"), reply[:200]
     assert "over the limit of 65536 bytes" in reply
+    assert console.request("GET", "/api/health")[0] == 200  # the console serves on
+
+
+def test_a_10_mb_body_sent_whole_before_reading_gets_a_readable_413_and_beyond_16_mb_it_is_answered_at_once(console):
+    """The server reads and discards a refused body up to 16 MB before it ends the 413 and closes: a client that
+    sends all 10 MB first (here on a connection it asked to close, which the server closes after the answer)
+    then reads the answer, where the close used to reset the connection under the unread body."""
+    from app.security import DRAIN_MAX_BYTES
+
+    body = b"{" + b" " * (10 * 1024 * 1024) + b"}"
+    with socket.create_connection(("127.0.0.1", console.port), timeout=30) as sock:
+        sock.sendall(b"PUT /api/stabilizer/params HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n"
+                     b"Content-Type: application/json\r\nContent-Length: %d\r\n\r\n" % len(body) + body)
+        reply = _read_reply(sock).decode(errors="replace")
+    head, _, payload = reply.partition("\r\n\r\n")
+    assert head.startswith("HTTP/1.1 413"), reply[:200]
+    assert json.loads(payload) == {"detail": f"the body is {len(body)} bytes; the limit is 65536"}
+    # beyond the bound the server does not read: it answers from the length, at once, and closes
+    with socket.create_connection(("127.0.0.1", console.port), timeout=30) as sock:
+        sock.sendall(b"PUT /api/stabilizer/params HTTP/1.1\r\nHost: 127.0.0.1\r\n"
+                     b"Content-Type: application/json\r\nContent-Length: %d\r\n\r\n{" % (DRAIN_MAX_BYTES + 1))
+        reply = _read_reply(sock).decode(errors="replace")
+        assert sock.recv(1) == b""  # closed
+    assert reply.startswith("HTTP/1.1 413") and "connection: close" in reply.lower(), reply[:200]
     assert console.request("GET", "/api/health")[0] == 200  # the console serves on
 
 

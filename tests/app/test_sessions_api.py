@@ -81,3 +81,22 @@ def test_the_start_and_stop_paths_are_not_session_names(client):
     r = client.get("/api/sessions/start")
     assert r.status_code == 405 and r.headers["allow"] == "POST", r.text
     assert client.options("/api/sessions/stop").headers["allow"] == "POST"
+
+
+def test_a_session_start_removes_the_oldest_files_beyond_the_retention_rule_never_the_one_recording(service, runtime,
+                                                                                                     tmp_path):
+    import os
+
+    folder = tmp_path / "sessions"
+    folder.mkdir()
+    for i in range(3):
+        (folder / f"old-{i}.mcap").write_bytes(b"x" * 100)
+        os.utime(folder / f"old-{i}.mcap", (1_700_000_000 + i, 1_700_000_000 + i))
+    settings = Settings(extra_hosts=("testserver",), sessions_dir=str(folder), sessions_keep=2)
+    with TestClient(create_app(settings, service=service), headers={"content-type": "application/json"}) as client:
+        r = client.post("/api/sessions/start", json={"name": "new"})
+        assert r.status_code == 200, r.text
+        assert r.json()["removed"] == ["old-0.mcap", "old-1.mcap"]  # 4 files with the new one: the 2 oldest go
+        runtime.loop.run_for(0.05)
+        assert client.post("/api/sessions/stop").status_code == 200
+        assert [s["name"] for s in client.get("/api/sessions").json()["sessions"]] == ["new.mcap", "old-2.mcap"]

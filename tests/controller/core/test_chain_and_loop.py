@@ -213,3 +213,24 @@ def test_pacing_is_true_while_run_paced_ticks_in_the_callers_own_thread():
     assert not loop.pacing
     loop.run_paced(between_ticks=between_ticks)
     assert seen == [(True, False)] * 3 and not loop.pacing
+
+
+def test_a_reset_starts_a_new_schedule_and_the_timing_figures_of_the_new_run_only():
+    """Reset at a tick boundary after 0.5 s paced at real time: the first tick of the new run is not measured
+    against the old schedule (it was the whole old run late), and the figures cover the new run only."""
+    loop, _, _ = make_loop()
+    loop.speed = 1.0
+    boundaries = []
+
+    def between_ticks():
+        boundaries.append(loop.snapshot.time_s)
+        if len(boundaries) == 100:  # 0.5 s of the first run
+            loop.replace_plant(FakePlant())
+        elif len(boundaries) == 121:
+            loop.request_stop()
+
+    loop.run_paced(between_ticks=between_ticks)
+    t = loop.timing()
+    assert t.ticks == 21  # boundaries 101..121: the new run's ticks (the reset was at boundary 100)
+    assert t.lateness_max_ms < 50.0, t
+    assert t.speed_run is not None and 0.5 < t.speed_run < 1.5, t
