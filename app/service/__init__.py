@@ -229,32 +229,36 @@ class OperatorService:
         return _with_params(self._info, self.run(GetParams(owners))) if owners else self._info
 
     # ---- the operator's velocities and the behaviours ([OP] Eq. 5) -------------------------------------------
-    def _refuse_setpoint(self) -> None:
-        """A fall refuses a setpoint as it refuses a motion verb (the robot's latest published safety state)."""
+    def _refuse_setpoint(self) -> float:
+        """A fall refuses a setpoint as it refuses a motion verb (the robot's latest published safety state).
+        Returns the published control time [s]."""
         if "op" not in self._info.chain:
             raise NotFound(f"the chain has no operation layer ('op'); present: {', '.join(self._info.chain)}")
-        safety = self.published().snapshot.safety
+        snapshot = self.published().snapshot
+        safety = snapshot.safety
         if safety.fall is not None:
             raise Refused("fallen", f"operator velocity refused: the robot has fallen ({safety.fall}); reset the "
                                     "simulation")
         # (the hard e-stop is the robot's to judge, at the tick the setpoint reaches: it acknowledges the setpoint
         # as ignored; a published state up to 20 ms old would refuse the first setpoints after a release)
+        return snapshot.time_s
 
     def put_setpoint(self, setpoint: Setpoint, sender: Sender | None = None, override: bool = False) -> Setpoint:
         """Hand the operator's newest velocity for one point to the robot's latest-value channel (no queue);
         returns it numbered. `sender`: the client it comes from; PointTaken when another client streams to the
         point (unless `override`: the operator lock's holder); None (the console's own scripts) is not checked.
         `setpoint_outcome` tells when it reached the loop and whether it was applied."""
-        self._refuse_setpoint()
+        now_s = self._refuse_setpoint()
         with self._claims_lock:
             self._claims.stale_s = self._stream_stale_s()
-            self._claims.claim(setpoint, sender, override)
+            self._claims.claim(setpoint, sender, now_s, override)
             numbered = self.robot.put_setpoint(setpoint)
             self._claims.record(numbered, sender)
         return numbered
 
     def _stream_stale_s(self) -> float:
-        """[s] a point's stream has stopped after this long without a setpoint: the dead-man's timeout and ramp."""
+        """[s] of control time: a point's stream has stopped after this long without a setpoint, the dead-man's
+        timeout and ramp."""
         op = self._info.params.get("op")
         if op is None:
             return STREAM_STALE_S
@@ -267,8 +271,9 @@ class OperatorService:
 
     def point_owner(self, point: str) -> str | None:
         """The display name of the client streaming to `point` now (None: nobody)."""
+        now_s = self.published().snapshot.time_s
         with self._claims_lock:
-            owner = self._claims.owner(point)
+            owner = self._claims.owner(point, now_s)
         return None if owner is None else owner.name
 
     def setpoint_ack(self, point: str) -> SetpointAck | None:
@@ -302,16 +307,21 @@ class OperatorService:
         """Put a setpoint and wait until the robot has applied it (the tick it reached): see `put_setpoint`
         and `setpoint_outcome` for what is refused (PointTaken, Refused "hard_stop" / "before_release",
         Superseded); Unavailable when no acknowledgement came within `timeout_s`."""
+        return self.wait_setpoint(self.put_setpoint(setpoint, sender, override), sender, timeout_s)
+
+    def wait_setpoint(self, numbered: Setpoint, sender: Sender | None = None, timeout_s: float = ACK_TIMEOUT_S
+                      ) -> SetpointAck:
+        """Wait for the outcome of a setpoint put (`setpoint_outcome`): the acknowledgement when applied, else
+        its refusal; Unavailable when none came within `timeout_s`."""
         import time
 
-        numbered = self.put_setpoint(setpoint, sender, override)
         deadline = time.monotonic() + timeout_s
         while True:
-            ack = self.setpoint_outcome(numbered, sender, self.setpoint_ack(setpoint.point))
+            ack = self.setpoint_outcome(numbered, sender, self.setpoint_ack(numbered.point))
             if ack is not None:
                 return ack
             if time.monotonic() > deadline:
-                raise Unavailable(f"the robot did not acknowledge the {setpoint.point} setpoint within "
+                raise Unavailable(f"the robot did not acknowledge the {numbered.point} setpoint within "
                                   f"{timeout_s:g} s")
             time.sleep(0.002)
 

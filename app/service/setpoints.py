@@ -8,9 +8,8 @@ from __future__ import annotations
 
 import math
 import threading
-import time
 from collections import OrderedDict
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 from app.service.board import Board
@@ -23,8 +22,8 @@ MAX_ANGULAR_RAD_S = math.radians(90.0)  # [rad/s] |component| of a streamed angu
 MAX_STRIDE_RANGE_M = (0.01, 0.5)  # [m] the walking point's step length limit
 FOOT_DISTANCE_RANGE_M = (0.12, 0.4)  # [m] the walking point's distance between the feet's centres
 BOARD_BYTES = 1 << 14
-STREAM_STALE_S = 0.3  # [s] a point's stream has stopped this long after its last setpoint (the dead-man's 0.2 s
-#                       and its 0.1 s ramp, OperationParams' defaults: by then the point is at zero)
+STREAM_STALE_S = 0.3  # [s] of control time: a point's stream has stopped this long after its last setpoint (the
+#                       dead-man's 0.2 s and its 0.1 s ramp, OperationParams' defaults: by then the point is at zero)
 REMEMBERED_SEQS = 512  # per point: whose the newest setpoints were (10 s of two 25 Hz streams)
 
 
@@ -111,39 +110,38 @@ class Sender:
 
 class PointClaims:
     """Console side, without the operator lock: the first client streaming to a point owns it until its stream
-    stops (`stale_s` [s] without a new setpoint, a zero sent, or its WebSocket closed); another client's
-    setpoint to it is refused (PointTaken naming the owner) rather than mixed in. Also remembers whose each
-    recent setpoint was, so that an acknowledgement of a newer one can say whose it was. Not thread-safe: the
-    service holds its lock around `claim`, the board's put and `record`."""
+    stops (`stale_s` [s] of control time without a new setpoint, as the dead-man counts; a zero sent; or its
+    WebSocket closed); another client's setpoint to it is refused (PointTaken naming the owner) rather than
+    mixed in. Also remembers whose each recent setpoint was, so that an acknowledgement of a newer one can say
+    whose it was. `now_s`: the robot's control time as last published. Not thread-safe: the service holds its
+    lock around `claim`, the board's put and `record`."""
 
-    def __init__(self, stale_s: float = STREAM_STALE_S, clock: Callable[[], float] = time.monotonic,
-                 remembered: int = REMEMBERED_SEQS) -> None:
+    def __init__(self, stale_s: float = STREAM_STALE_S, remembered: int = REMEMBERED_SEQS) -> None:
         self.stale_s = float(stale_s)
-        self._clock = clock
         self._remembered = int(remembered)
-        self._owners: dict[str, tuple[Sender, float]] = {}  # point -> (owner, clock time of its last setpoint)
+        self._owners: dict[str, tuple[Sender, float]] = {}  # point -> (owner, control time of its last setpoint)
         self._senders: dict[str, OrderedDict[int, Sender | None]] = {}  # point -> seq -> who put it
 
     def __repr__(self) -> str:
         return f"PointClaims(stale_s={self.stale_s:g}, owners={ {p: o.name for p, (o, _) in self._owners.items()} })"
 
-    def owner(self, point: str) -> Sender | None:
-        """The client streaming to `point` now, or None."""
+    def owner(self, point: str, now_s: float) -> Sender | None:
+        """The client streaming to `point` at control time `now_s` [s], or None."""
         held = self._owners.get(point)
         if held is None:
             return None
-        if self._clock() - held[1] >= self.stale_s:
+        if not 0.0 <= now_s - held[1] < self.stale_s:  # stopped (or the simulation was reset since)
             del self._owners[point]
             return None
         return held[0]
 
-    def claim(self, sp: Setpoint, sender: Sender | None, override: bool = False) -> None:
+    def claim(self, sp: Setpoint, sender: Sender | None, now_s: float, override: bool = False) -> None:
         """PointTaken if another client streams to `sp.point` (unless `override`: the operator lock's holder).
         Otherwise `sender` owns the point from now (a zero gives it up); None (the console's own scripts) claims
         nothing."""
         if sender is None:
             return
-        owner = self.owner(sp.point)
+        owner = self.owner(sp.point, now_s)
         if owner is not None and not override and not sender.same_client(owner):
             raise PointTaken(sp.point, owner.name,
                              f"point: {sp.point!r} is being streamed by {owner.name!r}; its setpoints are not mixed "
@@ -153,7 +151,7 @@ class PointClaims:
         if sp.is_zero():
             self._owners.pop(sp.point, None)
         else:
-            self._owners[sp.point] = (sender, self._clock())
+            self._owners[sp.point] = (sender, now_s)
 
     def record(self, numbered: Setpoint, sender: Sender | None) -> None:
         """`numbered` (as the table numbered it) was put by `sender`."""
