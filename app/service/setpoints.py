@@ -150,8 +150,9 @@ class PointClaims:
                              "operator lock (POST /api/operator/lock)")
         if sp.is_zero():
             self._owners.pop(sp.point, None)
-        else:
-            self._owners[sp.point] = (sender, now_s)
+        else:  # a request of the streaming client's name leaves the point to that stream
+            keep = owner if owner is not None and sender.stream is None and sender.same_client(owner) else sender
+            self._owners[sp.point] = (keep, now_s)
 
     def record(self, numbered: Setpoint, sender: Sender | None) -> None:
         """`numbered` (as the table numbered it) was put by `sender`."""
