@@ -12,7 +12,7 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, ConfigDict, Field
 
 from app.operator_lock import Locked
-from app.service.errors import InvalidArgument, Refused, ServiceError
+from app.service.errors import InvalidArgument, PointTaken, Refused, ServiceError, Superseded
 from controller.core.errors import InvalidCommand, InvalidState
 
 log = logging.getLogger(__name__)
@@ -32,8 +32,13 @@ class ErrorBody(BaseModel):
     detail: str = Field(description="what was wrong and what would have worked")
     field: str | None = Field(default=None, description="the offending field (422)")
     reason: str | None = Field(default=None, description="what is in the way (409): hard_stop, fallen, collision, "
-                                                         "motion_stop, reach, state, diverged; (423): locked")
-    holder: str | None = Field(default=None, description="the client holding the operator lock (423)")
+                                                         "motion_stop, reach, state, diverged, point_taken, "
+                                                         "superseded; (423): locked")
+    holder: str | None = Field(default=None, description="the display name of the operator lock's holder (423)")
+    owner: str | None = Field(default=None, description="the display name of the client streaming to the point "
+                                                        "(409 point_taken)")
+    by: str | None = Field(default=None, description="the display name of the client whose newer setpoint the "
+                                                     "robot applied instead (409 superseded)")
     errors: list[ValidationItem] | None = Field(default=None, description="pydantic's findings (422)")
 
 
@@ -92,6 +97,11 @@ async def _service_handler(_: Request, exc: ServiceError) -> JSONResponse:
         extra["field"] = exc.field
     if isinstance(exc, Refused):
         extra["reason"] = exc.reason
+    if isinstance(exc, PointTaken):
+        extra["field"] = "point"
+        extra["owner"] = exc.owner
+    if isinstance(exc, Superseded):
+        extra["by"] = exc.by
     if exc.status >= 500:
         log.error("service error: %s", exc)
     return JSONResponse(status_code=exc.status, content=body(str(exc), **extra))
@@ -138,7 +148,9 @@ COMMON_ERRORS = {
     503: {"model": ErrorBody, "description": "the robot process is not running or did not answer"}}
 #: what control requests (POST, PUT, DELETE) may answer besides those
 CONTROL_ERRORS = {423: {"model": ErrorBody, "description": "another client holds the operator lock: `holder` "
-                                                           "names it (the e-stop is never refused)"}}
+                                                           "names it; its holder sends the lease token it got "
+                                                           "from POST /api/operator/lock as the X-Lock-Token "
+                                                           "header (the e-stop is never refused)"}}
 
 
 def errors(*codes: int, **descriptions: str) -> dict[int, dict[str, Any]]:

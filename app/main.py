@@ -53,8 +53,8 @@ def create_app(settings: Settings | None = None, service: OperatorService | None
                               "accepted without. Bodies are limited to 64 kB. A console bound beyond loopback needs "
                               "its token on every /api/ request (Authorization: Bearer <token>) and every WebSocket "
                               "(?token=<token>). While a client holds the operator lock (POST /api/operator/lock), "
-                              "the others' control requests are answered 423 naming the holder; the e-stop never "
-                              "is.")
+                              "control requests without its lease token (header X-Lock-Token; WebSockets "
+                              "?lock_token=) are answered 423 naming the holder; the e-stop never is.")
     api.state.settings = settings
     api.state.service = service
     lock = api.state.lock = OperatorLock(settings.lock_lease_s, settings.lock_grace_s)

@@ -400,8 +400,8 @@ class BehaviorDoc(BaseModel):
 # ---- the operator lock ---------------------------------------------------------------------------------------
 class LockRequest(StrictBody):
     client: str = Field(pattern=r"^[A-Za-z0-9._:-]{1,64}$", min_length=1, max_length=64, examples=["page-1"],
-                        description="this client's id (1 to 64 of A-Z a-z 0-9 . _ : -), sent again as the "
-                                    "X-Client-Id header of its control requests and as ?client= of its WebSockets")
+                        description="this client's display name (1 to 64 of A-Z a-z 0-9 . _ : -), shown to "
+                                    "every client; it proves nothing: the lease token answered does")
 
 
 class OperatorLockState(BaseModel):
@@ -414,7 +414,15 @@ class OperatorLockState(BaseModel):
     expires_in_s: float | None = Field(description="when it goes unless renewed [s]; null while the holder has a "
                                                    "WebSocket open, or when free")
     connected: bool = Field(description="the holder has a WebSocket open (/ws/operator or /ws/telemetry with "
-                                        "?client=)")
+                                        "?lock_token=)")
+
+
+class OperatorLockLease(OperatorLockState):
+    """The lock as its taker sees it: with the lease token, which only POST /api/operator/lock answers."""
+
+    token: str = Field(description="the lease token: secret, the holder's only proof. Send it as the X-Lock-Token "
+                                   "header of its control requests (and DELETE /api/operator/lock) and as "
+                                   "?lock_token= of its WebSockets; a renewal (POST with it) answers the same one")
 
 
 class CommandRecord(BaseModel):

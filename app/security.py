@@ -12,7 +12,7 @@ import os
 from collections.abc import Collection, Iterable
 from urllib.parse import parse_qs, urlsplit
 
-from app.operator_lock import Locked, OperatorLock
+from app.operator_lock import TOKEN_HEADER, Locked, OperatorLock
 
 log = logging.getLogger(__name__)
 
@@ -31,7 +31,8 @@ LOCK_EXEMPT = frozenset({("POST", "/api/estop"), ("POST", "/api/motion/stop"), (
 TOKEN_PREFIXES = ("/api/", "/ws/")
 TOKEN_ENV = "HRP2_CONSOLE_TOKEN"
 MIN_TOKEN_CHARS = 16
-CLIENT_HEADER = b"x-client-id"
+CLIENT_HEADER = b"x-client-id"  # the client's display name (journal, point ownership): it authenticates nothing
+LOCK_TOKEN_HEADER = TOKEN_HEADER.lower().encode()  # the operator lock's lease token: the holder's proof
 
 
 #: headers a request may carry once only: with two, which one a check reads and which one a later reader uses
@@ -159,7 +160,8 @@ class ConsoleGuard:
     """Wraps the FastAPI app. `allowed_hosts` None accepts any Host (the token then guards, see Settings).
     `token`: when set, every /api/ request carries it as `Authorization: Bearer <token>` and every /ws/
     connection as `?token=<token>` (or the same header). `lock`: while a client holds it, the control
-    requests of the others are answered 423 naming the holder (stops excepted, see LOCK_EXEMPT)."""
+    requests that do not carry its lease token (header X-Lock-Token) are answered 423 naming the holder (stops
+    excepted, see LOCK_EXEMPT)."""
 
     def __init__(self, app, allowed_hosts: tuple[str, ...] | None, max_body_bytes: int = MAX_BODY_BYTES,
                  token: str | None = None, lock: OperatorLock | None = None) -> None:
@@ -240,9 +242,9 @@ class ConsoleGuard:
                 return
             if (self.lock is not None and path.startswith("/api/") and (method, path) not in LOCK_EXEMPT
                     and self._documented(scope)):  # a method the path lacks is answered 405, locked or not
-                client = headers.get(CLIENT_HEADER)
+                lease = headers.get(LOCK_TOKEN_HEADER)
                 try:
-                    self.lock.check(None if client is None else client.decode("latin-1"), f"{method} {path}")
+                    self.lock.check(None if lease is None else lease.decode("latin-1"), f"{method} {path}")
                 except Locked as exc:
                     payload = json.dumps({"detail": str(exc), "reason": "locked", "holder": exc.holder}).encode()
                     await send({"type": "http.response.start", "status": 423, "headers": [

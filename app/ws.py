@@ -1,8 +1,8 @@
 """The console's WebSockets, shared by the routers that serve them: the message size limit, the `?client=<id>`
-check, receiving a text message, and a stream at a rate its client chooses (`?rate_hz=N`, then {"rate_hz": N}
-messages: the opening checks, the operator lock kept by `?client=<id>`, the sends under one lock, and the reader
-that answers rate messages). The telemetry and the camera streams are built on it; each says only what it
-sends."""
+check (a display name), the operator lock's lease token (`?lock_token=`), receiving a text message, and a stream
+at a rate its client chooses (`?rate_hz=N`, then {"rate_hz": N} messages: the opening checks, the operator lock
+kept by its holder's `?lock_token=`, the sends under one lock, and the reader that answers rate messages). The
+telemetry and the camera streams are built on it; each says only what it sends."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import math
 from fastapi import WebSocket
 
 from app.deps import get_lock
-from app.operator_lock import check_client_id
+from app.operator_lock import TOKEN_HEADER, TOKEN_PARAM, check_client_id
 
 MAX_MESSAGE_BYTES = 4096  # a setpoint is ~150 bytes
 
@@ -27,6 +27,19 @@ def ws_client(ws: WebSocket) -> tuple[str | None, str | None]:
         return check_client_id(client, "client"), None
     except ValueError as exc:
         return None, str(exc)
+
+
+def ws_lock_token(ws: WebSocket) -> str | None:
+    """The operator lock's lease token the socket was opened with (?lock_token=, or the X-Lock-Token header)."""
+    return ws.query_params.get(TOKEN_PARAM) or ws.headers.get(TOKEN_HEADER)
+
+
+def ws_sender_name(ws: WebSocket, client: str | None) -> str:
+    """The name a stream's client is shown by: its ?client= id, else "anonymous@<address>"."""
+    if client is not None:
+        return client
+    peer = ws.client
+    return f"anonymous@{peer.host if peer else '?'}"
 
 
 async def receive_message(ws: WebSocket) -> str | None:
@@ -85,11 +98,11 @@ class RateStream:
     """One accepted stream: `period_s` (changed by the client's messages), `send`, `reading` (the reader task:
     done when the client has gone), `close()`."""
 
-    def __init__(self, ws: WebSocket, range_hz: tuple[float, float], rate_hz: float, client: str | None) -> None:
+    def __init__(self, ws: WebSocket, range_hz: tuple[float, float], rate_hz: float, lease: str | None) -> None:
         self.ws = ws
         self.range_hz = range_hz
         self.period_s = 1.0 / rate_hz
-        self.client = client
+        self.lease = lease  # the operator lock's lease this stream keeps (None: none)
         self.lock = get_lock(ws)
         self.send_lock = asyncio.Lock()
         self.reading: asyncio.Task | None = None
@@ -97,9 +110,10 @@ class RateStream:
     @classmethod
     async def open(cls, ws: WebSocket, range_hz: tuple[float, float], default_hz: float) -> RateStream | None:
         """Accept; a bad `?rate_hz` or `?client` is answered with an error naming it and the socket closed
-        (None). Otherwise the client's operator lock is kept while the stream is open, and the reader runs."""
+        (None). Otherwise the operator lock is kept while the stream is open if it was opened with the holder's
+        ?lock_token=, and the reader runs."""
         lock = get_lock(ws)
-        client, bad_client = ws_client(ws)
+        _, bad_client = ws_client(ws)  # the name is only checked: it keeps no lock
         await ws.accept()
         try:
             rate = check_rate(ws.query_params.get("rate_hz", default_hz), range_hz)
@@ -109,9 +123,7 @@ class RateStream:
             await ws.send_text(error_text(str(exc), field=_field(exc)))
             await ws.close(code=1008, reason=str(exc)[:120])
             return None
-        if client is not None:
-            lock.connected(client)
-        stream = cls(ws, range_hz, rate, client)
+        stream = cls(ws, range_hz, rate, lock.connected(ws_lock_token(ws)))
         stream.reading = asyncio.create_task(stream._reader())
         return stream
 
@@ -142,5 +154,5 @@ class RateStream:
     def close(self) -> None:
         if self.reading is not None:
             self.reading.cancel()
-        if self.client is not None:
-            self.lock.disconnected(self.client)
+        self.lock.disconnected(self.lease)
+        self.lease = None

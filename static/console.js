@@ -21,22 +21,25 @@ const el = (tag, attrs = {}, ...children) => {
 function setText(node, text) { if (node.textContent !== text) node.textContent = text; }
 function setClass(node, cls) { if (node.className !== cls) node.className = cls; }
 
-// ---- the token and the client id (contract with the API): from the page's own URL, kept in memory -----------
+// ---- the token, the client id and the lock's lease (contract with the API): kept in memory only --------------
 const TOKEN = new URLSearchParams(location.search).get("token");
 if (TOKEN) history.replaceState(null, "", location.pathname);  // not left in the address bar
-const CLIENT_ID = "page-" + Math.random().toString(36).slice(2, 10);
+const CLIENT_ID = "page-" + Math.random().toString(36).slice(2, 10);  // a display name: it proves nothing
+let lockToken = null;  // the operator lock's lease token while this page holds it: secret, never shown or logged
 
 function headers(json = true) {
   const h = {"X-Client-Id": CLIENT_ID};
   if (json) h["Content-Type"] = "application/json";
   if (TOKEN) h["Authorization"] = `Bearer ${TOKEN}`;
+  if (lockToken) h["X-Lock-Token"] = lockToken;
   return h;
 }
 function wsUrl(path) {
   const url = new URL(path, location.href);
   url.protocol = location.protocol === "https:" ? "wss:" : "ws:";
   if (TOKEN) url.searchParams.set("token", TOKEN);
-  url.searchParams.set("client", CLIENT_ID);  // an open socket of the lock's holder keeps its lock
+  url.searchParams.set("client", CLIENT_ID);
+  if (lockToken) url.searchParams.set("lock_token", lockToken);  // the holder's stream; an open one keeps the lock
   return url.href;
 }
 
@@ -199,6 +202,7 @@ let lastState = null;
 let lastFreshAt = performance.now();
 let telemetryMode = "connecting";
 
+let telemetryWs = null;
 function startTelemetry() {
   let opened = false;
   let ws;
@@ -208,11 +212,13 @@ function startTelemetry() {
     pollState();
     return;
   }
+  telemetryWs = ws;
   ws.onopen = () => { opened = true; telemetryMode = "telemetry"; };
   ws.onmessage = (m) => { try { onState(JSON.parse(m.data)); } catch (e) { /* a bad frame is skipped */ } };
   ws.onclose = () => {
+    if (telemetryWs === ws) telemetryWs = null;
     if (!opened) { telemetryMode = "polling"; pollState(); return; }  // not offered: poll instead
-    setTimeout(startTelemetry, 500);  // was offered: reconnect
+    setTimeout(startTelemetry, ws.renewed ? 0 : 500);  // was offered: reconnect
   };
 }
 
@@ -592,6 +598,7 @@ const isZero = (t) => t.linear.every((v) => v === 0) && t.angular.every((v) => v
 
 // the WS /ws/operator stream: each message answered once, in order (ack or error): the FIFO gives the round trip
 let opWs = null;
+let opWsLatest = null;  // the newest socket, open or opening
 const sentAt = [];
 const rtts = [];
 const zeroTail = {};
@@ -621,8 +628,16 @@ function connectOperator() {
   ws.onclose = () => {
     if (opWs === ws) opWs = null;
     estopsOnWs.length = 0;  // answered no more: their POSTs answer them
-    setTimeout(connectOperator, 1000);
+    setTimeout(connectOperator, ws.renewed ? 0 : 1000);
   };
+  opWsLatest = ws;
+}
+// the lock just taken: the stick stream and the telemetry reconnect at once with its lease token (the holder's
+// stream is the one that may steer; an open one keeps the lock)
+function renewStreams() {
+  for (const ws of [opWsLatest, telemetryWs]) {
+    if (ws && ws.readyState <= WebSocket.OPEN) { ws.renewed = true; ws.close(); }
+  }
 }
 
 function streamTick() {
@@ -832,7 +847,7 @@ $("joint-form").addEventListener("submit", (e) => {
 let lockHolder = null;
 function updateLock(lock) {
   const holder = lock ? lock.holder : null;
-  const mine = holder === CLIENT_ID;
+  const mine = holder === CLIENT_ID && lockToken !== null;
   const watching = holder !== null && !mine;
   const st = $("lock-state");
   setText(st, holder === null ? "control: free (anyone)" : mine ? "control: YOU" : `control: ${holder} (watching)`);
@@ -853,12 +868,17 @@ function updateLock(lock) {
   lockHolder = holder;
 }
 $("lock-btn").addEventListener("click", async () => {
-  if (lockHolder === CLIENT_ID) {
+  if (lockHolder === CLIENT_ID && lockToken !== null) {
     const d = await api("DELETE", "/api/operator/lock");
-    if (d) log("control released", "ok");
+    if (d) { lockToken = null; log("control released", "ok"); }
   } else {
     const d = await post("/api/operator/lock", {client: CLIENT_ID});
-    if (d) log("you have control", "ok");
+    if (d && d.token) {
+      lockToken = d.token;
+      renewStreams();
+      updateLock(d);
+      log("you have control", "ok");
+    }
   }
 });
 

@@ -6,30 +6,34 @@ angular [deg/s]."""
 from __future__ import annotations
 
 import asyncio
+import itertools
 import json
 import math
 import time
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Body, Header, WebSocket, WebSocketDisconnect
+from fastapi import APIRouter, Body, Header, Request, WebSocket, WebSocketDisconnect
 from pydantic import TypeAdapter, ValidationError
 
+from app.command_journal import client_name
 from app.deps import LockDep, ServiceDep, get_service
 from app.deps import get_lock as lock_of
 from app.errors import errors
 from app.operator_lock import Locked
 from app.params_http import params_changes_body, params_document
-from app.schemas import LockRequest, OperatorAck, OperatorLockState, OperatorVelocityRequest
-from app.service import ServiceError, estop, ignored_message
+from app.schemas import LockRequest, OperatorAck, OperatorLockLease, OperatorLockState, OperatorVelocityRequest
+from app.service import PointTaken, Refused, Sender, ServiceError, Superseded, estop
 from app.service.setpoints import Setpoint, SetpointAck
 from app.state import jsonable
-from app.ws import MAX_MESSAGE_BYTES, receive_message, ws_client
+from app.ws import MAX_MESSAGE_BYTES, receive_message, ws_client, ws_lock_token, ws_sender_name
 
 router = APIRouter(prefix="/api/operator", tags=["operator"])
 ws_router = APIRouter(tags=["operator"])
 
 ACK_POLL_S = 0.003  # [s] how often the stream looks for the robot's acknowledgements
 ACK_GIVE_UP_S = 1.0  # [s] a setpoint not acknowledged by then is answered with an error
+LOCK_TOKEN_DOC = ("the operator lock's lease token (POST /api/operator/lock answers it to the taker only); needed "
+                  "while the lock is held")
 
 
 def setpoint_of(req: OperatorVelocityRequest) -> Setpoint:
@@ -54,14 +58,17 @@ async def _estop_message(text: str, service, send) -> bool:
     return True
 
 
-def _stop_points(service, points) -> None:
+def _stop_points(service, points, sender: Sender) -> None:
     """A zero setpoint for each of `points`: a stream that ends (closed, dropped) stops what it moved at the next
-    tick instead of after the dead-man's 200 ms + 100 ms ramp."""
+    tick instead of after the dead-man's 200 ms + 100 ms ramp; a point another client streams to now is left to
+    it. Then the points are free for the others."""
     for point in points:
         try:
-            service.put_setpoint(Setpoint(point, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
+            service.put_setpoint(Setpoint(point, (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)), sender)
         except ServiceError:
-            pass  # the e-stop or a fall already holds it, or the robot process is gone: nothing moves
+            pass  # another client streams to it, the e-stop or a fall holds it, or the robot process is gone
+    if sender.stream is not None:
+        service.end_stream(sender.stream)
 
 
 def ack_body(ack: SetpointAck, seq: int) -> dict[str, Any]:
@@ -69,16 +76,27 @@ def ack_body(ack: SetpointAck, seq: int) -> dict[str, Any]:
             "time_s": ack.time_s}
 
 
-@router.put("/velocity", response_model=OperatorAck, responses=errors(404, 409, 422, e404="the chain has no "
-            "operation layer"),
+@router.put("/velocity", response_model=OperatorAck, responses=errors(
+    404, 409, 422, e404="the chain has no operation layer",
+    e409="not applied, `reason` says why: hard_stop, before_release (the robot ignored it: the hard e-stop), "
+         "fallen; point_taken (another client streams to the point: `owner` names it, first come until its "
+         "stream stops); superseded (another client's newer setpoint was applied instead: `by` names it)"),
             summary="The operator's velocity of one operational point (feet frame F: linear [m/s], angular "
                     "[deg/s]; walk: linear (vx, vy, 0), angular (0, 0, vtheta) and the step parameters). A "
                     "setpoint older than 200 ms counts as zero (ramped down over 100 ms): stream it (WS "
-                    "/ws/operator) to keep moving. Answers with the control tick it reached.")
-def put_velocity(req: OperatorVelocityRequest, service: ServiceDep) -> OperatorAck:
-    sp = setpoint_of(req)
-    ack = service.operator_velocity(sp)
-    return OperatorAck(**ack_body(ack, ack.seq))
+                    "/ws/operator) to keep moving. Answers with the control tick it reached, only once it (or a "
+                    "newer setpoint of the same client) reached the operation layer. X-Client-Id names the "
+                    "client (display only); while the operator lock is held, X-Lock-Token must be its lease.")
+def put_velocity(req: OperatorVelocityRequest, service: ServiceDep, lock: LockDep, request: Request,
+                 x_client_id: Annotated[str | None, Header(description="this client's display name (the other "
+                                                           "clients are told it); default anonymous@<address>")]
+                 = None,
+                 x_lock_token: Annotated[str | None, Header(description=LOCK_TOKEN_DOC)] = None) -> OperatorAck:
+    del x_client_id  # read with the journal's rule (client_name): here for the schema
+    sender = Sender(client_name(request.scope))
+    numbered = service.put_setpoint(setpoint_of(req), sender, override=lock.holds(x_lock_token))
+    ack = service.wait_setpoint(numbered, sender)
+    return OperatorAck(**ack_body(ack, numbered.seq))
 
 
 def _operation_params_class():
@@ -112,20 +130,26 @@ def lock_state(lock: LockDep) -> OperatorLockState:
     return OperatorLockState(**lock.state().to_dict())
 
 
-@router.post("/lock", response_model=OperatorLockState, responses=errors(422, 423),
-             summary="Take the operator lock (or renew it): the others' control requests are then answered 423 "
-                     "naming the holder, except the e-stop and the motion stop. Kept while the holder has a "
-                     "WebSocket open with ?client=<id>, else for lease_s after its last request; grace_s after "
-                     "its last WebSocket closed")
-def take_lock(req: LockRequest, lock: LockDep) -> OperatorLockState:
-    return OperatorLockState(**lock.take(req.client).to_dict())
+@router.post("/lock", response_model=OperatorLockLease, responses=errors(422, 423),
+             summary="Take the operator lock (or renew it, with X-Lock-Token): answers a secret lease token, "
+                     "to the taker only. Control requests without it (header X-Lock-Token; WebSockets "
+                     "?lock_token=) are then answered 423 naming the holder, except the e-stop and the motion "
+                     "stop; `client` is only the name the others see. Kept while the holder has a WebSocket open "
+                     "with ?lock_token=, else for lease_s after its last request; grace_s after its last "
+                     "WebSocket closed")
+def take_lock(req: LockRequest, lock: LockDep, x_lock_token: Annotated[str | None, Header(
+        description="the lease token, to renew the lock (taking a free lock needs none)")] = None
+              ) -> OperatorLockLease:
+    state, token = lock.take(req.client, x_lock_token)
+    return OperatorLockLease(**state.to_dict(), token=token)
 
 
-@router.delete("/lock", response_model=OperatorLockState, responses=errors(422, 423),
-               summary="Give the operator lock back (the holder only, named by its X-Client-Id header)")
-def release_lock(lock: LockDep, x_client_id: Annotated[str | None, Header(
-        pattern=r"^[A-Za-z0-9._:-]{1,64}$", description="the holder's client id")] = None) -> OperatorLockState:
-    lock.release(x_client_id)
+@router.delete("/lock", response_model=OperatorLockState, responses=errors(423),
+               summary="Give the operator lock back: the holder only, with its lease token as the X-Lock-Token "
+                       "header (423 without it, whatever X-Client-Id says)")
+def release_lock(lock: LockDep, x_lock_token: Annotated[str | None, Header(description=LOCK_TOKEN_DOC)] = None
+                 ) -> OperatorLockState:
+    lock.release(x_lock_token)
     return OperatorLockState(**lock.state().to_dict())
 
 
@@ -138,17 +162,38 @@ def _error(detail: str, field: str | None = None, reason: str | None = None, seq
                                          "seq": seq, **extra}.items() if v is not None})
 
 
+_STREAMS = itertools.count(1)  # each /ws/operator connection's id: two streams are two clients
+
+
+def _outcome_message(service, numbered: Setpoint, sender: Sender, ack: SetpointAck | None) -> str | None:
+    """The stream's answer to `numbered` given the robot's newest ack of its point (None: not yet)."""
+    try:
+        done = service.setpoint_outcome(numbered, sender, ack)
+    except Superseded as exc:
+        return _error(str(exc), reason="superseded", seq=numbered.seq, point=numbered.point, by=exc.by,
+                      applied_seq=None if ack is None else ack.seq)
+    except Refused as exc:  # ignored by the robot (the hard e-stop)
+        assert ack is not None
+        return _error(str(exc), reason=exc.reason, seq=numbered.seq, ignored=True, point=numbered.point,
+                      applied_seq=ack.seq, tick=ack.tick, time_s=ack.time_s)
+    return None if done is None else json.dumps(jsonable(ack_body(done, numbered.seq)))
+
+
 @ws_router.websocket("/ws/operator")
 async def operator_stream(ws: WebSocket) -> None:
     """Setpoints as JSON text messages, each the body of PUT /api/operator/velocity; every message is
     answered with {"ok": true, "point", "seq", "applied_seq", "tick", "time_s"} once the robot has applied
-    it (or a newer setpoint of the same point), or {"ok": false, "detail", "field"?, "reason"?}: a setpoint
-    the robot ignored (the hard e-stop) says {"ok": false, "ignored": true, "reason": "hard_stop" or
-    "before_release", ...}; one refused by the operator lock {"reason": "locked", "holder"}. The message
-    {"estop": true} engages the hard e-stop (POST /api/estop's answer with "estop": true; any client, the lock
-    never refuses it); {"estop": true, "press": "<id>"} with the press's id, as POST /api/estop's X-Estop-Press.
-    `?client=<id>`:
-    this connection keeps its client's operator lock (app.operator_lock)."""
+    it (or a newer setpoint of the same point from this stream), or {"ok": false, "detail", "field"?,
+    "reason"?}: a setpoint the robot ignored (the hard e-stop) says {"ok": false, "ignored": true, "reason":
+    "hard_stop" or "before_release", ...}; one refused by the operator lock {"reason": "locked", "holder"};
+    one to a point another client streams to {"reason": "point_taken", "field": "point", "owner"} (first come,
+    until its stream stops: a zero sent, no setpoint for the dead-man's 0.3 s, or its socket closed); one
+    replaced by another client's newer setpoint before the robot applied it {"reason": "superseded", "by"}.
+    The message {"estop": true} engages the hard e-stop (POST /api/estop's answer with "estop": true; any
+    client, the lock never refuses it); {"estop": true, "press": "<id>"} with the press's id, as POST
+    /api/estop's X-Estop-Press. `?client=<name>`: the name the other clients are told (display only);
+    `?lock_token=<lease>`: the operator lock's lease token, which makes this the holder's stream (and keeps
+    the lock while it is open, app.operator_lock)."""
     try:
         service = get_service(ws)
     except ServiceError as exc:
@@ -161,9 +206,10 @@ async def operator_stream(ws: WebSocket) -> None:
         await ws.send_text(_error(bad_client, field="client"))
         await ws.close(code=1008, reason="invalid client id")
         return
-    if client is not None:
-        op_lock.connected(client)
-    pending: list[tuple[str, int, float]] = []  # (point, seq, monotonic time put)
+    lease_token = ws_lock_token(ws)
+    lease = op_lock.connected(lease_token)
+    sender = Sender(ws_sender_name(ws, client), next(_STREAMS))
+    pending: list[tuple[Setpoint, float]] = []  # (numbered setpoint, monotonic time put)
     lock = asyncio.Lock()
 
     async def send(text: str) -> None:
@@ -180,22 +226,19 @@ async def operator_stream(ws: WebSocket) -> None:
                 acks = service.published().setpoint_acks
             except ServiceError as exc:
                 while pending:
-                    point, seq, _ = pending.pop(0)
-                    await send(_error(str(exc), seq=seq))
+                    numbered, _ = pending.pop(0)
+                    await send(_error(str(exc), seq=numbered.seq))
                 continue
             still = []
-            for point, seq, put_at in pending:
-                ack = acks.get(point)
-                if ack is not None and ack.seq == seq and ack.ignored is not None:
-                    await send(_error(ignored_message(ack.ignored), reason=ack.ignored, seq=seq, ignored=True,
-                                      point=point, tick=ack.tick, time_s=ack.time_s))
-                elif ack is not None and ack.seq >= seq:
-                    await send(json.dumps(jsonable(ack_body(ack, seq))))
+            for numbered, put_at in pending:
+                answer = _outcome_message(service, numbered, sender, acks.get(numbered.point))
+                if answer is not None:
+                    await send(answer)
                 elif now - put_at > ACK_GIVE_UP_S:
-                    await send(_error(f"the robot did not acknowledge setpoint {seq} within {ACK_GIVE_UP_S:g} s",
-                                      seq=seq))
+                    await send(_error(f"the robot did not acknowledge setpoint {numbered.seq} within "
+                                      f"{ACK_GIVE_UP_S:g} s", seq=numbered.seq))
                 else:
-                    still.append((point, seq, put_at))
+                    still.append((numbered, put_at))
             pending[:] = still
 
     task = asyncio.create_task(acker())
@@ -221,23 +264,25 @@ async def operator_stream(ws: WebSocket) -> None:
                 await send(_error(f"{field}: {err.get('msg', 'invalid')}", field=field))
                 continue
             try:
-                op_lock.check(client, "the stick stream")
+                holder = op_lock.check(lease_token, "the stick stream")
             except Locked as exc:
                 await send(_error(str(exc), reason="locked", holder=exc.holder))
                 continue
             try:
-                numbered = service.put_setpoint(setpoint_of(req))
+                numbered = service.put_setpoint(setpoint_of(req), sender, override=holder)
+            except PointTaken as exc:
+                await send(_error(str(exc), field="point", reason=exc.reason, owner=exc.owner, point=exc.point))
+                continue
             except ServiceError as exc:
                 reason = getattr(exc, "reason", None)
                 await send(_error(str(exc), field=getattr(exc, "field", None), reason=reason,
                                   ignored=True if reason in ("hard_stop", "fallen") else None))
                 continue
-            pending.append((numbered.point, numbered.seq, time.monotonic()))
+            pending.append((numbered, time.monotonic()))
             streamed.add(numbered.point)
     except WebSocketDisconnect:
         pass
     finally:
         task.cancel()
-        _stop_points(service, streamed)
-        if client is not None:
-            op_lock.disconnected(client)
+        _stop_points(service, streamed, sender)
+        op_lock.disconnected(lease)

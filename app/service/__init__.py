@@ -13,11 +13,19 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError, Unavailable
+from app.service.errors import (
+    InvalidArgument,
+    NotFound,
+    PointTaken,
+    Refused,
+    ServiceError,
+    Superseded,
+    Unavailable,
+)
 from app.service.estop import EstopAck, EstopRequest
 from app.service.estop import request_of as estop_request_of
 from app.service.host import Observation, Published
-from app.service.setpoints import Setpoint, SetpointAck
+from app.service.setpoints import STREAM_STALE_S, PointClaims, Sender, Setpoint, SetpointAck
 from app.service.verbs import (
     CancelRun,
     ChainTiming,
@@ -64,8 +72,8 @@ from controller.core.loop import Snapshot
 from controller.core.loop_timing import LoopTiming
 from controller.walking.footsteps import StepParams
 
-__all__ = ["InvalidArgument", "NotFound", "OperatorService", "Refused", "RobotBackend", "ServiceError",
-           "Unavailable"]
+__all__ = ["InvalidArgument", "NotFound", "OperatorService", "PointTaken", "Refused", "RobotBackend", "Sender",
+           "ServiceError", "Superseded", "Unavailable"]
 
 VERB_TIMEOUT_S = 5.0  # [s] a verb not answered by then is reported (the loop may be stuck or gone)
 ACK_TIMEOUT_S = 0.5  # [s] a setpoint whose acknowledgement has not come back by then is reported
@@ -101,6 +109,8 @@ class OperatorService:
         self._state_lock = threading.Lock()
         self._state_cache: tuple[tuple[int, int], dict, bytes] | None = None
         self._camera = None  # the camera view, made when first watched
+        self._claims = PointClaims()  # who streams to which point, whose each recent setpoint was
+        self._claims_lock = threading.Lock()
 
     def __repr__(self) -> str:
         return f"OperatorService({self.robot!r})"
@@ -222,42 +232,99 @@ class OperatorService:
         return _with_params(self._info, self.run(GetParams(owners))) if owners else self._info
 
     # ---- the operator's velocities and the behaviours ([OP] Eq. 5) -------------------------------------------
-    def _refuse_setpoint(self) -> None:
-        """A fall refuses a setpoint as it refuses a motion verb (the robot's latest published safety state)."""
+    def _refuse_setpoint(self) -> float:
+        """A fall refuses a setpoint as it refuses a motion verb (the robot's latest published safety state).
+        Returns the published control time [s]."""
         if "op" not in self._info.chain:
             raise NotFound(f"the chain has no operation layer ('op'); present: {', '.join(self._info.chain)}")
-        safety = self.published().snapshot.safety
+        snapshot = self.published().snapshot
+        safety = snapshot.safety
         if safety.fall is not None:
             raise Refused("fallen", f"operator velocity refused: the robot has fallen ({safety.fall}); reset the "
                                     "simulation")
         # (the hard e-stop is the robot's to judge, at the tick the setpoint reaches: it acknowledges the setpoint
         # as ignored; a published state up to 20 ms old would refuse the first setpoints after a release)
+        return snapshot.time_s
 
-    def put_setpoint(self, setpoint: Setpoint) -> Setpoint:
+    def put_setpoint(self, setpoint: Setpoint, sender: Sender | None = None, override: bool = False) -> Setpoint:
         """Hand the operator's newest velocity for one point to the robot's latest-value channel (no queue);
-        returns it numbered. `setpoint_ack` tells when it reached the loop."""
-        self._refuse_setpoint()
-        return self.robot.put_setpoint(setpoint)
+        returns it numbered. `sender`: the client it comes from; PointTaken when another client streams to the
+        point (unless `override`: the operator lock's holder); None (the console's own scripts) is not checked.
+        `setpoint_outcome` tells when it reached the loop and whether it was applied."""
+        now_s = self._refuse_setpoint()
+        with self._claims_lock:
+            self._claims.stale_s = self._stream_stale_s()
+            self._claims.claim(setpoint, sender, now_s, override)
+            numbered = self.robot.put_setpoint(setpoint)
+            self._claims.record(numbered, sender)
+        return numbered
+
+    def _stream_stale_s(self) -> float:
+        """[s] of control time: a point's stream has stopped after this long without a setpoint, the dead-man's
+        timeout and ramp."""
+        op = self._info.params.get("op")
+        if op is None:
+            return STREAM_STALE_S
+        return max(0.05, float(op.deadman_timeout_s) + float(op.deadman_ramp_s))
+
+    def end_stream(self, stream: int) -> list[str]:
+        """The WebSocket stream `stream` closed: the points it streamed to are free for other clients."""
+        with self._claims_lock:
+            return self._claims.release(stream)
+
+    def point_owner(self, point: str) -> str | None:
+        """The display name of the client streaming to `point` now (None: nobody)."""
+        now_s = self.published().snapshot.time_s
+        with self._claims_lock:
+            owner = self._claims.owner(point, now_s)
+        return None if owner is None else owner.name
 
     def setpoint_ack(self, point: str) -> SetpointAck | None:
         """The newest setpoint of `point` the robot has applied (as last published)."""
         return self.published().setpoint_acks.get(point)
 
-    def operator_velocity(self, setpoint: Setpoint, timeout_s: float = ACK_TIMEOUT_S) -> SetpointAck:
-        """Put a setpoint and wait until the robot has applied it (the tick it reached); Refused when the
-        robot acknowledged it as ignored (the hard e-stop)."""
+    def setpoint_outcome(self, numbered: Setpoint, sender: Sender | None, ack: SetpointAck | None
+                         ) -> SetpointAck | None:
+        """The answer to `numbered` (put by `sender`), given the robot's newest acknowledgement of its point:
+        None while it has not reached the robot; `ack` when it, or a newer setpoint of the same client, reached
+        the operation layer; Refused with the robot's reason when what reached it was ignored (the hard
+        e-stop: so also when the acknowledged setpoint is a newer one); Superseded when another client's newer
+        setpoint came after it (naming that client)."""
+        if ack is None or ack.seq < numbered.seq:
+            return None
+        if ack.ignored is not None:
+            raise Refused(ack.ignored, ignored_message(ack.ignored))
+        if ack.seq == numbered.seq:
+            return ack
+        with self._claims_lock:
+            newer = self._claims.sender_of(numbered.point, ack.seq)
+        if (sender is None and newer is None) or (sender is not None and sender.same_client(newer)):
+            return ack
+        who = f"{newer.name!r}" if newer is not None else "another client"
+        raise Superseded(numbered.point, None if newer is None else newer.name,
+                         f"setpoint {numbered.seq} of {numbered.point!r} superseded: {who} sent a newer one "
+                         f"({ack.seq}) that the robot applied instead; yours did not stay in effect")
+
+    def operator_velocity(self, setpoint: Setpoint, sender: Sender | None = None, override: bool = False,
+                          timeout_s: float = ACK_TIMEOUT_S) -> SetpointAck:
+        """Put a setpoint and wait until the robot has applied it (the tick it reached): see `put_setpoint`
+        and `setpoint_outcome` for what is refused (PointTaken, Refused "hard_stop" / "before_release",
+        Superseded); Unavailable when no acknowledgement came within `timeout_s`."""
+        return self.wait_setpoint(self.put_setpoint(setpoint, sender, override), sender, timeout_s)
+
+    def wait_setpoint(self, numbered: Setpoint, sender: Sender | None = None, timeout_s: float = ACK_TIMEOUT_S
+                      ) -> SetpointAck:
+        """Wait for the outcome of a setpoint put (`setpoint_outcome`): the acknowledgement when applied, else
+        its refusal; Unavailable when none came within `timeout_s`."""
         import time
 
-        numbered = self.put_setpoint(setpoint)
         deadline = time.monotonic() + timeout_s
         while True:
-            ack = self.setpoint_ack(setpoint.point)
-            if ack is not None and ack.seq >= numbered.seq:
-                if ack.ignored is not None and ack.seq == numbered.seq:
-                    raise Refused(ack.ignored, ignored_message(ack.ignored))
+            ack = self.setpoint_outcome(numbered, sender, self.setpoint_ack(numbered.point))
+            if ack is not None:
                 return ack
             if time.monotonic() > deadline:
-                raise Unavailable(f"the robot did not acknowledge the {setpoint.point} setpoint within "
+                raise Unavailable(f"the robot did not acknowledge the {numbered.point} setpoint within "
                                   f"{timeout_s:g} s")
             time.sleep(0.002)
 

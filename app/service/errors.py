@@ -29,7 +29,7 @@ class Refused(ServiceError):
     status = 409
 
     #: why a verb can be refused, and what ends it
-    REASONS = ("hard_stop", "fallen", "collision", "motion_stop", "reach", "state")
+    REASONS = ("hard_stop", "fallen", "collision", "motion_stop", "reach", "state", "point_taken", "superseded")
 
     def __init__(self, reason: str, message: str) -> None:
         super().__init__(message)
@@ -37,6 +37,30 @@ class Refused(ServiceError):
 
     def __reduce__(self):  # crosses the robot process's pipe
         return type(self), (self.reason, str(self))
+
+
+class PointTaken(Refused):
+    """A setpoint for an operational point another client streams to (first come, until its stream stops)."""
+
+    def __init__(self, point: str, owner: str, message: str) -> None:
+        super().__init__("point_taken", message)
+        self.point = point
+        self.owner = owner  # the streaming client's display name
+
+    def __reduce__(self):
+        return type(self), (self.point, self.owner, str(self))
+
+
+class Superseded(Refused):
+    """A setpoint replaced by another client's newer one before the robot applied it."""
+
+    def __init__(self, point: str, by: str | None, message: str) -> None:
+        super().__init__("superseded", message)
+        self.point = point
+        self.by = by  # the other client's display name (None: not known any more)
+
+    def __reduce__(self):
+        return type(self), (self.point, self.by, str(self))
 
 
 class NotFound(ServiceError, LookupError):

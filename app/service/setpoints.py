@@ -8,11 +8,12 @@ from __future__ import annotations
 
 import math
 import threading
+from collections import OrderedDict
 from collections.abc import Mapping
 from dataclasses import dataclass
 
 from app.service.board import Board
-from app.service.errors import InvalidArgument
+from app.service.errors import InvalidArgument, PointTaken
 from controller.core.errors import InvalidCommand
 from controller.operation.points import POINTS, Twist, WalkCommand, check_twist
 
@@ -21,6 +22,9 @@ MAX_ANGULAR_RAD_S = math.radians(90.0)  # [rad/s] |component| of a streamed angu
 MAX_STRIDE_RANGE_M = (0.01, 0.5)  # [m] the walking point's step length limit
 FOOT_DISTANCE_RANGE_M = (0.12, 0.4)  # [m] the walking point's distance between the feet's centres
 BOARD_BYTES = 1 << 14
+STREAM_STALE_S = 0.3  # [s] of control time: a point's stream has stopped this long after its last setpoint (the
+#                       dead-man's 0.2 s and its 0.1 s ramp, OperationParams' defaults: by then the point is at zero)
+REMEMBERED_SEQS = 512  # per point: whose the newest setpoints were (10 s of two 25 Hz streams)
 
 
 @dataclass(frozen=True, slots=True)
@@ -65,6 +69,10 @@ class Setpoint:
     def twist(self) -> Twist:
         return Twist.of(self.linear_m_s, self.angular_rad_s)
 
+    def is_zero(self) -> bool:
+        """Every component zero: the point is told to stop."""
+        return not any(self.linear_m_s) and not any(self.angular_rad_s)
+
     def walk(self) -> WalkCommand | None:
         if self.point != "walk":
             return None
@@ -83,6 +91,87 @@ class SetpointAck:
     tick: int
     time_s: float
     ignored: str | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class Sender:
+    """Who put a setpoint: a display name (the client's X-Client-Id / ?client=, or "anonymous@<address>"; it
+    proves nothing, the operator lock's token does) and the WebSocket stream it came on (None: a request)."""
+
+    name: str
+    stream: int | None = None
+
+    def same_client(self, other: Sender | None) -> bool:
+        """The same client: the same name, and the same stream unless one of them is a single request (a page
+        that streams may also PUT; two streams are two clients, whatever they are called)."""
+        return (other is not None and self.name == other.name
+                and (self.stream is None or other.stream is None or self.stream == other.stream))
+
+
+class PointClaims:
+    """Console side, without the operator lock: the first client streaming to a point owns it until its stream
+    stops (`stale_s` [s] of control time without a new setpoint, as the dead-man counts; a zero sent; or its
+    WebSocket closed); another client's setpoint to it is refused (PointTaken naming the owner) rather than
+    mixed in. Also remembers whose each recent setpoint was, so that an acknowledgement of a newer one can say
+    whose it was. `now_s`: the robot's control time as last published. Not thread-safe: the service holds its
+    lock around `claim`, the board's put and `record`."""
+
+    def __init__(self, stale_s: float = STREAM_STALE_S, remembered: int = REMEMBERED_SEQS) -> None:
+        self.stale_s = float(stale_s)
+        self._remembered = int(remembered)
+        self._owners: dict[str, tuple[Sender, float]] = {}  # point -> (owner, control time of its last setpoint)
+        self._senders: dict[str, OrderedDict[int, Sender | None]] = {}  # point -> seq -> who put it
+
+    def __repr__(self) -> str:
+        return f"PointClaims(stale_s={self.stale_s:g}, owners={ {p: o.name for p, (o, _) in self._owners.items()} })"
+
+    def owner(self, point: str, now_s: float) -> Sender | None:
+        """The client streaming to `point` at control time `now_s` [s], or None."""
+        held = self._owners.get(point)
+        if held is None:
+            return None
+        if not 0.0 <= now_s - held[1] < self.stale_s:  # stopped (or the simulation was reset since)
+            del self._owners[point]
+            return None
+        return held[0]
+
+    def claim(self, sp: Setpoint, sender: Sender | None, now_s: float, override: bool = False) -> None:
+        """PointTaken if another client streams to `sp.point` (unless `override`: the operator lock's holder).
+        Otherwise `sender` owns the point from now (a zero gives it up); None (the console's own scripts) claims
+        nothing."""
+        if sender is None:
+            return
+        owner = self.owner(sp.point, now_s)
+        if owner is not None and not override and not sender.same_client(owner):
+            raise PointTaken(sp.point, owner.name,
+                             f"point: {sp.point!r} is being streamed by {owner.name!r}; its setpoints are not mixed "
+                             f"with another client's: wait until its stream stops ({self.stale_s:g} s after its "
+                             "last setpoint, a zero, or its socket closed), choose another point, or take the "
+                             "operator lock (POST /api/operator/lock)")
+        if sp.is_zero():
+            self._owners.pop(sp.point, None)
+        else:  # a request of the streaming client's name leaves the point to that stream
+            keep = owner if owner is not None and sender.stream is None and sender.same_client(owner) else sender
+            self._owners[sp.point] = (keep, now_s)
+
+    def record(self, numbered: Setpoint, sender: Sender | None) -> None:
+        """`numbered` (as the table numbered it) was put by `sender`."""
+        seen = self._senders.setdefault(numbered.point, OrderedDict())
+        seen[numbered.seq] = sender
+        while len(seen) > self._remembered:
+            seen.popitem(last=False)
+
+    def sender_of(self, point: str, seq: int) -> Sender | None:
+        """Who put setpoint `seq` of `point` (None: the console's own, or too old to remember)."""
+        seen = self._senders.get(point)
+        return None if seen is None else seen.get(seq)
+
+    def release(self, stream: int) -> list[str]:
+        """The stream `stream` closed: the points it owned are free; they are returned."""
+        points = [p for p, (o, _) in self._owners.items() if o.stream == stream]
+        for p in points:
+            del self._owners[p]
+        return points
 
 
 class SetpointTable:

@@ -5,13 +5,29 @@ dead-man lets go of a setpoint not renewed; the validation and refusals; the ope
 from __future__ import annotations
 
 import math
+import threading
+import time
 
 import pytest
+from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
+
+from app.main import create_app
+from app.service import OperatorService, Refused, Sender, Superseded
+from app.service.local import LocalRobot
+from app.service.setpoints import Setpoint
+from app.settings import Settings
 
 
 def _status(client, point: str) -> dict:
     return client.get("/api/state").json()["operation"]["points"][point]
+
+
+def _wait(predicate, timeout_s: float = 10.0) -> None:
+    deadline = time.monotonic() + timeout_s
+    while not predicate():
+        assert time.monotonic() < deadline, "condition not reached in time"
+        time.sleep(0.005)
 
 
 def test_a_put_setpoint_reaches_the_op_layer_at_the_next_tick_and_the_dead_man_lets_it_go(client, runtime):
@@ -113,3 +129,141 @@ def test_operation_parameters_are_read_and_replaced_with_named_errors(client):
     assert r.status_code == 200 and r.json()["params"]["hand_speed_m_s"] == 0.2
     r = client.put("/api/operator/params", json={"hand_speed_m_s": 5.0})
     assert r.status_code == 422 and r.json()["field"] == "hand_speed_m_s"
+
+
+# ---- two clients, one point: ownership without the lock, and acks that say what happened to each setpoint ------
+def _stream(client, name: str):
+    return client.websocket_connect(f"/ws/operator?client={name}")
+
+
+def test_two_clients_streaming_one_point_without_a_lock_the_second_is_refused_naming_the_first(client, runtime):
+    runtime.run_for(0.1)
+    with _stream(client, "alice") as alice, _stream(client, "bob") as bob:
+        alice.send_json({"point": "rhand", "linear": [0.05, 0, 0]})
+        assert alice.receive_json()["ok"]
+        bob.send_json({"point": "rhand", "linear": [-0.05, 0, 0]})
+        err = bob.receive_json()
+        assert err["ok"] is False and err["reason"] == "point_taken" and err["owner"] == "alice", err
+        assert err["field"] == "point" and "'alice'" in err["detail"] and "operator lock" in err["detail"]
+        r = client.put("/api/operator/velocity", json={"point": "rhand", "linear": [-0.05, 0, 0]},
+                       headers={"x-client-id": "carol"})
+        assert r.status_code == 409 and r.json()["reason"] == "point_taken" and r.json()["owner"] == "alice", r.text
+        runtime.run_for(0.05)
+        assert _status(client, "rhand")["motion"][0] == pytest.approx(0.05)  # bob's and carol's never applied
+        bob.send_json({"point": "lhand", "linear": [0, 0.02, 0]})  # another point is free
+        assert bob.receive_json()["ok"]
+        alice.send_json({"point": "rhand", "linear": [0, 0, 0]})  # a zero ends alice's stream of the point...
+        assert alice.receive_json()["ok"]
+        bob.send_json({"point": "rhand", "linear": [-0.05, 0, 0]})  # ... and bob may take it
+        assert bob.receive_json()["ok"]
+        alice.send_json({"point": "rhand", "linear": [0.05, 0, 0]})
+        assert alice.receive_json()["owner"] == "bob"
+        runtime.run_for(0.05)
+        assert _status(client, "rhand")["motion"][0] == pytest.approx(-0.05)
+
+
+def test_a_point_is_free_again_once_its_stream_went_stale_or_closed(client, runtime):
+    runtime.run_for(0.1)
+    with _stream(client, "bob") as bob:
+        with _stream(client, "alice") as alice:
+            alice.send_json({"point": "head", "angular": [0, 0, 10.0]})
+            assert alice.receive_json()["ok"]
+            bob.send_json({"point": "head", "angular": [0, 0, -10.0]})
+            assert bob.receive_json()["reason"] == "point_taken"
+        client.get("/api/health")  # the close has been handled
+        bob.send_json({"point": "head", "angular": [0, 0, -10.0]})
+        assert bob.receive_json()["ok"], "alice's socket closed: the point is free"
+        with _stream(client, "alice") as alice:
+            alice.send_json({"point": "head", "angular": [0, 0, 10.0]})
+            assert alice.receive_json()["owner"] == "bob"
+            runtime.run_for(0.25)  # bob still moves the head: the dead-man's 0.2 s, then its 0.1 s ramp
+            alice.send_json({"point": "head", "angular": [0, 0, 10.0]})
+            assert alice.receive_json()["owner"] == "bob"
+            runtime.run_for(0.05)  # 0.3 s of control time without a setpoint of bob: his stream has stopped
+            alice.send_json({"point": "head", "angular": [0, 0, 10.0]})
+            assert alice.receive_json()["ok"]
+
+
+def test_two_streams_under_one_name_are_two_clients_but_a_put_of_the_same_name_is_the_same(client, runtime):
+    runtime.run_for(0.1)
+    with _stream(client, "alice") as first, _stream(client, "alice") as second:
+        first.send_json({"point": "rhand", "linear": [0.05, 0, 0]})
+        assert first.receive_json()["ok"]
+        second.send_json({"point": "rhand", "linear": [0.05, 0, 0]})
+        assert second.receive_json()["reason"] == "point_taken"
+        r = client.put("/api/operator/velocity", json={"point": "rhand", "linear": [0.02, 0, 0]},
+                       headers={"x-client-id": "alice"})
+        assert r.status_code == 200, r.text
+
+
+def test_an_ack_of_a_newer_setpoint_is_ok_only_when_it_was_applied_and_came_from_the_same_client(service, runtime):
+    """The robot acknowledges the newest setpoint of each point only; an older setpoint's answer is judged from
+    it: another client's newer one supersedes it, an ignored newer one means nothing was applied."""
+    runtime.run_for(0.1)
+    alice, bob = Sender("alice"), Sender("bob", stream=7)
+    a1 = service.put_setpoint(Setpoint("rhand", (0.02, 0.0, 0.0), (0.0, 0.0, 0.0)), alice)
+    a2 = service.put_setpoint(Setpoint("rhand", (0.03, 0.0, 0.0), (0.0, 0.0, 0.0)), alice)
+    assert service.setpoint_outcome(a1, alice, service.setpoint_ack("rhand")).seq == a2.seq  # alice's own newer one
+    b = service.put_setpoint(Setpoint("rhand", (-0.03, 0.0, 0.0), (0.0, 0.0, 0.0)), bob, override=True)  # the lock
+    with pytest.raises(Superseded, match="'bob' sent a newer one") as exc:
+        service.setpoint_outcome(a2, alice, service.setpoint_ack("rhand"))
+    assert exc.value.by == "bob" and exc.value.reason == "superseded"
+    assert service.setpoint_outcome(b, bob, service.setpoint_ack("rhand")).seq == b.seq
+    service.estop()
+    runtime.run_for(0.01)
+    b2 = service.put_setpoint(Setpoint("rhand", (-0.03, 0.0, 0.0), (0.0, 0.0, 0.0)), bob)
+    assert service.setpoint_ack("rhand").ignored == "hard_stop"
+    for numbered, sender in ((b, bob), (b2, bob), (a2, alice)):
+        with pytest.raises(Refused) as exc:
+            service.setpoint_outcome(numbered, sender, service.setpoint_ack("rhand"))
+        assert exc.value.reason == "hard_stop"
+    assert service.setpoint_outcome(b2, bob, None) is None  # not reached yet: no answer yet
+
+
+def test_under_the_estop_with_two_clients_streaming_no_velocity_request_is_answered_ok():
+    """The robot's loop paced in its own thread (the setpoints race its ticks, as on the console); alice streams
+    the right hand at 50 Hz while her lone PUTs and bob's stream and PUTs ask for the same point: every answer is
+    a refusal with its reason, and the hand's operator velocity stays zero."""
+    robot = LocalRobot(speed=1.0)
+    service = OperatorService(robot)
+    app = create_app(Settings(extra_hosts=("testserver",)), service=service)
+    robot.start()
+    answers: list[dict] = []
+    stop = threading.Event()
+    try:
+        with TestClient(app, headers={"content-type": "application/json"}) as client:
+            _wait(lambda: service.snapshot().time_s > 0.1)
+            assert client.post("/api/estop").status_code == 200
+
+            def stream_alice() -> None:
+                with _stream(client, "alice") as ws:
+                    while not stop.is_set():
+                        ws.send_json({"point": "rhand", "linear": [0.05, 0, 0]})
+                        answers.append(ws.receive_json())
+                        time.sleep(0.02)
+
+            streamer = threading.Thread(target=stream_alice, daemon=True)
+            streamer.start()
+            _wait(lambda: len(answers) >= 3)
+            motions = []
+            with _stream(client, "bob") as bob:
+                for i in range(40):
+                    name = "alice" if i % 2 else "bob"
+                    r = client.put("/api/operator/velocity", json={"point": "rhand", "linear": [0.05, 0, 0]},
+                                   headers={"x-client-id": name})
+                    answers.append({**r.json(), "status": r.status_code})
+                    bob.send_json({"point": "rhand", "linear": [-0.05, 0, 0]})
+                    answers.append(bob.receive_json())
+                    motions.append(_status(client, "rhand")["motion"])
+            stop.set()
+            streamer.join(timeout=5.0)
+    finally:
+        stop.set()
+        robot.stop()
+    assert len(answers) > 80
+    answered_ok = [a for a in answers if a.get("ok") is True or a.get("status") == 200]
+    assert not answered_ok, answered_ok
+    reasons = {a["reason"] for a in answers}
+    assert reasons <= {"hard_stop", "point_taken"} and "hard_stop" in reasons and "point_taken" in reasons, reasons
+    assert all(a["status"] == 409 for a in answers if "status" in a)
+    assert all(m == [0.0] * 6 for m in motions), motions

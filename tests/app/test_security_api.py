@@ -140,52 +140,84 @@ def test_websockets_with_the_token_are_served(secured):
 
 
 # ---- the operator lock ----------------------------------------------------------------------------------------
-def test_the_lock_is_taken_explicitly_and_shown_to_all(locked_app):
+def _take(app, name: str) -> str:
+    """Take the lock as `name`; its lease token."""
+    r = app.post("/api/operator/lock", json={"client": name})
+    assert r.status_code == 200, r.text
+    return r.json()["token"]
+
+
+def test_the_lock_is_taken_explicitly_and_shown_to_all_without_its_token(locked_app):
     assert locked_app.get("/api/operator/lock").json()["holder"] is None
     r = locked_app.post("/api/operator/lock", json={"client": "alice"})
     assert r.status_code == 200, r.text
-    assert r.json()["holder"] == "alice" and r.json()["lease_s"] == 5.0
-    assert locked_app.get("/api/state").json()["operator_lock"]["holder"] == "alice"
+    token = r.json()["token"]
+    assert r.json()["holder"] == "alice" and r.json()["lease_s"] == 5.0 and len(token) >= 32
+    shown = locked_app.get("/api/operator/lock").json()
+    assert shown["holder"] == "alice" and "token" not in shown
+    state = locked_app.get("/api/state")
+    assert state.json()["operator_lock"]["holder"] == "alice" and token not in state.text
     r = locked_app.post("/api/operator/lock", json={"client": "bob"})
     assert r.status_code == 423 and r.json()["holder"] == "alice" and "'alice'" in r.json()["detail"]
+    r = locked_app.post("/api/operator/lock", json={"client": "alice"})  # the name is not the holder
+    assert r.status_code == 423 and "token" not in r.json(), r.text
+    r = locked_app.post("/api/operator/lock", json={"client": "alice"}, headers={"x-lock-token": token})
+    assert r.status_code == 200 and r.json()["token"] == token  # the holder renews it with its token
+    assert token not in locked_app.get("/api/state").text  # nor does the journal show it
+    locked_app.delete("/api/operator/lock", headers={"x-lock-token": token})
 
 
 def test_control_requests_of_others_are_423_naming_the_holder_and_the_estop_always_passes(locked_app, robot):
-    locked_app.post("/api/operator/lock", json={"client": "alice"})
-    for headers in ({}, {"x-client-id": "bob"}):
+    token = _take(locked_app, "alice")
+    for headers in ({}, {"x-client-id": "bob"}, {"x-client-id": "alice"}, {"x-lock-token": "guessed"}):
         r = locked_app.post("/api/walk/go-pos", json={"x": 0.0, "y": 0.0, "theta_deg": 0.0}, headers=headers)
         assert r.status_code == 423, r.text
         assert r.json() == {"detail": r.json()["detail"], "reason": "locked", "holder": "alice"}
-        assert "POST /api/walk/go-pos refused" in r.json()["detail"]
+        assert "POST /api/walk/go-pos refused" in r.json()["detail"] and "X-Lock-Token" in r.json()["detail"]
         assert locked_app.put("/api/operator/velocity", json={"point": "rhand"}, headers=headers).status_code == 423
         assert locked_app.post("/api/sim/reset", headers=headers).status_code == 423
     assert locked_app.get("/api/state", headers={"x-client-id": "bob"}).status_code == 200  # watching is free
     r = locked_app.post("/api/estop", headers={"x-client-id": "bob"})
     assert r.status_code == 200 and robot.loop.hard_stop_engaged
-    assert locked_app.post("/api/estop/release", headers={"x-client-id": "bob"}).status_code == 423
-    r = locked_app.post("/api/estop/release", headers={"x-client-id": "alice"})
+    assert locked_app.post("/api/estop/release", headers={"x-client-id": "alice"}).status_code == 423
+    r = locked_app.post("/api/estop/release", headers={"x-client-id": "alice", "x-lock-token": token})
     assert r.status_code == 200, r.text
-    assert locked_app.delete("/api/operator/lock", headers={"x-client-id": "bob"}).status_code == 423
-    assert locked_app.delete("/api/operator/lock", headers={"x-client-id": "alice"}).json()["holder"] is None
+    r = locked_app.put("/api/operator/velocity", json={"point": "rhand"}, headers={"x-lock-token": token})
+    assert r.status_code == 200, r.text
+    for headers in ({"x-client-id": "bob"}, {"x-client-id": "alice"}, {"x-lock-token": token[:-1]}):
+        r = locked_app.delete("/api/operator/lock", headers=headers)
+        assert r.status_code == 423 and r.json()["holder"] == "alice", r.text
+    assert locked_app.get("/api/operator/lock").json()["holder"] == "alice"
+    assert locked_app.delete("/api/operator/lock", headers={"x-lock-token": token}).json()["holder"] is None
     r = locked_app.put("/api/operator/velocity", json={"point": "rhand"}, headers={"x-client-id": "bob"})
     assert r.status_code == 200, r.text
 
 
 def test_a_method_a_path_lacks_is_405_even_while_another_client_holds_the_lock(locked_app):
-    locked_app.post("/api/operator/lock", json={"client": "alice"})
+    token = _take(locked_app, "alice")
     r = locked_app.put("/api/behaviors", headers={"x-client-id": "bob"})  # GET only (the fuzz run found a 423)
     assert r.status_code == 405 and r.headers["allow"] == "GET", r.text
     assert locked_app.post("/api/walk/stop", headers={"x-client-id": "bob"}).status_code == 423
-    locked_app.delete("/api/operator/lock", headers={"x-client-id": "alice"})
+    locked_app.delete("/api/operator/lock", headers={"x-lock-token": token})
 
 
-def test_a_stick_stream_of_another_client_is_refused_naming_the_holder_and_the_socket_stays_usable(locked_app):
-    locked_app.post("/api/operator/lock", json={"client": "alice"})
+def test_a_stick_stream_without_the_holders_token_is_refused_naming_the_holder_and_the_socket_stays_usable(
+        locked_app):
+    token = _take(locked_app, "alice")
+    for query in ("client=bob", "client=alice", "client=alice&lock_token=guessed"):
+        with locked_app.websocket_connect(f"/ws/operator?{query}") as ws:
+            ws.send_json({"point": "rhand", "linear": [0.01, 0, 0]})
+            err = ws.receive_json()
+            assert err["ok"] is False and err["reason"] == "locked" and err["holder"] == "alice", (query, err)
+    with locked_app.websocket_connect(f"/ws/operator?client=alice&lock_token={token}") as ws:
+        ws.send_json({"point": "rhand", "linear": [0.01, 0, 0]})
+        assert ws.receive_json()["ok"] is True
+        ws.send_json({"point": "rhand", "linear": [0, 0, 0]})
+        assert ws.receive_json()["ok"] is True
     with locked_app.websocket_connect("/ws/operator?client=bob") as ws:
         ws.send_json({"point": "rhand", "linear": [0.01, 0, 0]})
-        err = ws.receive_json()
-        assert err["ok"] is False and err["reason"] == "locked" and err["holder"] == "alice"
-        locked_app.delete("/api/operator/lock", headers={"x-client-id": "alice"})
+        assert ws.receive_json()["reason"] == "locked"
+        locked_app.delete("/api/operator/lock", headers={"x-lock-token": token})
         ws.send_json({"point": "rhand", "linear": [0.01, 0, 0]})
         ack = ws.receive_json()
         assert ack["ok"] is True, ack
@@ -194,8 +226,11 @@ def test_a_stick_stream_of_another_client_is_refused_naming_the_holder_and_the_s
 def test_the_lock_is_released_a_grace_time_after_the_holders_last_websocket_closed(locked_app):
     import time
 
-    locked_app.post("/api/operator/lock", json={"client": "alice"})
-    with locked_app.websocket_connect("/ws/telemetry?client=alice&rate_hz=5") as ws:
+    token = _take(locked_app, "alice")
+    with locked_app.websocket_connect("/ws/telemetry?client=alice&rate_hz=5") as ws:  # the name keeps nothing
+        ws.receive_json()
+        assert locked_app.get("/api/operator/lock").json()["connected"] is False
+    with locked_app.websocket_connect(f"/ws/telemetry?client=alice&rate_hz=5&lock_token={token}") as ws:
         ws.receive_json()
         state = locked_app.get("/api/operator/lock").json()
         assert state["connected"] is True and state["expires_in_s"] is None
@@ -217,23 +252,40 @@ def test_an_invalid_client_id_is_422_naming_the_field(locked_app, body, field):
 def test_the_lock_expires_after_its_lease_without_a_websocket_and_control_renews_it():
     now = [0.0]
     lock = OperatorLock(lease_s=5.0, grace_s=1.0, clock=lambda: now[0])
-    lock.take("alice")
+    _, alice = lock.take("alice")
     now[0] = 4.0
-    lock.check("alice")  # a control request of the holder renews the lease
+    assert lock.check(alice) is True  # a control request of the holder renews the lease
     now[0] = 8.9
-    with pytest.raises(Locked, match="held by 'alice'"):
-        lock.check("bob")
+    for token in (None, "alice", "bob"):
+        with pytest.raises(Locked, match="held by 'alice'"):
+            lock.check(token)
     now[0] = 9.0
-    lock.check("bob")  # expired: free
+    assert lock.check(None) is False  # expired: free
     assert lock.holder is None
-    lock.take("bob")
-    lock.connected("bob")
+    _, bob = lock.take("bob")
+    assert bob != alice and not lock.holds(alice) and lock.holds(bob)
+    assert lock.connected(alice) is None  # an old lease's socket keeps nothing
+    lease = lock.connected(bob)
     now[0] = 100.0
     assert lock.holder == "bob"  # a holder with a WebSocket open keeps it
-    lock.disconnected("bob")
+    lock.disconnected(lease)
     now[0] = 100.9
     assert lock.holder == "bob"
     now[0] = 101.0
+    assert lock.holder is None
+
+
+def test_taking_the_lock_with_the_holders_name_gives_no_token_and_release_needs_the_token():
+    lock = OperatorLock()
+    _, token = lock.take("alice")
+    with pytest.raises(Locked):
+        lock.take("alice")
+    with pytest.raises(Locked):
+        lock.release(None)
+    with pytest.raises(Locked):
+        lock.release("alice")
+    assert lock.holder == "alice"
+    lock.release(token)
     assert lock.holder is None
 
 

@@ -216,3 +216,29 @@ def test_a_reset_to_another_scene_starts_its_camera_process_at_once():
         assert robot.host._cameras is expo
     finally:
         robot.host.close_cameras()
+
+
+def test_point_claims_first_come_until_the_stream_stops_on_control_time():
+    from app.service import PointTaken
+    from app.service.setpoints import PointClaims, Sender, Setpoint
+
+    claims = PointClaims(stale_s=0.3)
+    alice, bob = Sender("alice", stream=1), Sender("bob", stream=2)
+    move, zero = Setpoint("rhand", (0.05, 0.0, 0.0), (0.0, 0.0, 0.0)), Setpoint("rhand", (0.0,) * 3, (0.0,) * 3)
+    claims.claim(move, alice, now_s=1.0)
+    with pytest.raises(PointTaken, match="streamed by 'alice'") as exc:
+        claims.claim(move, bob, now_s=1.29)
+    assert exc.value.owner == "alice" and exc.value.reason == "point_taken" and exc.value.status == 409
+    claims.claim(move, Sender("alice"), now_s=1.29)  # a PUT of the same name: the same client
+    with pytest.raises(PointTaken):
+        claims.claim(move, Sender("alice", stream=3), now_s=1.3)  # another stream under the name: another client
+    claims.claim(move, bob, now_s=1.59)  # alice's last setpoint 0.3 s ago: her stream has stopped
+    claims.claim(zero, bob, now_s=1.6)  # a zero gives the point up
+    claims.claim(move, alice, now_s=1.6)
+    claims.claim(move, bob, now_s=1.61, override=True)  # the operator lock's holder
+    assert claims.owner("rhand", 1.62) == bob
+    assert claims.owner("rhand", 0.1) is None  # the simulation was reset: time went back
+    claims.claim(move, bob, now_s=0.2)
+    assert claims.release(2) == ["rhand"] and claims.owner("rhand", 0.2) is None
+    claims.claim(move, None, now_s=0.2)  # the console's own scripts claim nothing
+    assert claims.owner("rhand", 0.2) is None

@@ -943,12 +943,27 @@ def test_take_and_release_control_with_two_pages(page, hrp2_console, artifacts):
         # the watcher's E-STOP still works (any authenticated client, always)
         watcher.get_by_role("button", name="E-STOP", exact=True).click()
         wait_until(lambda: hrp2_console.state()["emergency"]["hard_stop"], 5.0, "the watcher's E-STOP")
-        # the watcher cannot release it; the operator can
-        r = watcher.evaluate("""async () => (await fetch('/api/estop/release', {method: 'POST',
-            headers: {'Content-Type': 'application/json', 'X-Client-Id': 'page-other'}})).status""")
+        # the watcher cannot release it, not even under the holder's name (a display name proves nothing), nor
+        # take the lock away; the operator can
+        for name in ("page-other", holder):
+            r = watcher.evaluate("""async (name) => (await fetch('/api/estop/release', {method: 'POST',
+                headers: {'Content-Type': 'application/json', 'X-Client-Id': name}})).status""", name)
+            assert r == 423, name
+        r = watcher.evaluate("""async (name) => (await fetch('/api/operator/lock', {method: 'DELETE',
+            headers: {'Content-Type': 'application/json', 'X-Client-Id': name}})).status""", holder)
         assert r == 423
+        assert hrp2_console.state()["operator_lock"]["holder"] == holder
         page.get_by_role("button", name="Release e-stop").click()
         wait_until(lambda: not hrp2_console.state()["emergency"]["hard_stop"], 5.0, "released by the operator")
+        # the holder's streams reconnected with its lease: they keep the lock, and its stick steers
+        wait_until(lambda: hrp2_console.state()["operator_lock"]["connected"], 5.0, "the holder's streams")
+        page.locator("#s-chain").click()
+        page.keyboard.press("Digit1")  # rhand
+        page.keyboard.down("KeyW")
+        try:
+            wait_until(lambda: motion(hrp2_console, "rhand")[0] > 0.01, 10.0, "the holder's stick moving the hand")
+        finally:
+            page.keyboard.up("KeyW")
         page.get_by_role("button", name="Release control").click()
         playwright_api.expect(watcher.locator("#lock-state")).to_contain_text("free")
         assert "watching" not in watcher.evaluate("document.body.className")
