@@ -180,7 +180,8 @@ class Ports:
     #: the stop of a walk the e-stop cut plays under the blend; the motion layers hold until it is over
     releasing: bool = False
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
-    #: st: |CP_ref - CP_act| this tick [m] (0: not estimated); hes lets a pushed robot's balance run on after a press
+    #: st: |CP_ref - CP_act| this tick [m] (0: not estimated, or not balancing: stopped or blending in); hes lets a
+    #: pushed robot's balance run on after a press
     cp_error_m: float = 0.0
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
