@@ -91,6 +91,11 @@ class HardEmergencyStopper(Layer):
     def set_params(self, params: HardEmergencyStopperParams) -> None:
         self.params = params
 
+    @property
+    def stopping(self) -> str | None:
+        """Engaged, not frozen yet: what it waits for ('landing the step'); None otherwise."""
+        return LANDING if self.landing else None
+
     def engage(self, q_rad: np.ndarray | None = None, reason: str = "operator") -> None:  # the safe-stop port
         """Engage the stop for `reason`. The operator's lets a step in progress land first (see the class); a
         fault, a fall or a given posture `q_rad` freeze now (at the last output, or at `q_rad`), also while a
@@ -182,6 +187,6 @@ class HardEmergencyStopper(Layer):
         return HardEmergencyStopperStatus(
             enabled=self.enabled, engaged=self.engaged, reason=self.reason, recovering=self.blend is not None,
             recover_remaining_s=0.0 if self.blend is None else round(self.blend.remaining_s, 4),
-            engage_count=self.engage_count, stopping=LANDING if self.landing else None,
+            engage_count=self.engage_count, stopping=self.stopping,
             landing_remaining_s=round(max(0.0, self.landing_deadline_s - self._next_tick_s), 4) if self.landing
             else 0.0)

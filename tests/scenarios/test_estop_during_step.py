@@ -74,7 +74,7 @@ def push_estop_release(impulse_ns, delay_s: float) -> dict:
     last = snaps[-1]
     return {
         "before": before, "frozen": frozen, "foot_load_n": float(frozen.wrenches_ext[RFSENSOR][2]), "last": last,
-        "fell_frozen": fell_frozen, "fallen": last.fallen,
+        "fell_frozen": fell_frozen, "fallen": last.fallen, "first": press[0],
         "t_push": t_push, "press_to_freeze_s": frozen.time_s - t_press,
         # the freeze's tick began a control period before its snapshot; the touchdown's snapshot ends its tick
         "touchdown_to_freeze_s": None if landed is None else frozen.time_s - landed.time_s,
@@ -102,7 +102,10 @@ def test_an_e_stop_during_the_emergency_step_lets_it_land_and_after_the_release_
           f"{r['worst_tilt_deg']:.1f} deg, foot load at the freeze {r['foot_load_n']:.0f} N, BODY at the end "
           f"{r['last'].truth.base_pos_world[2]:.3f} m, servo command "
           f"{r['command_moved_rad']:.3f} rad off the frozen one at most (el's tracking-error limit)")
-    # 1. the step landed before the freeze, and the freeze came within the bound
+    # 1. engaged at once, saying it lets the step land; the step landed before the freeze, which came within the bound
+    first = r["first"]
+    assert first.safety.hard_stop and first.safety.hard_stop_stopping == "landing the step"
+    assert first.layers["hes"].stopping == "landing the step"
     assert step.landed and np.sign(step.landing[0]) == np.sign(impulse[0])
     assert r["touchdown_to_freeze_s"] is not None and r["touchdown_to_freeze_s"] >= 0.0
     assert r["press_to_freeze_s"] <= LANDING_MAX_S + 1e-9
