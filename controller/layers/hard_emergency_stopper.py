@@ -97,7 +97,8 @@ class HardEmergencyStopper(Layer):
         return LANDING if self.landing else None
 
     def engage(self, q_rad: np.ndarray | None = None, reason: str = "operator") -> None:  # the safe-stop port
-        """Engage the stop for `reason`. The operator's lets a step in progress land first (see the class); a
+        """Engage the stop for `reason`. The operator's lets a step in progress land first (see the class), unless
+        it comes during a release blend (the output is not the live command: it freezes where the blend is); a
         fault, a fall or a given posture `q_rad` freeze now (at the last output, or at `q_rad`), also while a
         step lands. Engaging an engaged stopper is otherwise a no-op."""
         if self.engaged:
@@ -108,8 +109,8 @@ class HardEmergencyStopper(Layer):
         self.engaged = True
         self.reason = reason
         self.engage_count += 1
-        self.blend = None
-        if reason == "operator" and q_rad is None and self._step_to_land():
+        blending, self.blend = self.blend is not None, None
+        if reason == "operator" and q_rad is None and not blending and self._step_to_land():
             self.landing = True
             self.landing_deadline_s = self._next_tick_s + self.params.landing_max_s
             self.q_frozen = None

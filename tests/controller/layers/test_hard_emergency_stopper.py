@@ -233,3 +233,18 @@ def test_release_while_a_step_lands_ends_the_stop_without_a_blend():
     assert t.hes.tick(ctx, ref) is ref
     assert not (ctx.ports.hold or ctx.ports.landing or ctx.ports.releasing)
     assert not t.hes.status().engaged and not t.hes.status().recovering
+
+
+def test_an_e_stop_during_the_release_blend_freezes_where_the_blend_is_even_in_a_step():
+    t = StepTicker(HardEmergencyStopperParams(recover_time_s=1.0))
+    step = StepInProgress(1.0, True)
+    for _ in range(10):
+        t.tick(step)
+    t.hes.engage()
+    t.hes.engage(np.zeros(30), reason="fault")  # frozen at zero, far from the live ramp
+    t.hes.release()
+    for _ in range(20):
+        blended = t.tick(step).q_rad
+    t.hes.engage()
+    assert t.hes.status().stopping is None
+    np.testing.assert_array_equal(t.tick(step).q_rad, blended)  # no jump to the live command
