@@ -96,7 +96,8 @@ def state_document(pub: Published) -> dict[str, Any]:
                           "cp_threshold_m": cp_threshold_m,
                           "threshold": cp_threshold_m},  # deprecated name of cp_threshold_m
         "emergency": {
-            "hard_stop": safety.hard_stop, "hard_stop_reason": safety.hard_stop_reason, "fault": safety.fault,
+            "hard_stop": safety.hard_stop, "hard_stop_reason": safety.hard_stop_reason,
+            "hard_stop_stopping": safety.hard_stop_stopping, "fault": safety.fault,
             "fall": safety.fall,
             "flag": bool(getattr(st, "emergency", False)),
             "flag_rise_time": flag_rose_at,  # deprecated name of flag_rose_at
@@ -239,6 +240,9 @@ def state_model() -> type[BaseModel]:
         "EmergencyState", __base__=_Doc,
         hard_stop=(bool, Field(description="the hard e-stop (HardEmergencyStopper) is engaged")),
         hard_stop_reason=(str | None, Field(description="'operator', 'fault' or 'fallen'")),
+        hard_stop_stopping=(str | None, Field(description=(
+            "engaged, the command not frozen yet: 'landing the step' (the step in progress lands first, for at most "
+            "the HardEmergencyStopper's landing_max_s); null: frozen, or not engaged"))),
         fault=(str | None, Field(description="the last controller fault, until released")),
         fall=(str | None, Field(description="why the fall detector says the robot fell (until a reset)")),
         flag=(bool, Field(description="the Stabilizer's capture-point emergency flag")),

@@ -267,7 +267,7 @@ function onState(s) {
   const em = s.emergency || {};
   setText($("s-time"), `${fmt(s.time)} s (tick ${s.tick})`);
 
-  setText($("s-hard"), em.hard_stop ? "ENGAGED" : "off");
+  setText($("s-hard"), em.hard_stop ? (em.hard_stop_stopping ? `ENGAGED (${em.hard_stop_stopping})` : "ENGAGED") : "off");
   setClass($("s-hard"), "st" + (em.hard_stop ? " alarm" : ""));
   setStop("stop-hard", !!em.hard_stop);
   setText($("s-motion"), em.motion_stop ? `STOPPED (${em.motion_stop_reason || "?"})` : "off");

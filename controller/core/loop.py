@@ -48,6 +48,8 @@ class Safety:
     hard_stop_reason: str | None  # "operator" | "fault" | "fallen"
     fault: str | None  # the last exception inside the chain ("Type: message"), until cleared
     fall: str | None  # why the FallDetector says the robot has fallen (latched until a reset)
+    #: engaged, the command not frozen yet: "landing the step" (HardEmergencyStopperStatus.stopping); None: frozen
+    hard_stop_stopping: str | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -254,7 +256,8 @@ class ControlLoop:
         layers = {name: layer.status() for name, layer in self.chain.layers.items()}
         stop = self.chain.safe_stop_layer
         safety = Safety(hard_stop=bool(getattr(stop, "engaged", False)), hard_stop_reason=getattr(stop, "reason", None),
-                        fault=self.fault, fall=None if self.fall is None else self.fall.reason)
+                        fault=self.fault, fall=None if self.fall is None else self.fall.reason,
+                        hard_stop_stopping=getattr(stop, "stopping", None))
         planned = self._ports.planned_q_rad if planned_q_rad is None else planned_q_rad
         return Snapshot(
             tick=self.tick_count, time_s=float(sensors.time_s if self.tick_count == 0 else self.plant.time_s),

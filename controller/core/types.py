@@ -14,8 +14,8 @@ from robot.sensors import Sensors, frozen_array
 if TYPE_CHECKING:
     from controller.balance.leg_odometry import OdometryEstimate
 
-__all__ = ["BalanceEstimate", "Estimate", "GaitState", "Ports", "Reference", "TickContext", "frozen_array",
-           "read_only"]
+__all__ = ["BalanceEstimate", "Estimate", "GaitState", "Ports", "Reference", "StepInProgress", "TickContext",
+           "frozen_array", "read_only"]
 
 
 @dataclass(frozen=True, slots=True)
@@ -36,6 +36,15 @@ class GaitState:
     cog_acc_world: np.ndarray | None = None  # (3,) planned COG acceleration [m/s^2]
     base_pos_world: np.ndarray | None = None  # (3,) BODY where the AutoBalancer put it this tick [m]
     base_rpy_rad: np.ndarray | None = None  # (3,) and its roll, pitch, yaw [rad] (op places the upper body on it)
+
+
+@dataclass(frozen=True, slots=True)
+class StepInProgress:
+    """The step the AutoBalancer is taking, as the hard e-stop needs it to let the step land before it freezes
+    (Ports.step): a walk's swing, or a capture-point emergency step from its trigger to its end."""
+
+    touchdown_time_s: float  # control time [s] the swing foot touches (or touched) down: planned, or measured early
+    catching: bool  # a capture-point emergency step (its double support after the touchdown still catches the robot)
 
 
 @dataclass(frozen=True, slots=True)
@@ -171,6 +180,9 @@ class Ports:
     #: the stop of a walk the e-stop cut plays under the blend; the motion layers hold until it is over
     releasing: bool = False
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
+    #: st: |CP_ref - CP_act| this tick [m] (0: not estimated, or not balancing: stopped or blending in); hes lets a
+    #: pushed robot's balance run on after a press
+    cp_error_m: float = 0.0
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
     gait: GaitState | None = None  # abc: this tick's gait state (soles, contacts, COG); op reads the feet frame from it
@@ -189,6 +201,12 @@ class Ports:
     balance: BalanceEstimate | None = None
     # abc: a capture-point emergency step is in progress; es stops (and holds) the motion on it
     emergency_step: bool = False
+    #: abc: the step in progress (a walk's swing in the air, or an emergency step until it ends); None: none (standing,
+    #: a walk's double support). hes reads it to let the step land before it freezes
+    step: StepInProgress | None = None
+    #: hes: the e-stop is engaged and lets the step in progress land before it freezes (hold is set too): the balance
+    #: layers (abc, st) run on, abc plans no step after this one; the motion layers hold
+    landing: bool = False
 
 
 @dataclass(slots=True)
@@ -210,6 +228,7 @@ class TickContext:
 
     @property
     def balance_hold(self) -> bool:
-        """The hard e-stop is engaged (not releasing): the balance layers (abc, st) hold."""
+        """The hard e-stop holds the command (engaged, neither letting a step land nor releasing): the balance
+        layers (abc, st) hold."""
         last = self.last_ports
-        return last.hold and not last.releasing
+        return last.hold and not (last.releasing or last.landing)

@@ -19,7 +19,7 @@ from controller.balance.tilt_anchor import TiltAnchor
 from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
-from controller.core.types import BalanceEstimate, GaitState, Reference, TickContext, read_only
+from controller.core.types import BalanceEstimate, GaitState, Reference, StepInProgress, TickContext, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
@@ -293,6 +293,7 @@ class AutoBalancer(Layer):
         self._estep_records: tuple[EmergencyStepRecord, ...] = ()
         self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
         self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
+        self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
         if active:
             self.start()
 
@@ -521,6 +522,8 @@ class AutoBalancer(Layer):
             return out
         if self._holding:
             self._resume(ctx)
+        if ctx.last_ports.landing and self.gait.walking and self._estep is None and not self._walking_stop_requested:
+            self.emergency_stop_walking()  # the hard e-stop lets this step land: no step after it
         if self._blend is not None:
             self._weight = self._blend.step(ctx.dt_s)
             if self._blend.done:
@@ -592,9 +595,25 @@ class AutoBalancer(Layer):
         self._last_in = ref
         ctx.ports.cog_acc_world = gait.cog_acc_world
         ctx.ports.gait = gait
+        ctx.ports.step = self._step_in_progress(ctx)
         if self._estep is not None:
             self._estep_k += 1
         return self._last_out
+
+    def _step_in_progress(self, ctx: TickContext) -> StepInProgress | None:
+        """Ports.step this tick: the emergency step until it ends, or a walk's swing while its foot is in the air."""
+        if self._estep is not None:
+            samples, catching = self._estep.touchdown_k - self._estep_k, True
+        else:
+            samples, catching = self.gait.swing_samples_left(), False
+            if samples == 0:
+                self._step_port = None
+                return None
+        touchdown_s = ctx.time_s + samples * ctx.dt_s
+        last = self._step_port
+        if last is None or last.catching != catching or abs(last.touchdown_time_s - touchdown_s) > 0.5 * ctx.dt_s:
+            last = self._step_port = StepInProgress(touchdown_s, catching)
+        return last
 
     # ---- the capture-point emergency step ---------------------------------------------------------------
     def _check_emergency_step(self, ctx: TickContext) -> None:
@@ -602,7 +621,7 @@ class AutoBalancer(Layer):
         outside the support polygon of the two soles (and the feet carry the robot)."""
         bal = ctx.last_ports.balance
         g = self.last_gait
-        if bal is None or g is None or ctx.hold or g.walking:
+        if bal is None or g is None or g.walking or (ctx.hold and not ctx.last_ports.landing):
             return
         support = self._support
         if support is None or support[0] is not g.p_rsole_world:  # the idle soles' arrays: rebuilt when they move

@@ -223,6 +223,9 @@ class Stabilizer(Layer):
             return self._last_out
         self._update_emergency(ctx.time_s, gait, contact_act)
         ctx.ports.cp_flag = self.emergency
+        if self.active and self._transition is None:  # balancing (the flag's condition too)
+            ex, ey = self.cp_error.tolist()
+            ctx.ports.cp_error_m = math.hypot(ex, ey)
         if self.weight <= 0.0:
             self._last_out = ref
             return ref

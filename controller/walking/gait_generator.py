@@ -174,6 +174,7 @@ class GaitGenerator:
         self._pending_goal: tuple[float, float, float] | None = None  # goPos goal mid-coords for after this walk
         self._velocity_step: tuple[float | None, float | None] = (None, None)  # (max stride, foot distance) [m]
         self._plan_params: GaitParams | None = None  # the plan's own timing (an emergency step's), else params
+        self._swing_end: tuple[np.ndarray, int, int] | None = None  # swing_samples_left's last search
         self._idle = self._idle_sample()
 
     def __repr__(self) -> str:
@@ -226,6 +227,21 @@ class GaitGenerator:
         if not self._walking:
             return []
         return self._footsteps[max(self._current_segment().index, 1):]
+
+    def swing_samples_left(self) -> int:
+        """Samples of the swing in progress from the one `tick()` handed out last to the touchdown (that one
+        counted): the swing foot is planned down from that many ticks on; 0 in double support or idle."""
+        if not self._walking:
+            return 0
+        support = self._arrays["support"]
+        j = self._tick - 1 - self._origin
+        if not 0 <= j < len(support) or support[j] == _BOTH:
+            return 0
+        cache = self._swing_end  # (the support array, the swing's first and end sample): one search per swing
+        if cache is None or cache[0] is not support or not cache[1] <= j < cache[2]:
+            other = np.flatnonzero(support[j:] != support[j])
+            cache = self._swing_end = (support, j, j + (int(other[0]) if len(other) else len(support) - j))
+        return cache[2] - j
 
     # ----- commands (planning) --------------------------------------------------------------------------
 

@@ -34,7 +34,8 @@ class Ticker:
         self.ports = Ports()
         self.run(2.1)  # blended in, no capture point measured yet
 
-    def run(self, seconds, cp_xy=None, fz=(HALF_WEIGHT_N, HALF_WEIGHT_N), command=None, sensor_pos=None, hold=False):
+    def run(self, seconds, cp_xy=None, fz=(HALF_WEIGHT_N, HALF_WEIGHT_N), command=None, sensor_pos=None, hold=False,
+            landing=False):
         for _ in range(int(round(seconds / DT))):
             w = np.zeros((4, 6))
             w[RF, 2], w[LF, 2] = fz
@@ -47,7 +48,8 @@ class Ticker:
                 self.ports.balance = BalanceEstimate(cog_world=cog, cog_vel_world=np.zeros(3),
                                                      zmp_world=np.array([cp_xy[0], cp_xy[1], 0.0]),
                                                      cp_world_xy=np.array(cp_xy, dtype=float), omega_1_s=OMEGA)
-            self.ports.hold = hold
+            self.ports.hold = hold or landing
+            self.ports.landing = landing
             ctx.last_ports = self.ports
             ctx.ports.walk_command = command
             self.out = self.abc.tick(ctx, self.ref)
@@ -154,3 +156,50 @@ def test_the_emergency_step_parameters_are_the_autobalancers_and_refuse_an_empty
     assert (es.step_time_s, es.max_forward_m, es.cp_margin_m) == (0.5, 0.4, 0.0)
     with pytest.raises(InvalidCommand, match="emergency_step_min_width_m"):
         AutoBalancerParams(emergency_step_min_width_m=0.3, emergency_step_max_width_m=0.2)
+
+
+def test_the_step_port_says_when_the_emergency_steps_foot_touches_down_until_the_step_ends():
+    t = Ticker()
+    t.run(DT, cp_xy=None)
+    assert t.ports.step is None  # standing
+    t0 = t.tick_no * DT
+    t.run(DT, cp_xy=(TOE_X + 0.03, 0.0))
+    p = AutoBalancerParams()
+    swing_s = (1.0 - p.emergency_step_double_support_ratio) * p.emergency_step_time_s
+    step = t.ports.step
+    assert step.catching
+    # the touchdown as planned: after the initial double support and the swing (whole ticks, one tick's margin)
+    assert step.touchdown_time_s - t0 == pytest.approx(p.emergency_step_initial_double_support_s + swing_s, abs=DT)
+    t.run(0.5, cp_xy=None)
+    assert t.ports.step == step  # down, the step goes on: the same touchdown
+    t.run(3.0, cp_xy=None)
+    assert t.ports.step is None and not t.abc.status().emergency_step
+
+
+def test_a_walks_swing_is_in_the_step_port_and_its_double_support_is_not():
+    t = Ticker()
+    t.abc.go_velocity(0.1, 0.0, 0.0)
+    seen = []
+    for _ in range(int(round(2.5 / DT))):
+        t.run(DT)
+        step, support = t.ports.step, t.abc.status().support
+        assert (step is None) == (support == "both")
+        if step is not None:
+            assert not step.catching and step.touchdown_time_s > (t.tick_no - 1) * DT
+            seen.append(step.touchdown_time_s)
+    touchdowns = sorted(set(seen))
+    assert len(touchdowns) >= 2 and np.diff(touchdowns).min() > 0.5  # one touchdown time per swing
+
+
+def test_while_the_e_stop_lets_a_step_land_the_walk_ends_after_it_and_an_emergency_step_may_start():
+    t = Ticker()
+    t.abc.go_velocity(0.1, 0.0, 0.0)
+    t.run(1.5)
+    st = t.run(DT, landing=True)
+    assert st.walking_stop and st.walk_point != "walking"
+    t2 = Ticker()
+    st = t2.run(DT, cp_xy=(TOE_X + 0.03, 0.0), landing=True)  # pushed, the e-stop waiting: the step is taken
+    assert st.emergency_step
+    t3 = Ticker()
+    st = t3.run(DT, cp_xy=(TOE_X + 0.03, 0.0), hold=True)  # frozen: no step
+    assert not st.emergency_step

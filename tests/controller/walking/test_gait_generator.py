@@ -352,3 +352,23 @@ def test_set_zmp_overwrites_the_next_ticks_reference_and_nothing_before():
     assert gg.zmp_preview(50) == pytest.approx(path)
     assert gg.tick().zmp_world == pytest.approx(path[0])
     assert not np.allclose(first, path[0])
+
+
+@pytest.mark.parametrize("goal", [(0.3, 0.0, 0.0), (0.2, 0.1, math.radians(20.0))])
+def test_swing_samples_left_counts_down_to_the_touchdown_of_every_swing(goal):
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_pos(*goal)
+    supports, left = [], []
+    while gg.walking:
+        supports.append(gg.tick().support)
+        left.append(gg.swing_samples_left() if gg.walking else 0)
+    supports.append("both")
+    swings = 0
+    for k, (support, n) in enumerate(zip(supports, left, strict=False)):
+        if support == "both":
+            assert n == 0
+            continue
+        # the samples k .. k + n - 1 are this swing's, sample k + n is the double support after it
+        assert set(supports[k:k + n]) == {support} and supports[k + n] == "both"
+        swings += supports[k - 1] == "both"
+    assert swings >= 2
