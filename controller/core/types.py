@@ -171,6 +171,7 @@ class Ports:
     #: the stop of a walk the e-stop cut plays under the blend; the motion layers hold until it is over
     releasing: bool = False
     cp_flag: bool = False  # st: the capture-point emergency flag; es stops and reverts the motion on it
+    cp_flag_error_m: float | None = None  # st: while the flag is raised, |CP error| of the tick it rose [m]
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
     gait: GaitState | None = None  # abc: this tick's gait state (soles, contacts, COG); op reads the feet frame from it
