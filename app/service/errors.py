@@ -29,7 +29,7 @@ class Refused(ServiceError):
     status = 409
 
     #: why a verb can be refused, and what ends it
-    REASONS = ("hard_stop", "fallen", "collision", "motion_stop", "reach", "state")
+    REASONS = ("hard_stop", "fallen", "collision", "motion_stop", "walking_stop", "reach", "state")
 
     def __init__(self, reason: str, message: str) -> None:
         super().__init__(message)
