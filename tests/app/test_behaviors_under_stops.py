@@ -137,3 +137,18 @@ def test_a_walking_run_the_emergency_walking_stop_catches_fails_naming_it(client
     assert run["state"] == "failed", run
     assert "the emergency walking stop (AutoBalancer) is in force, raised by the operator " \
            "(POST /api/walk/emergency-stop)" in run["message"]
+
+
+def test_after_a_hard_estop_released_mid_walk_a_behaviour_is_refused_naming_the_walking_stop_it_left(
+        client, runtime, service):
+    step(runtime, WARM_UP_S)
+    assert client.post("/api/walk/go-velocity", json={"vx": 0.1, "vy": 0.0, "vtheta_deg": 0.0}).status_code == 200
+    step(runtime, 1.0)
+    service.estop()
+    step(runtime, 0.1)
+    service.release_estop()
+    step(runtime, 0.02)
+    assert emergency(client)["walking_stop"] is True  # the walk the e-stop cut stops in place now
+    r = client.post("/api/behaviors/look_at", json={})
+    assert r.status_code == 409 and r.json()["reason"] == "walking_stop"
+    assert "raised by the hard e-stop (the walk it cut stops in place after its release)" in r.json()["detail"]
