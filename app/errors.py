@@ -32,8 +32,8 @@ class ErrorBody(BaseModel):
     detail: str = Field(description="what was wrong and what would have worked")
     field: str | None = Field(default=None, description="the offending field (422)")
     reason: str | None = Field(default=None, description="what is in the way (409): hard_stop, fallen, collision, "
-                                                         "motion_stop, reach, state, diverged, point_taken, "
-                                                         "superseded; (423): locked")
+                                                         "motion_stop, walking_stop, reach, state, diverged, "
+                                                         "point_taken, superseded; (423): locked")
     holder: str | None = Field(default=None, description="the display name of the operator lock's holder (423)")
     owner: str | None = Field(default=None, description="the display name of the client streaming to the point "
                                                         "(409 point_taken)")
@@ -157,7 +157,7 @@ def errors(*codes: int, **descriptions: str) -> dict[int, dict[str, Any]]:
     """OpenAPI `responses` for a route: the error codes it may answer, each with ErrorBody."""
     default = {404: "something named does not exist (the valid names are listed)",
                409: "valid, but not now: `reason` says what is in the way (hard_stop, fallen, collision, "
-                    "motion_stop, reach, state, diverged)",
+                    "motion_stop, walking_stop, reach, state, diverged)",
                422: "invalid field: `field` names it, `detail` says what is allowed"}
     out = dict(COMMON_ERRORS)
     for code in codes:

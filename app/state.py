@@ -105,6 +105,8 @@ def state_document(pub: Published) -> dict[str, Any]:
             "motion_stop": bool(getattr(es, "stopped", False)),
             "motion_stop_reason": getattr(es, "reason", None),
             "motion_stop_time": getattr(es, "flag_time", None),
+            "motion_stop_cp_error_m": getattr(es, "cp_error_m", None),
+            "flag_cp_error_m": getattr(st, "flag_cp_error_m", None),
             "walking_stop": bool(getattr(abc, "walking_stop", False)),
             "stabilizer_stop": st is not None and not st.active},
         "layers": layer_docs,
@@ -251,6 +253,10 @@ def state_model() -> type[BaseModel]:
         motion_stop=(bool, Field(description="the EmergencyStopper holds the planned motion")),
         motion_stop_reason=(str | None, Field(description="'capture_point' or 'operator'")),
         motion_stop_time=(opt_float, Field(description="simulated time of the motion stop [s]")),
+        motion_stop_cp_error_m=(opt_float, Field(description=(
+            "reason 'capture_point': |CP error| of the tick the flag rose, what raised the stop (capture_point."
+            "error_norm is the value now) [m]"))),
+        flag_cp_error_m=(opt_float, Field(description="|CP error| of the tick the flag last rose [m]")),
         walking_stop=(bool, Field(description="the AutoBalancer's emergency walking stop is in force")),
         stabilizer_stop=(bool, Field(description="the Stabilizer was stopped by the operator")))
     loop = create_model("LoopState", __base__=_Doc,

@@ -20,6 +20,21 @@ KEEP_FINISHED = 64  # finished runs kept for GET /api/behaviors/runs/{id}
 STATES = ("running", "succeeded", "failed", "cancelled")
 
 
+@dataclass(frozen=True)
+class LatchedStop:
+    """A stop of the controller no behaviour runs under: a run is refused while it is latched, and a running
+    run it concerns ends, failed, with `message` as its cause."""
+
+    reason: str  # what kind: "motion_stop" (EmergencyStopper), "walking_stop" (AutoBalancer)
+    raised_by: str  # "operator", "capture_point", "emergency_step", "hard_stop"
+    time_s: float | None  # simulated time it was raised [s]
+    message: str  # what it is, what raised it and when, and what releases it
+    points: tuple[str, ...] | None = None  # the runs it ends: those needing one of these (None: every run)
+
+    def concerns(self, resources: Sequence[str]) -> bool:
+        return self.points is None or any(p in resources for p in self.points)
+
+
 class OperationPort(Protocol):
     """What the runner needs of the operation layer (controller.layers.operation.OperationLayer)."""
 
@@ -93,8 +108,12 @@ class BehaviorRunner:
     refused). Two runs may not drive the same point: the later one is refused, naming the running one."""
 
     def __init__(self, op: Callable[[], OperationPort | None], commands: Commands, dt_s: float,
-                 world_from_control: Callable[[], Sequence[float] | None] | None = None) -> None:
+                 world_from_control: Callable[[], Sequence[float] | None] | None = None,
+                 stops: Callable[[], Sequence[LatchedStop]] | None = None) -> None:
         self._op = op
+        #: the latched stops of the controller now (none: nothing in the way); checked when a run starts and
+        #: at every tick boundary, so a run under a stop ends naming it instead of failing on its symptom
+        self._stops = stops
         #: the controller's frame in the world (x, y, z, yaw), or None: the views the behaviours get are placed
         #: in the world with it, where perception and the map's places are
         self._world_from_control = world_from_control
@@ -118,6 +137,9 @@ class BehaviorRunner:
         now = self._time_s if time_s is None else float(time_s)
         points = tuple(behavior.points())
         resources = tuple(dict.fromkeys((*points, *behavior.resources())))
+        stops = self.latched()
+        if stops:
+            raise InvalidState(f"{behavior.name} refused: {stops[0].message}")
         op = self._op()
         if points and op is None:
             raise InvalidCommand(f"{behavior.name} drives {list(points)}, and the chain has no operation layer")
@@ -183,10 +205,28 @@ class BehaviorRunner:
     def active(self) -> bool:
         return bool(self._running)
 
+    def latched(self) -> tuple[LatchedStop, ...]:
+        """The latched stops now, as the host tells them."""
+        return () if self._stops is None else tuple(self._stops())
+
+    def _end_stopped_runs(self) -> None:
+        """Each run a latched stop concerns ends, failed, naming the stop (not the symptom its behaviour would
+        meet: a gaze ending off target, a hand held short of its goal)."""
+        stops = self.latched()
+        if not stops:
+            return
+        for run in list(self._running.values()):
+            stop = next((s for s in stops if s.concerns(run.resources)), None)
+            if stop is not None:
+                self._end(run, "failed", f"{run.behavior.name} stopped at t = {self._time_s:.3f} s: {stop.message}",
+                          interrupted=True)
+
     # ---- every tick boundary -------------------------------------------------------------------------------------
     def step(self, time_s: float) -> None:
         """Step the running behaviours; hand their sum per point (and the walk command) to the op layer."""
         self._time_s = float(time_s)
+        if self._running:
+            self._end_stopped_runs()
         if not self._running and not self._zero_walk:
             return
         op = self._op()

@@ -287,9 +287,11 @@ function onState(s) {
   if (s.fallen) latched = {key: "fall", text: `the robot has fallen (${em.fall || "?"}); reset the simulation.`};
   else if (em.fault) latched = {key: `fault:${em.fault}`, text: `fault: ${em.fault} (the hard stop is engaged).`};
   else if (em.motion_stop && em.motion_stop_reason && em.motion_stop_reason !== "operator") {
+    // the CP error that raised the flag, not the value now (it has fallen back by the time one reads it)
+    const raisedBy = em.motion_stop_cp_error_m != null
+      ? ` (CP error ${fmt(1000 * em.motion_stop_cp_error_m, 1)} mm when the flag rose)` : "";
     latched = {key: `motion:${em.motion_stop_time}`, text: `motion stop latched by ${em.motion_stop_reason} at ` +
-      `${fmt(em.motion_stop_time, 2)} s (CP error ${fmt(1000 * (s.capture_point || {}).error_norm, 1)} mm). ` +
-      "Balance keeps working; release it in the motion row."};
+      `${fmt(em.motion_stop_time, 3)} s${raisedBy}. Balance keeps working; release it in the motion row.`};
   }
   const showLatched = latched !== null && latched.key !== acknowledged;
   $("latched").hidden = !showLatched;
@@ -321,11 +323,17 @@ function onState(s) {
     const pe = prev.emergency || {};
     if (em.hard_stop && !pe.hard_stop) log(`hard stop engaged${em.hard_stop_reason ? ` (${em.hard_stop_reason})` : ""}`, "bad");
     if (!em.hard_stop && pe.hard_stop) log("hard stop released", "ok");
-    if (em.motion_stop && !pe.motion_stop) log(`motion stop (${em.motion_stop_reason || "?"})`, "bad");
+    if (em.motion_stop && !pe.motion_stop) {
+      const cp = em.motion_stop_cp_error_m != null ? `, CP error ${fmt(1000 * em.motion_stop_cp_error_m, 1)} mm` : "";
+      log(`motion stop (${em.motion_stop_reason || "?"}${cp}) at ${fmt(em.motion_stop_time, 3)} s`, "bad");
+    }
     if (!em.motion_stop && pe.motion_stop) log("motion stop released", "ok");
     if (em.fault && em.fault !== pe.fault) log(`FAULT: ${em.fault}`, "bad");
     if (s.fallen && !prev.fallen) log("FALLEN", "bad");
-    if (em.flag && !pe.flag) log("capture-point flag raised", "bad");
+    if (em.flag && !pe.flag) {
+      const cp = em.flag_cp_error_m != null ? ` (CP error ${fmt(1000 * em.flag_cp_error_m, 1)} mm)` : "";
+      log(`capture-point flag raised${cp} at ${fmt(em.flag_rose_at, 3)} s`, "bad");
+    }
     if (s.scene !== prev.scene) log(`scene is now ${s.scene}`, "other");
   }
   updateRuns(s.runs || []);

@@ -29,7 +29,8 @@ class Refused(ServiceError):
     status = 409
 
     #: why a verb can be refused, and what ends it
-    REASONS = ("hard_stop", "fallen", "collision", "motion_stop", "reach", "state", "point_taken", "superseded")
+    REASONS = ("hard_stop", "fallen", "collision", "motion_stop", "walking_stop", "reach", "state", "point_taken",
+               "superseded")
 
     def __init__(self, reason: str, message: str) -> None:
         super().__init__(message)

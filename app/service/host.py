@@ -20,6 +20,7 @@ from app.service.errors import InvalidArgument, NotFound, Refused, ServiceError
 from app.service.estop import EstopAck, PressLog
 from app.service.session_recorder import SessionRecorder
 from app.service.setpoints import LocalSource, Setpoint, SetpointAck
+from app.service.stops import LatchedStop, WalkingStopWatch, motion_stop
 from app.service.verbs import RobotInfo, SetParams, Verb
 from app.session.inputs import outcome_of
 from behaviors.perception.worker import prepare as prepare_recognition
@@ -143,8 +144,9 @@ class RobotHost:
         #: a replay's schedule of the results the recording took late: capture number -> "result_late" (not
         #: entered yet) or "result_entered"; None when not replaying
         self.replayed_captures: dict[int, str] | None = None
+        self.walking_stop_watch = WalkingStopWatch()
         self.runner = BehaviorRunner(self._operation_layer, HostCommands(self), dt_control_s,
-                                     world_from_control=self.world_from_control)
+                                     world_from_control=self.world_from_control, stops=self.latched_stops)
         self.start_auto_balancer = start_auto_balancer
         self.recorder: SessionRecorder | None = None  # the session being recorded, if any
         self.last_recorder: SessionRecorder | None = None  # the last one stopped (its file may still be finishing)
@@ -168,7 +170,16 @@ class RobotHost:
         odometry = None if snap is None else snap.odometry
         return None if odometry is None else odometry.world_from_control
 
+    def latched_stops(self) -> tuple[LatchedStop, ...]:
+        """The motion stop and the emergency walking stop in force after the last tick, each with what raised
+        it, when, and what releases it (app.service.stops)."""
+        layers = self.loop.chain.layers
+        stops = (motion_stop(layers.get("es")), self.walking_stop_watch.stop())
+        return tuple(s for s in stops if s is not None)
+
     def _before_tick(self, time_s: float) -> None:
+        layers = self.loop.chain.layers
+        self.walking_stop_watch.observe(time_s, layers.get("abc"), layers.get("st"), self.loop.hard_stop_engaged)
         if self.loop.hard_stop_engaged:  # whatever engaged it (the operator, a fault, a fall)
             op = self._operation_layer()
             if op is not None:
@@ -360,10 +371,14 @@ class RobotHost:
                 pairs = ", ".join("-".join(p) for p in co.pairs[:2])
                 raise Refused("collision", f"{verb.name} refused: the CollisionDetector holds the posture "
                                            f"({pairs}); wait until it has recovered")
-            es = loop.chain.layers.get("es")
-            if es is not None and es.enabled and es.stopped:
-                raise Refused("motion_stop", f"{verb.name} refused: the planned motion is stopped by the "
-                                             f"EmergencyStopper ({es.reason}); release the motion stop first")
+        if verb.name == "run_behavior":  # no behaviour starts under a latched stop (the runner checks it too)
+            stops = self.latched_stops()
+            if stops:
+                raise Refused(stops[0].reason, f"{verb.behavior} refused: {stops[0].message}")
+        if verb.sequence:
+            stop = motion_stop(loop.chain.layers.get("es"))
+            if stop is not None:
+                raise Refused("motion_stop", f"{verb.name} refused: {stop.message}")
 
     def layer(self, name: str):
         chain = self.loop.chain
@@ -438,6 +453,7 @@ class RobotHost:
                                            f"{', '.join(available_scenes())}")
         plant = MujocoPlant(scene)
         self.runner.reset("cancelled: the simulation was reset")
+        self.walking_stop_watch = WalkingStopWatch()
         restart_cameras = scene != self._cameras_scene and self._cameras is not None
         if scene != self._cameras_scene:
             self.close_cameras()

@@ -198,6 +198,7 @@ class WalkEmergencyStop(Verb):
     name = "walk_emergency_stop"
 
     def run(self, host: RobotHost) -> str:
+        host.walking_stop_watch.asked = True  # what raised the stop, for the refusals it causes
         host.layer("abc").emergency_stop_walking()
         return "walking emergency stop"
 

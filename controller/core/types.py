@@ -183,6 +183,7 @@ class Ports:
     #: st: |CP_ref - CP_act| this tick [m] (0: not estimated, or not balancing: stopped or blending in); hes lets a
     #: pushed robot's balance run on after a press
     cp_error_m: float = 0.0
+    cp_flag_error_m: float | None = None  # st: while the flag is raised, |CP error| of the tick it rose [m]
     planned_q_rad: np.ndarray | None = None  # seq: the planned joint stream (30,) [rad], as the snapshot shows it
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
     gait: GaitState | None = None  # abc: this tick's gait state (soles, contacts, COG); op reads the feet frame from it

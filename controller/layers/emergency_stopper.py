@@ -33,6 +33,9 @@ class EmergencyStopperStatus(Status):
     recovering: bool = field(metadata=described("blending back to the live plan after a release"))
     t1_s: float = field(metadata=described("T1: how far back the revert goes", "s"))
     t2_s: float = field(metadata=described("T2: how long the revert takes", "s"))
+    cp_error_m: float | None = field(default=None, metadata=described(
+        "reason 'capture_point': |CP error| of the tick the flag rose (what raised the stop, not the value now)",
+        "m"))
 
 
 def pack(ref: Reference) -> np.ndarray:
@@ -121,6 +124,7 @@ class EmergencyStopper(Layer):
         self._requested: str | None = None
         self.reason: str | None = None
         self.flag_time_s: float | None = None
+        self.cp_error_m: float | None = None  # reason 'capture_point': |CP error| when the flag rose [m]
         self._last_out: np.ndarray | None = None
         self._prev_out: np.ndarray | None = None
 
@@ -144,6 +148,7 @@ class EmergencyStopper(Layer):
             self.reverter.release()
             self.blend = RecoverBlend(self._last_out, self.params.recover_time_s)
             self.reason = None
+            self.cp_error_m = None
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         if not self.enabled:
@@ -157,6 +162,7 @@ class EmergencyStopper(Layer):
         if not self.stopped and (flag or step or self._requested):
             self.reason = self._requested or ("emergency_step" if step else "capture_point")
             self.flag_time_s = t
+            self.cp_error_m = last.cp_flag_error_m if self.reason == "capture_point" else None
             self._requested = None
             prev = self._last_out if self._last_out is not None else x_seq
             v = None if self._prev_out is None else (prev - self._prev_out) / ctx.dt_s
@@ -179,4 +185,4 @@ class EmergencyStopper(Layer):
     def status(self) -> EmergencyStopperStatus:
         return EmergencyStopperStatus(enabled=self.enabled, stopped=self.stopped, reason=self.reason,
                                       flag_time=self.flag_time_s, recovering=self.blend is not None,
-                                      t1_s=self.params.t1_s, t2_s=self.params.t2_s)
+                                      t1_s=self.params.t1_s, t2_s=self.params.t2_s, cp_error_m=self.cp_error_m)

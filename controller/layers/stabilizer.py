@@ -119,6 +119,8 @@ class StabilizerStatus(Status):
         "foot damping control's roll, pitch of the right and the left sole", "deg"))
     dz_diff_m: float = field(metadata=described("right minus left sole height offset of the force control", "m"))
     new_zmp: tuple[float, float, float] = field(metadata=described("ZMP the feet are asked to realise (world)", "m"))
+    flag_cp_error_m: float | None = field(default=None, metadata=described(
+        "|cp_error| of the tick the flag last rose (what raised it; cp_error_norm is the value now)", "m"))
 
 
 def _matmul3(A, B) -> tuple[tuple[float, float, float], ...]:
@@ -163,6 +165,7 @@ class Stabilizer(Layer):
         self.omega_1_s = math.sqrt(GRAVITY_M_S2 / 0.8)  # [1/s] the LIP's, from the last estimate
         self.emergency = False
         self.flag_rose_at_s: float | None = None
+        self.flag_cp_error_m: float | None = None  # |CP error| of the tick the flag last rose [m]
         self.new_zmp = np.zeros(3)
         self.projected = False
         self._qp: ForceDistributionQP | None = None
@@ -226,6 +229,7 @@ class Stabilizer(Layer):
         if self.active and self._transition is None:  # balancing (the flag's condition too)
             ex, ey = self.cp_error.tolist()
             ctx.ports.cp_error_m = math.hypot(ex, ey)
+        ctx.ports.cp_flag_error_m = self.flag_cp_error_m if self.emergency else None
         if self.weight <= 0.0:
             self._last_out = ref
             return ref
@@ -467,6 +471,7 @@ class Stabilizer(Layer):
             flag = poly.shape[0] < 3 or not point_in_convex_polygon(self.cp_act, poly)
         if flag and not self.emergency:
             self.flag_rose_at_s = time_s
+            self.flag_cp_error_m = float(np.hypot(*self.cp_error))
         self.emergency = flag
 
     def status(self) -> StabilizerStatus:
@@ -477,6 +482,6 @@ class Stabilizer(Layer):
             enabled=self.enabled, active=self.active, weight=round(self.weight, 4),
             cp_ref=tuple(self.cp_ref.tolist()), cp_act=tuple(self.cp_act.tolist()), cp_error=cp_error,
             cp_error_norm=math.hypot(ex, ey), cp_threshold_m=self.params.cp_threshold_m,
-            emergency=self.emergency, flag_rose_at=self.flag_rose_at_s,
+            emergency=self.emergency, flag_rose_at=self.flag_rose_at_s, flag_cp_error_m=self.flag_cp_error_m,
             d_foot_rpy_deg=((deg(r_roll), deg(r_pitch)), (deg(l_roll), deg(l_pitch))), dz_diff_m=self.dz_diff,
             new_zmp=tuple(self.new_zmp.tolist()))

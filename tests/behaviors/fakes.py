@@ -156,9 +156,10 @@ class Harness:
         return self.runner.get(run_id)
 
 
-def harness(dt_s: float = 0.005) -> Harness:
+def harness(dt_s: float = 0.005, stops=None) -> Harness:
+    """`stops`: the latched stops the runner sees (a callable, as the host's latched_stops), or None."""
     from behaviors.runner import BehaviorRunner
 
     op = FakeOp(dt_s)
     commands = FakeCommands(op)
-    return Harness(BehaviorRunner(lambda: op, commands, dt_s), op, commands)
+    return Harness(BehaviorRunner(lambda: op, commands, dt_s, stops=stops), op, commands)

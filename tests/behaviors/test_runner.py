@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from behaviors.base import Behavior, BehaviorParams, Context, Output
-from behaviors.runner import BehaviorRunner
+from behaviors.runner import BehaviorRunner, LatchedStop
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
 from controller.operation.points import Twist, WalkCommand
 from tests.behaviors.fakes import harness
@@ -193,3 +193,39 @@ def test_the_same_runs_give_the_same_trajectory():
         return h.op.p["rhand"].copy()
 
     np.testing.assert_array_equal(trajectory(), trajectory())
+
+
+MOTION_STOP = LatchedStop("motion_stop", "capture_point", 1.234, "the motion stop, raised by the CP flag at 1.234 s")
+WALKING_STOP = LatchedStop("walking_stop", "operator", 2.0, "the walking stop, raised by the operator", ("walk",))
+
+
+def test_a_run_is_refused_under_a_latched_stop_naming_it():
+    h = harness(stops=lambda: (MOTION_STOP,))
+    with pytest.raises(InvalidState, match="push refused: the motion stop, raised by the CP flag at 1.234 s"):
+        h.runner.run(Push())
+    assert h.runner.ids() == []
+
+
+def test_a_running_run_a_stop_latches_on_ends_failed_naming_the_stop_and_leaves_nothing_moving():
+    latched: list[LatchedStop] = []
+    h = harness(stops=lambda: tuple(latched))
+    b = Push()
+    rid = h.runner.run(b)
+    h.tick(10)
+    latched.append(MOTION_STOP)
+    h.tick()
+    status = h.runner.get(rid)
+    assert status.state == "failed" and b.stopped and b.torn_down
+    assert status.message == (f"push stopped at t = {status.ended_s:.3f} s: the motion stop, raised by the CP flag "
+                              "at 1.234 s")
+
+
+def test_a_stop_ends_only_the_runs_that_need_what_it_stops():
+    latched: list[LatchedStop] = []
+    h = harness(stops=lambda: tuple(latched))
+    walker, hand = h.runner.run(Push(PushParams(point="walk"))), h.runner.run(Push(PushParams(point="rhand")))
+    h.tick(5)
+    latched.append(WALKING_STOP)
+    h.tick()
+    assert h.runner.get(walker).state == "failed" and "the walking stop" in h.runner.get(walker).message
+    assert h.runner.get(hand).state == "running"

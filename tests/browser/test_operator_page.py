@@ -505,6 +505,10 @@ def test_stop_and_release_the_stabilizer_from_their_buttons(page, hrp2_console, 
     wait_until(lambda: hrp2_console.state()["layers"]["st"]["weight"] == 1.0, 10.0, "blended in again")
 
 
+def s_threshold(hrp2_console) -> float:
+    return hrp2_console.state()["capture_point"]["cp_threshold_m"]
+
+
 def test_a_push_that_raises_the_cp_flag_latches_a_motion_stop_shown_as_an_alert(page, hrp2_console, artifacts):
     released(hrp2_console)
     motion_released(hrp2_console)
@@ -516,6 +520,10 @@ def test_a_push_that_raises_the_cp_flag_latches_a_motion_stop_shown_as_an_alert(
     alert = page.get_by_role("alertdialog")
     playwright_api.expect(alert).to_be_visible()
     playwright_api.expect(alert).to_contain_text("motion stop latched by capture_point")
+    # the CP error that raised the flag and when, not the value at the time of reading (issue 27)
+    assert em["motion_stop_cp_error_m"] > s_threshold(hrp2_console)
+    playwright_api.expect(alert).to_contain_text(
+        f"at {em['motion_stop_time']:.3f} s (CP error {1000 * em['motion_stop_cp_error_m']:.1f} mm when the flag rose)")
     shot(page, artifacts, "latched_alert")
     alert.get_by_role("button", name="Acknowledge").click()
     playwright_api.expect(alert).to_be_hidden()
