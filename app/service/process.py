@@ -6,6 +6,7 @@ no other traffic shares, and a shared-memory board the robot publishes its snaps
 from __future__ import annotations
 
 import dataclasses
+import gc
 import itertools
 import logging
 import multiprocessing
@@ -82,6 +83,15 @@ def _raise_priority() -> str:
         return "default"
 
 
+def settle_heap() -> None:
+    """Collect now, then keep everything alive so far out of later collections (gc.freeze): a full collection of
+    the robot's heap (MuJoCo, pinocchio, placo and the chain, ~76,000 objects) takes 28-38 ms, and the automatic
+    ones, triggered by whatever a tick or a client allocates, made ticks that late."""
+    gc.unfreeze()
+    gc.collect()
+    gc.freeze()
+
+
 def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.Connection, board_name: str,
                log_name: str, setpoints_name: str | None = None) -> None:
     """The robot process's main: build, announce, tick until Shutdown, publish the last snapshot."""
@@ -125,6 +135,7 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
         except OSError as exc:  # e.g. the port is taken: the console's e-stop paths remain
             log.error("no e-stop door on %s:%s: %s", cfg.estop_door.host, cfg.estop_door.port, exc)
     board.put(host.publish())
+    settle_heap()
     cmd.send(("ready", host.info(), priority, None if door is None else door.port))
     loop = host.loop
     loop.nap_s = cfg.nap_s
@@ -143,6 +154,8 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             request, verb = cmd.recv()
             try:
                 reply = ("ok", host.apply_input(verb))
+                if isinstance(verb, Reset):
+                    settle_heap()  # the new chain's objects out of the collector's way, the old ones freed
             except ServiceError as exc:
                 reply = ("err", exc)
             except Exception as exc:  # noqa: BLE001 - a verb never kills the loop
