@@ -78,6 +78,16 @@ class Console:
         except ValueError:
             return r.status, raw.decode(errors="replace")
 
+    def hard_stop_after(self, tick: int, timeout_s: float = 2.0) -> bool:
+        """Whether the loop had the hard e-stop engaged in the first published state after `tick` (an answer's
+        tick: that tick's own snapshot was published before the answer)."""
+        deadline = time.monotonic() + timeout_s
+        while True:
+            _, state = self.request("GET", "/api/state")
+            if state["tick"] > tick or time.monotonic() > deadline:
+                return bool(state["emergency"]["hard_stop"])
+            time.sleep(0.005)
+
     def stop(self, sig: int = signal.SIGTERM, timeout_s: float = 30.0) -> tuple[int, str]:
         """Send `sig`, wait; (exit code, everything it printed)."""
         if self.proc.returncode is not None:

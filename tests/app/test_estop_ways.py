@@ -49,15 +49,8 @@ class Way:
         return bool(body.get("ok")), body
 
 
-def engaged(console: Console, tick: int = -1, timeout_s: float = 2.0) -> bool:
-    """Whether the loop has the hard e-stop engaged in the first published state after `tick` (an answer's tick:
-    that tick's own snapshot was published before the answer)."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        _, state = console.request("GET", "/api/state")
-        if state["tick"] > tick or time.monotonic() > deadline:
-            return bool(state["emergency"]["hard_stop"])
-        time.sleep(0.005)
+def engaged(console: Console, tick: int = -1) -> bool:
+    return console.hard_stop_after(tick)
 
 
 def released(console: Console) -> None:
