@@ -58,25 +58,32 @@ def parse_text(data: str | bytes) -> EstopRequest | None:
 
 
 class PressLog:
-    """The press ids seen within COPY_WINDOW_S and the last release: whether a press is a late copy of one the
-    operator already released. Times in seconds of one monotonic clock."""
+    """The presses of the last COPY_WINDOW_S, each with the answer to its first copy, and the last release: whether
+    another copy of a press is a late one (the operator released that press since). Times in seconds of one
+    monotonic clock."""
 
     def __init__(self, window_s: float = COPY_WINDOW_S) -> None:
         self.window_s = float(window_s)
-        self._first_at: dict[str, float] = {}  # press id -> when its first copy arrived
-        self._released_at = float("-inf")
+        self._first: dict[str, EstopAck] = {}  # press id -> the answer to its first copy
+        self._released_at_s = float("-inf")
 
-    def is_late_copy(self, press: str | None, now_s: float) -> bool:
-        first = None if press is None else self._first_at.get(press)
-        return first is not None and now_s - first < self.window_s and self._released_at >= first
+    def first(self, press: str | None, now_s: float) -> EstopAck | None:
+        """The answer to the first copy of `press`, if it came within the window."""
+        ack = None if press is None else self._first.get(press)
+        return ack if ack is not None and now_s - ack.engaged_at_monotonic_s < self.window_s else None
 
-    def pressed(self, press: str | None, now_s: float) -> None:
-        self._first_at = {p: t for p, t in self._first_at.items() if now_s - t < self.window_s}
-        if press is not None and press not in self._first_at:
-            self._first_at[press] = now_s
+    def released_after(self, ack: EstopAck) -> bool:
+        return self._released_at_s >= ack.engaged_at_monotonic_s
+
+    def pressed(self, press: str | None, ack: EstopAck) -> None:
+        """`ack` answered a copy of `press`: kept if it is the first of the window."""
+        now_s = ack.engaged_at_monotonic_s
+        self._first = {p: a for p, a in self._first.items() if now_s - a.engaged_at_monotonic_s < self.window_s}
+        if press is not None:
+            self._first.setdefault(press, ack)
 
     def released(self, now_s: float) -> None:
-        self._released_at = now_s
+        self._released_at_s = now_s
 
 
 @dataclass(frozen=True)
@@ -90,10 +97,13 @@ class EstopAck:
     engaged: bool
     already_engaged: bool = False
     late_copy: bool = False
+    copy: bool = False  # another copy of a press that engaged the stop, still engaged: the first copy's answer
     press_ignored: str | None = None
 
     @property
     def message(self) -> str:
+        if self.copy:
+            return "hard e-stop engaged (by another copy of this press)"
         if self.late_copy:
             return (f"a late copy of a press already released: not engaged again (the same press id engages "
                     f"again {COPY_WINDOW_S:g} s after its first copy)")
@@ -103,7 +113,7 @@ class EstopAck:
         """The answer every way in gives (POST /api/estop's EstopResponse): ok only when engaged."""
         body = {"ok": self.engaged, "engaged": self.engaged, "message": self.message, "tick": self.tick,
                 "sim_time_s": self.sim_time_s, "engaged_at_monotonic_s": self.engaged_at_monotonic_s,
-                "late_copy": self.late_copy}
+                "late_copy": self.late_copy, "copy": self.copy}
         if not self.engaged:
             body["reason"] = "late_copy"
         if self.press_ignored is not None:

@@ -392,16 +392,24 @@ class RobotHost:
         loop = self.loop
         now = time.monotonic()
         already = loop.hard_stop_engaged
-        late = not already and self._presses.is_late_copy(press, now)
-        if not already and not late:
-            loop.safe_stop("operator")
-        self._presses.pressed(press, now)
-        result = "late copy" if late else "already engaged" if already else "engaged"
+        first = self._presses.first(press, now)
+        released = first is not None and self._presses.released_after(first)
+        if first is not None and already and not released:  # the same press, its stop still engaged
+            ack = dataclasses.replace(first, copy=True)
+        elif first is not None and released and not already:
+            ack = EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s), engaged_at_monotonic_s=now,
+                           engaged=False, late_copy=True)
+        else:
+            if not already:
+                loop.safe_stop("operator")
+            ack = EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s), engaged_at_monotonic_s=now,
+                           engaged=loop.hard_stop_engaged, already_engaged=already)
+            self._presses.pressed(press, ack)
         if self.recorder is not None:
+            result = "late copy" if ack.late_copy else "already engaged" if already else "engaged"
             self.recorder.input("estop", "boundary", "estop", loop.plant.time_s, None,
-                                {"ok": not late, "result": result})
-        return EstopAck(tick=loop.tick_count, sim_time_s=float(loop.snapshot.time_s), engaged_at_monotonic_s=now,
-                        engaged=loop.hard_stop_engaged, already_engaged=already, late_copy=late)
+                                {"ok": ack.engaged, "result": result})
+        return ack
 
     def release_estop(self, setpoints_before: int = 0) -> None:
         """Release the hard e-stop; the operator's setpoints numbered up to `setpoints_before` (sent before the
