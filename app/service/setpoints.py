@@ -15,12 +15,19 @@ from dataclasses import dataclass
 from app.service.board import Board
 from app.service.errors import InvalidArgument, PointTaken
 from controller.core.errors import InvalidCommand
-from controller.operation.points import POINTS, Twist, WalkCommand, check_twist
+from controller.operation.points import (
+    POINTS,
+    WALK_FOOT_DISTANCE_RANGE_M,
+    WALK_MAX_STRIDE_RANGE_M,
+    Twist,
+    WalkCommand,
+    check_twist,
+)
 
 MAX_LINEAR_M_S = 0.5  # [m/s] |component| of a streamed linear velocity (the op layer limits further)
 MAX_ANGULAR_RAD_S = math.radians(90.0)  # [rad/s] |component| of a streamed angular velocity
-MAX_STRIDE_RANGE_M = (0.01, 0.5)  # [m] the walking point's step length limit
-FOOT_DISTANCE_RANGE_M = (0.12, 0.4)  # [m] the walking point's distance between the feet's centres
+MAX_STRIDE_RANGE_M = WALK_MAX_STRIDE_RANGE_M  # [m] the walking point's step length limit, as the AutoBalancer's
+FOOT_DISTANCE_RANGE_M = WALK_FOOT_DISTANCE_RANGE_M  # [m] its distance between the feet's centres
 BOARD_BYTES = 1 << 14
 STREAM_STALE_S = 0.3  # [s] of control time: a point's stream has stopped this long after its last setpoint (the
 #                       dead-man's 0.2 s and its 0.1 s ramp, OperationParams' defaults: by then the point is at zero)

@@ -24,7 +24,7 @@ from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import FullbodyIK
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
-from controller.operation.points import WalkCommand
+from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M, WalkCommand
 from controller.walking.emergency_step import EmergencyStepParams, EmergencyStepPlan, SupportRegion, swing_leg_for
 from controller.walking.footsteps import Footstep, FootstepParams, StepParams, StrideLimits
 from controller.walking.gait_generator import GaitGenerator, GaitParams
@@ -52,11 +52,8 @@ TIPPED_LEVELLING_RATE_RAD_S = 0.03
 TIPPED_MIN_TILT_RAD = math.radians(1.0)
 #: [-] peak over mean rate of a minimum-jerk path (15/8)
 MIN_JERK_PEAK_RATIO = 1.875
-#: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it
-MAX_STRIDE_RANGE_M = (0.0, 0.3)
-#: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
-#: edges at 0.19 m) keep >= 2 cm apart at the low end
-FOOT_DISTANCE_RANGE_M = (0.14, 0.30)
+MAX_STRIDE_RANGE_M = WALK_MAX_STRIDE_RANGE_M  # [m] the walking point's (controller.operation.points)
+FOOT_DISTANCE_RANGE_M = WALK_FOOT_DISTANCE_RANGE_M  # [m]
 #: [-] share of the robot's weight the feet must carry for an emergency step (a robot held in the air does not step)
 EMERGENCY_STEP_MIN_LOAD_RATIO = 0.5
 #: [-] an emergency step's foot touches down early when it carries this share of the weight after this share of its
@@ -122,7 +119,8 @@ class AutoBalancerParams(Params):
     stride_outside_th_rad: float = field(default=math.radians(10.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
     stride_inside_th_rad: float = field(default=math.radians(5.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
     # distance between the feet's centres when walking (hrpsys leg_default_translate_pos, both legs)
-    foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": 0.14, "max": 0.30})
+    foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": FOOT_DISTANCE_RANGE_M[0],
+                                                           "max": FOOT_DISTANCE_RANGE_M[1]})
     # the Stabilizer's capture-point flag rising while walking (Ports.cp_flag, its estop_while_walking) calls the
     # emergency walking stop: the steps end in place while the EmergencyStopper holds the motion
     walking_stop_on_cp_flag: bool = field(default=True, metadata={"unit": "-"})

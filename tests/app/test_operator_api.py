@@ -72,6 +72,27 @@ def test_invalid_setpoints_are_422_naming_the_field(client, body, field, words):
     assert r.json()["field"] == field and words in r.json()["detail"], r.json()
 
 
+@pytest.mark.parametrize(("field", "value", "words"), [
+    ("max_stride", 0.4, "less than or equal to 0.3"), ("max_stride", -0.01, "greater than or equal to 0"),
+    ("foot_distance", 0.13, "greater than or equal to 0.14"), ("foot_distance", 0.31, "less than or equal to 0.3")])
+def test_a_walk_step_parameter_the_auto_balancer_cannot_honour_is_refused_at_the_door(client, runtime, field, value,
+                                                                                      words):
+    """The walking point's ranges are the AutoBalancer's own (controller.operation.points): a max_stride of 0.4 m was
+    acknowledged ok and then ignored by the AutoBalancer."""
+    runtime.run_for(0.05)
+    r = client.put("/api/operator/velocity", json={"point": "walk", "linear": [0.1, 0, 0], field: value})
+    assert r.status_code == 422 and r.json()["field"] == f"walk.{field}" and words in r.json()["detail"], r.json()
+    from controller.layers.auto_balancer import check_walk_command
+    from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M, WalkCommand
+
+    for stride, distance in ((WALK_MAX_STRIDE_RANGE_M[1], WALK_FOOT_DISTANCE_RANGE_M[0]),
+                             (WALK_MAX_STRIDE_RANGE_M[0], WALK_FOOT_DISTANCE_RANGE_M[1])):
+        check_walk_command(WalkCommand(0.1, 0.0, 0.0, stride, distance))  # what the door takes, abc takes
+        r = client.put("/api/operator/velocity", json={"point": "walk", "linear": [0.1, 0, 0], "max_stride": stride,
+                                                       "foot_distance": distance})
+        assert r.status_code == 200, r.text
+
+
 def test_setpoints_are_refused_under_the_hard_estop(client, runtime):
     runtime.run_for(0.05)
     assert client.post("/api/estop").status_code == 200
