@@ -19,11 +19,12 @@ The model (each assumption is a simplification the map's reader should know):
 - **1 step**: a sole lands with the capture point inside the hull of it and the stance sole (or inside it). In single
   support the foot in the air lands; no earlier than `min_swing_s` after it lifted, and no later than the plan's own
   touchdown. In double support either foot may lift at once and land `min_touchdown_s` later (the standing
-  emergency step's initial double support plus its swing). The landing is within the leg's reach from the stance
+  emergency step's initial double support plus its swing; until the lift the ZMP may be anywhere in both soles).
+  The landing is within the leg's reach from the stance
   sole, the standing emergency step's (EmergencyStepParams: 0.55 m forward, 0.40 m back, 0.16-0.45 m sideways on
   the swing leg's side: the soles never cross, which also stands for the hip's inward roll limit). The ZMP is held
-  at one point of the stance sole from the push until the touchdown; a touchdown before the push ends counts as at
-  its end. Two or more steps are not considered ("not capturable" means: not with one step).
+  at one point of the stance sole from the lift (or the push) until the touchdown; a touchdown before the push ends
+  counts as at its end. Two or more steps are not considered ("not capturable" means: not with one step).
 """
 
 from __future__ import annotations
@@ -187,41 +188,63 @@ def _sole(leg: str, xy) -> np.ndarray:
     return SOLES[leg].corners_world((float(xy[0]), float(xy[1]), 0.0))
 
 
-def _one_step(c0: np.ndarray, accel: np.ndarray, push_s: float, omega: float, stance: str, stance_xy, swing: str,
-              touchdown_s: float, limits: StepLimits) -> tuple[float, np.ndarray, np.ndarray, float]:
-    """The best single step of `swing` landing touchdown_s after the push's start, the ZMP held on the stance sole:
-    (margin [m], CP at touchdown, landing, touchdown_s). LP over (ZMP p, landing L, t): the CP inside the landing
-    sole shrunk by t; then the hull of both soles is checked for the landing found."""
-    td = max(touchdown_s, push_s)
-    e_push, e_rest = math.exp(omega * push_s), math.exp(omega * (td - push_s))
-    a = accel / omega**2
-    c = e_rest * ((c0 + a) * e_push - a)  # xi(td) = c - k p
-    k = e_rest * e_push - 1.0
+def _one_step(c0: np.ndarray, accel: np.ndarray, push_s: float, omega: float, double_support: np.ndarray | None,
+              lift_s: float, stance: str, stance_xy, swing: str, touchdown_s: float, limits: StepLimits
+              ) -> tuple[float, np.ndarray, np.ndarray, float]:
+    """The best single step of `swing` landing touchdown_s after the push's start: one ZMP held in the
+    `double_support` polygon until the foot lifts at lift_s (0: in the air already), then one on the stance sole:
+    (margin [m], CP at touchdown, landing, touchdown_s). LP over (the two ZMPs, the landing L, t): the CP inside
+    the landing sole shrunk by t; then, for a few held stance ZMPs, the hull of both soles with the landing nearest
+    the capture point."""
+    td = max(touchdown_s, push_s, lift_s)
+    # the capture point at touchdown is affine in the two ZMPs: xi = c + k1 p1 + k2 p2
+    c, k1, k2, t = np.array(c0, dtype=float), 0.0, 0.0, 0.0
+    for t_next in sorted({push_s, lift_s, td} - {0.0}):
+        if t_next <= t:
+            continue
+        e = math.exp(omega * (t_next - t))
+        a = accel / omega**2 if t < push_s else np.zeros(2)
+        c = e * c - (1.0 - e) * a
+        k1, k2 = (e * k1 + (1.0 - e), e * k2) if t < lift_s else (e * k1, e * k2 + (1.0 - e))
+        t = t_next
+    polygon1 = double_support if double_support is not None else _sole(stance, stance_xy)
+    N1, b1 = _halfplanes(polygon1)
     Nz, bz = _halfplanes(_sole(stance, stance_xy))
     Nr, br = _halfplanes(_reach_box(stance_xy, swing, limits))
     rect = SOLES[swing]
-    # xi - L inside the sole rectangle shrunk by t: -rear + t <= (xi - L)_x <= front - t, likewise y
+    # variables (p1, p2, L, t); xi - L inside the sole rectangle shrunk by t: -rear + t <= (xi - L)_x <= front - t
     rows, rhs = [], []
     for axis, hi, lo in ((0, rect.front_m, -rect.rear_m), (1, rect.left_m, -rect.right_m)):
         e = np.zeros(2)
         e[axis] = 1.0
-        rows.append(np.concatenate([-k * e, -e, [1.0]]))  # c - k p - L <= hi - t
+        rows.append(np.concatenate([k1 * e, k2 * e, -e, [1.0]]))  # c + k1 p1 + k2 p2 - L <= hi - t
         rhs.append(hi - c[axis])
-        rows.append(np.concatenate([k * e, e, [1.0]]))  # -(c - k p - L) <= -lo - t
+        rows.append(np.concatenate([-k1 * e, -k2 * e, e, [1.0]]))  # -(c + k1 p1 + k2 p2 - L) <= -lo - t
         rhs.append(c[axis] - lo)
-    a_ub = np.vstack([np.array(rows), np.hstack([-Nz, np.zeros((len(Nz), 3))]),
-                      np.hstack([np.zeros((len(Nr), 2)), -Nr, np.zeros((len(Nr), 1))])])
-    b_ub = np.concatenate([rhs, -bz, -br])
-    res = linprog([0, 0, 0, 0, -1.0], A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * 4 + [(None, 1.0)],
+    z2 = np.zeros
+    a_ub = np.vstack([np.array(rows),
+                      np.hstack([-N1, z2((len(N1), 5))]),
+                      np.hstack([z2((len(Nz), 2)), -Nz, z2((len(Nz), 3))]),
+                      np.hstack([z2((len(Nr), 4)), -Nr, z2((len(Nr), 1))])])
+    b_ub = np.concatenate([rhs, -b1, -bz, -br])
+    res = linprog([0, 0, 0, 0, 0, 0, -1.0], A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * 6 + [(None, 1.0)],
                   method="highs")
     if res.status != 0:
         raise RuntimeError(f"capturability LP failed: {res.message}")
-    p, landing, margin = res.x[:2], res.x[2:4], float(res.x[4])
-    xi = c - k * p
-    hull = support_polygon([((stance_xy[0], stance_xy[1], 0.0), SOLES[stance]),
-                            ((landing[0], landing[1], 0.0), rect)])
-    margin = max(margin, distance_to_polygon_edge(xi, hull))
-    return margin, xi, landing, td
+    p1 = res.x[:2]
+    best = (float(res.x[6]), c + k1 * p1 + k2 * res.x[2:4], res.x[4:6])
+    box = _reach_box(stance_xy, swing, limits)
+    lo, hi = box.min(axis=0), box.max(axis=0)
+    corners = _sole(stance, stance_xy)
+    for p2 in np.vstack([corners, 0.5 * (corners + np.roll(corners, -1, axis=0)), [stance_xy]]):
+        xi = c + k1 * p1 + k2 * p2
+        landing = np.clip(xi, lo, hi)
+        hull = support_polygon([((stance_xy[0], stance_xy[1], 0.0), SOLES[stance]),
+                                ((landing[0], landing[1], 0.0), rect)])
+        margin = distance_to_polygon_edge(xi, hull)
+        if margin > best[0]:
+            best = (margin, xi, landing)
+    return best[0], best[1], best[2], td
 
 
 def push_capturability(impulse_ns: float, direction_rad: float, phase: float, speed_m_s: float, lip: Lip,
@@ -247,15 +270,36 @@ def push_capturability(impulse_ns: float, direction_rad: float, phase: float, sp
     if ankle_margin >= 0.0:
         return Capturability(0, end, ankle_margin)
     if g.support == "both":
+        lift = limits.min_touchdown_s - limits.min_swing_s
         options = [(OTHER[leg], g.soles_xy[OTHER[leg]], leg, limits.min_touchdown_s) for leg in g.soles_xy]
     else:
+        lift, polygon = 0.0, None
         earliest = max(limits.min_swing_s - g.swing_elapsed_s, 0.0)
         options = [(g.support, g.soles_xy[g.support], OTHER[g.support], min(g.swing_left_s, earliest))]
     best = None
     for stance, stance_xy, swing, td in options:
-        margin, xi, landing, td_used = _one_step(c0, accel, push_s, omega, stance, stance_xy, swing, td, limits)
+        margin, xi, landing, td_used = _one_step(c0, accel, push_s, omega, polygon, lift, stance, stance_xy, swing,
+                                                 td, limits)
         if best is None or margin > best[0]:
             best = (margin, xi, landing, td_used, swing)
     margin, xi, landing, td_used, swing = best
     return Capturability(1 if margin >= 0.0 else None, end, ankle_margin, swing, td_used,
                          (float(xi[0]), float(xi[1])), (float(landing[0]), float(landing[1])), margin)
+
+
+def largest_capturable_ns(direction_rad: float, phase: float, speed_m_s: float, lip: Lip, steps: int,
+                          timing: GaitTiming = GaitTiming(), limits: StepLimits | None = None, push_s: float = 0.1,
+                          high_ns: float = 200.0, tol_ns: float = 0.25) -> float:
+    """The largest impulse [N s] (to tol_ns) in this direction and phase that `steps` (0 or 1) steps capture: the
+    LIP's boundary across impulses (capturability shrinks as the push grows: bisection)."""
+    def ok(j: float) -> bool:
+        c = push_capturability(j, direction_rad, phase, speed_m_s, lip, timing, limits, push_s)
+        return c.steps is not None and c.steps <= steps
+
+    if ok(high_ns):
+        return high_ns
+    lo, hi = 0.0, high_ns
+    while hi - lo > tol_ns:
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+    return lo

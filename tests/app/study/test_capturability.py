@@ -85,3 +85,14 @@ def test_invalid_input_is_refused():
         push_capturability(-1.0, FORWARD, 0.0, 0.1, LIP)
     with pytest.raises(ValueError):
         Lip(0.0, 0.8)
+
+
+def test_the_largest_capturable_impulse_is_the_boundary_of_the_verdicts():
+    from app.study.capturability import largest_capturable_ns
+
+    j0 = largest_capturable_ns(FORWARD, STANDING, 0.0, LIP, steps=0)
+    j1 = largest_capturable_ns(FORWARD, STANDING, 0.0, LIP, steps=1)
+    assert 26.0 < j0 < 31.0 and j1 > 2 * j0  # the ankles' bound, and a step's beyond it
+    assert push_capturability(j0 - 0.5, FORWARD, STANDING, 0.0, LIP).steps == 0
+    assert push_capturability(j0 + 0.5, FORWARD, STANDING, 0.0, LIP).steps == 1
+    assert push_capturability(j1 + 0.5, FORWARD, STANDING, 0.0, LIP).steps is None
