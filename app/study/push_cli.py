@@ -87,7 +87,7 @@ def main(argv: Sequence[str]) -> int:
     paths["summary"].write_text(text)
     if not args.no_plots:
         for w in args.speeds:
-            plot_push_map(cells, w, paths[f"map {w}"])
+            plot_push_map(cells, w, paths[f"map {w}"], lip)
     print(text, end="")
     print("files: " + ", ".join(str(v) for k, v in paths.items() if not (k.startswith("map ") and args.no_plots)))
     return 0

@@ -11,7 +11,7 @@ from typing import Any, TextIO
 
 import numpy as np
 
-from app.study.capturability import Capturability, Lip, push_capturability
+from app.study.capturability import Capturability, Lip, largest_capturable_ns, push_capturability
 from app.study.push_walking import PUSH_S, WALKS, PushSpec, walk_label
 from app.study.store import RunStore
 from app.study.study import PhaseStats, execute
@@ -122,9 +122,11 @@ def summary_markdown(cells: Sequence[Cell], lip: Lip, stats: PhaseStats | None =
     return "\n".join(lines) + "\n"
 
 
-def plot_push_map(cells: Sequence[Cell], walk: str, path: Path, title: str | None = None) -> Path:
+def plot_push_map(cells: Sequence[Cell], walk: str, path: Path, lip: Lip | None = None, title: str | None = None
+                  ) -> Path:
     """One panel per impulse: phase of the gait cycle across, push direction up; a cell green (stood) or red
-    (fell), grey (error), its LIP verdict as 0 / 1 (steps), hatched and outlined where one step cannot capture."""
+    (fell), grey (error), its LIP verdict as 0 / 1 (steps), hatched and outlined where one step cannot capture.
+    With `lip`, two more panels: the largest impulse the LIP captures with the ankles and with one step."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -136,9 +138,35 @@ def plot_push_map(cells: Sequence[Cell], walk: str, path: Path, title: str | Non
     directions = sorted({c.spec.direction_deg for c in mine})
     phases = sorted({c.spec.phase for c in mine})
     colour = {"stood": "#4caf50", "fell": "#e53935", "error": "#9e9e9e"}
-    fig, axes = plt.subplots(1, len(impulses), figsize=(0.42 * len(phases) * len(impulses) + 1.5, 4.2),
-                             squeeze=False, constrained_layout=True)
-    for ax, j in zip(axes[0], impulses, strict=True):
+    panels = len(impulses) + (2 if lip is not None else 0)
+    cols = min(2, panels)
+    rows = -(-panels // cols)
+    fig, grid_axes = plt.subplots(rows, cols, figsize=(0.45 * len(phases) * cols + 1.2, 3.6 * rows + 0.6),
+                                  squeeze=False, constrained_layout=True)
+    axes = [list(grid_axes.flat)]
+    for ax in axes[0][panels:]:
+        ax.set_visible(False)
+    axes[0] = axes[0][:panels]
+    if lip is not None:
+        speed = WALKS[walk][0]
+        for ax, steps, name in zip(axes[0][len(impulses):], (0, 1), ("the ankles", "one step"), strict=True):
+            bound = np.array([[largest_capturable_ns(math.radians(d), ph, speed, lip, steps, push_s=PUSH_S)
+                               for ph in phases] for d in directions])
+            ax.imshow(bound, origin="lower", cmap="viridis", vmin=0.0, vmax=100.0, aspect="auto")
+            for (r, k), v in np.ndenumerate(bound):
+                ax.text(k, r, f"{v:.0f}", ha="center", va="center", fontsize=6,
+                        color="white" if v < 60 else "black")
+            ax.set_title(f"LIP: the largest impulse [N s] {name} capture", fontsize=9)
+    for ax in axes[0]:
+        ax.set_xlim(-0.5, len(phases) - 0.5)
+        ax.set_ylim(-0.5, len(directions) - 0.5)
+        step = max(1, len(phases) // 8)
+        ax.set_xticks(range(0, len(phases), step), [f"{phases[k]:.2g}" for k in range(0, len(phases), step)],
+                      fontsize=7)
+        ax.set_yticks(range(len(directions)), [_direction_name(d) for d in directions], fontsize=7)
+        ax.set_xlabel("gait phase (0: right touchdown, 0.5: left)", fontsize=8)
+        ax.set_ylabel("push direction (robot frame)", fontsize=8)
+    for ax, j in zip(axes[0][:len(impulses)], impulses, strict=True):
         for c in (c for c in mine if c.spec.impulse_ns == j):
             x, y = phases.index(c.spec.phase), directions.index(c.spec.direction_deg)
             ax.add_patch(Rectangle((x - 0.5, y - 0.5), 1, 1, fc=colour[c.outcome], ec="white", lw=0.5))
@@ -150,18 +178,11 @@ def plot_push_map(cells: Sequence[Cell], walk: str, path: Path, title: str | Non
         for c in (c for c in mine if c.spec.impulse_ns == j):
             grid[directions.index(c.spec.direction_deg), phases.index(c.spec.phase)] = float(c.capturable)
         _outline(ax, grid)
-        ax.set_xlim(-0.5, len(phases) - 0.5)
-        ax.set_ylim(-0.5, len(directions) - 0.5)
-        step = max(1, len(phases) // 8)
-        ax.set_xticks(range(0, len(phases), step), [f"{phases[k]:.2g}" for k in range(0, len(phases), step)],
-                      fontsize=7)
-        ax.set_yticks(range(len(directions)), [_direction_name(d) for d in directions], fontsize=7)
-        ax.set_xlabel("phase of the gait cycle (0: right touchdown, 0.5: left)", fontsize=8)
         n = counts([c for c in mine if c.spec.impulse_ns == j])
-        ax.set_title(f"{j:g} N s: stood {n.stood}, fell {n.fell} (capturable {n.fell_capturable})", fontsize=9)
-    axes[0][0].set_ylabel("push direction (robot frame)", fontsize=8)
-    fig.suptitle(title or f"push map, walking {walk_label(walk)}: green stood, red fell; 0/1: steps the LIP needs, "
-                 "hatched: not capturable with one step", fontsize=9)
+        ax.set_title(f"{j:g} N s: stood {n.stood}, fell {n.fell} (of which capturable: {n.fell_capturable})",
+                     fontsize=9)
+    fig.suptitle(title or f"push map, walking {walk_label(walk)}, 0.1 s pushes on BODY\ngreen stood, red fell; 0 / 1: "
+                 "the steps the LIP needs; hatched and outlined: not capturable with one step", fontsize=10)
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path, dpi=110)
     plt.close(fig)

@@ -107,6 +107,6 @@ def test_the_counts_and_the_heat_map_of_a_map(tmp_path):
     assert all(c.capture.steps == 0 for c in cells if c.spec.impulse_ns == 10.0)
     text = summary_markdown(cells, LIP)
     assert "| 0.1 m/s | 40 | 32 | 24 | 8 |" in text
-    path = plot_push_map(cells, "0.1", tmp_path / "map.png")
+    path = plot_push_map(cells, "0.1", tmp_path / "map.png", LIP)
     assert path.stat().st_size > 10_000
     assert math.isclose(LIP.omega_1_s, 3.479, abs_tol=1e-3)
