@@ -524,8 +524,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         from app.study.cli import main as study_main
 
         code = study_main(argv[2:])
+    elif argv[:2] == ["study", "push-walking"]:
+        from app.study.push_cli import main as push_main
+
+        code = push_main(argv[2:])
     elif argv and argv[0] == "study":
-        print("hrp2-console study: error: expected a study name: estop (hrp2-console study estop --help)",
+        print("hrp2-console study: error: expected a study name: estop, push-walking (hrp2-console study estop "
+              "--help)",
               file=sys.stderr)
         code = 2
     elif argv[:2] == ["experiment", "floor"]:

@@ -4,7 +4,7 @@ depend on how many run at once)."""
 from __future__ import annotations
 
 import multiprocessing
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
@@ -14,12 +14,14 @@ MAX_WORKERS = 64
 
 
 class PoolBackend:
-    """`run(specs)` yields each run's record as it finishes, from `workers` spawned processes."""
+    """`run(specs)` yields each run's record as it finishes, from `workers` spawned processes; `fn` runs one spec
+    (a module-level function: the e-stop study's `run_spec` by default, the push map's `run_push`)."""
 
-    def __init__(self, workers: int) -> None:
+    def __init__(self, workers: int, fn: Callable[[dict[str, Any]], dict[str, Any]] = run_spec) -> None:
         if not 1 <= workers <= MAX_WORKERS:
             raise ValueError(f"workers must be 1..{MAX_WORKERS}, got {workers}")
         self.workers = workers
+        self.fn = fn
 
     def __repr__(self) -> str:
         return f"PoolBackend(workers={self.workers})"
@@ -33,7 +35,7 @@ class PoolBackend:
         ctx = multiprocessing.get_context("spawn")
         pool = ProcessPoolExecutor(max_workers=min(self.workers, len(specs)), mp_context=ctx)
         try:
-            futures = [pool.submit(run_spec, s) for s in specs]
+            futures = [pool.submit(self.fn, s) for s in specs]
             for future in as_completed(futures):
                 yield future.result()
         finally:  # also when the caller stops early (Ctrl-C): queued runs are dropped, running ones finish

@@ -4,7 +4,7 @@ one CPU each. Every node needs this project installed (the same version) in the 
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from app.study.run import run_spec
@@ -17,10 +17,12 @@ class RayUnavailable(RuntimeError):
 class RayBackend:
     """`address`: a running cluster's ("HOST:PORT", "ray://HOST:10001", "auto"), or "local" to start a
     private one on this machine (loopback only, no dashboard; shut down after the runs). Without an address,
-    a Ray session the caller already started is used (the tests start one)."""
+    a Ray session the caller already started is used (the tests start one). `fn` runs one spec (the e-stop
+    study's `run_spec` by default, the push map's `run_push`)."""
 
-    def __init__(self, address: str | None = None) -> None:
+    def __init__(self, address: str | None = None, fn: Callable[[dict[str, Any]], dict[str, Any]] = run_spec) -> None:
         self.address = address
+        self.fn = fn
 
     def __repr__(self) -> str:
         return f"RayBackend(address={self.address!r})"
@@ -47,7 +49,7 @@ class RayBackend:
         if not specs:
             return
         ray, started = self._connect()
-        remote = ray.remote(num_cpus=1)(run_spec)
+        remote = ray.remote(num_cpus=1)(self.fn)
         pending = [remote.remote(s) for s in specs]
         try:
             while pending:
