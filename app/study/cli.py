@@ -79,6 +79,16 @@ def positive_seconds(text: str) -> float:
     return v
 
 
+def add_backend_arguments(p: argparse.ArgumentParser) -> None:
+    """--workers (a local process pool) or --ray (a cluster): where a study's runs go."""
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=integer(1, 64, "a number of processes"), default=None,
+                       help=f"runs at once in a local process pool (1-64; default: the CPUs, {os.cpu_count()})")
+    where.add_argument("--ray", metavar="ADDRESS", default=None,
+                       help="run on a Ray cluster instead (HOST:PORT, ray://HOST:10001, auto; 'local': a private one "
+                            "on this machine); needs the ray extra: pip install -e '.[ray]'")
+
+
 def parser() -> argparse.ArgumentParser:
     th_lo, th_hi = (v * 1e3 for v in THRESHOLD_LIMITS_M)
     p = argparse.ArgumentParser(
@@ -114,12 +124,7 @@ def parser() -> argparse.ArgumentParser:
                    help="seed of the held-out cases; must differ from --seed (default: --seed + 1)")
     p.add_argument("--duration-s", type=positive_seconds, default=None,
                    help="end every experiment after this many seconds (0.5..600; default: each one's own length)")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=integer(1, 64, "a number of processes"), default=None,
-                       help=f"runs at once in a local process pool (1-64; default: the CPUs, {os.cpu_count()})")
-    where.add_argument("--ray", metavar="ADDRESS", default=None,
-                       help="run on a Ray cluster instead (HOST:PORT, ray://HOST:10001, auto; 'local': a private one "
-                            "on this machine); needs the ray extra: pip install -e '.[ray]'")
+    add_backend_arguments(p)
     p.add_argument("--bootstrap", type=integer(0, 100_000, "a number of resamples"), default=1000,
                    help="bootstrap resamples behind the recommendation's confidence (default 1000)")
     p.add_argument("--out", type=Path, default=Path("out/study/estop"),

@@ -8,7 +8,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from app.study.cli import integer, number_list, positive_seconds
+from app.study.cli import add_backend_arguments, integer, number_list, positive_seconds
 from app.study.push_walking import WALKS, WATCH_S
 
 
@@ -41,12 +41,7 @@ def parser() -> argparse.ArgumentParser:
                    help="phases evenly over one gait cycle (default 16)")
     p.add_argument("--watch-s", type=positive_seconds, default=WATCH_S,
                    help=f"seconds watched after the push (0.5..600; default {WATCH_S:g})")
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=integer(1, 64, "a number of processes"), default=None,
-                       help=f"runs at once in a local process pool (1-64; default: the CPUs, {os.cpu_count()})")
-    where.add_argument("--ray", metavar="ADDRESS", default=None,
-                       help="run on a Ray cluster instead (HOST:PORT, ray://HOST:10001, auto; 'local': a private one "
-                            "on this machine); needs the ray extra: pip install -e '.[ray]'")
+    add_backend_arguments(p)
     p.add_argument("--out", type=Path, default=Path("out/study/push-walking"),
                    help="where the runs (runs.jsonl) and the summary go (default out/study/push-walking)")
     p.add_argument("--img-dir", type=Path, default=None, help="where the heat maps go (default: OUT)")

@@ -11,6 +11,7 @@ from app.study.ray_backend import RayBackend
 from app.study.space import Case, EstopParams
 from app.study.store import RunStore
 from app.study.study import StudyConfig, run_study, tuning_specs, validation_specs
+from tests.app.study.fakes import Counting
 
 #: Two parameter sets, one disturbed forward push (wall 2 cm nearer, pushed at 0.1 m/s), one held-out push, each
 #: ended after 5 s: 6 runs of 7.5 simulated seconds.
@@ -19,17 +20,6 @@ TINY = StudyConfig(
     cases=[Case.make("wall-push-forward", None, {"wall_gap_m": -0.02, "push_speed_m_s": 0.1})],
     validation_cases=[Case.make("wall-push-forward", None, {"wall_gap_m": 0.0, "push_speed_m_s": 0.12})],
     duration_s=5.0, bootstrap_resamples=20)
-
-
-class Counting:
-    """A backend that only counts what it is asked to run."""
-
-    def __init__(self):
-        self.asked = 0
-
-    def run(self, specs):
-        self.asked += len(specs)
-        return iter(())
 
 
 def results(store: RunStore) -> dict:

@@ -14,19 +14,9 @@ from app.study.push_cli import parser, walk_list
 from app.study.push_map import Cell, cells_of, counts, plot_push_map, run_map, summary_markdown
 from app.study.push_walking import PushSpec, grid, run_push
 from app.study.store import RunStore
+from tests.app.study.fakes import Counting
 
 LIP = Lip(58.0, 0.8105)
-
-
-class Counting:
-    """A backend that only counts what it is asked to run."""
-
-    def __init__(self):
-        self.asked = 0
-
-    def run(self, specs):
-        self.asked += len(specs)
-        return iter(())
 
 
 def test_a_spec_round_trips_and_its_key_names_exactly_its_fields():

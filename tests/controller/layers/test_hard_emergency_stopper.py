@@ -206,13 +206,19 @@ def test_a_pushed_robot_that_the_ankles_catch_freezes_once_its_capture_point_err
     assert frozen_at == pytest.approx(0.5 + p.landing_max_s - DT, abs=1e-9)
 
 
-def test_a_fault_or_a_fall_while_a_step_lands_freezes_at_once_and_says_why():
+def pressed_in_a_step() -> tuple[StepTicker, StepInProgress]:
+    """An operator's e-stop pressed 0.05 s into an emergency step landing at 0.3 s, one tick later."""
     t = StepTicker()
     step = StepInProgress(0.3, True)
     for _ in range(10):
         t.tick(step)
     t.hes.engage()
     t.tick(step)
+    return t, step
+
+
+def test_a_fault_or_a_fall_while_a_step_lands_freezes_at_once_and_says_why():
+    t, step = pressed_in_a_step()
     assert t.hes.landing
     t.hes.engage(reason="fallen")
     held = t.tick(step).q_rad
@@ -221,12 +227,7 @@ def test_a_fault_or_a_fall_while_a_step_lands_freezes_at_once_and_says_why():
 
 
 def test_release_while_a_step_lands_ends_the_stop_without_a_blend():
-    t = StepTicker()
-    step = StepInProgress(0.3, True)
-    for _ in range(10):
-        t.tick(step)
-    t.hes.engage()
-    t.tick(step)
+    t, step = pressed_in_a_step()
     t.hes.release()
     ref = ramp(t.k)
     ctx = make_ctx(t=t.t)
