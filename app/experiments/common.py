@@ -45,8 +45,8 @@ class Rig:
 
 @dataclass(frozen=True)
 class DisturbanceParam:
-    """One disturbance an experiment accepts: its default (the experiment as the README describes it: no
-    disturbance beyond the variant's), the range it may be set to, its unit and what it changes."""
+    """One disturbance an experiment accepts: its default (the experiment as docs/estop-study.md describes
+    it: no disturbance beyond the variant's), the range it may be set to, its unit and what it changes."""
 
     default: float
     low: float
@@ -69,7 +69,7 @@ class Experiment:
     the scene up before the robot settles (simulator operations: the robot put down farther from the wall);
     `outcome(rig)` measures the task at the end (valve angle, door angle, ...) from the simulation, for tests
     and the report. `disturbances` declares what a study may vary (name -> DisturbanceParam); at their
-    defaults the experiment is the one the README describes."""
+    defaults the experiment is the one docs/estop-study.md describes."""
 
     scene: str
     script: Callable[[Rig, str, Disturbance], list[Event]]

@@ -1,6 +1,6 @@
 """Every experiment, variant, with and without the EmergencyStopper: `python -m app.experiments.report
-[OUT_DIR]` prints the Markdown table of the README and writes each run's Fig. 10-like PNG to OUT_DIR
-(docs/img/experiments for the README)."""
+[OUT_DIR]` prints the Markdown table of docs/estop-study.md and writes each run's Fig. 10-like PNG to OUT_DIR
+(docs/img/experiments for that page)."""
 
 from __future__ import annotations
 

@@ -21,7 +21,8 @@ class SoftErrorLimiterParams(Params):
     # the legs' limit while the AutoBalancer takes a capture-point emergency step (its `emergency_step` port): the
     # swing must land before the capture point runs past the leg's reach; at 3.5 rad/s the 2x forward push's step
     # lands 0.38 m out with the capture point 0.52 m ahead and the robot falls, at 4.5 it lands 0.44 m out and
-    # stands (README, issue 13.3). An assumption as the 3.5 is: what the drives follow for a fraction of a second
+    # stands (docs/measurements/walking-and-balance.md, issue 13.3). An assumption as the 3.5 is: what the drives
+    # follow for a fraction of a second
     emergency_step_velocity_limit_rad_s: float = field(default=4.5, metadata={"unit": "rad/s", "min": 0.01,
                                                                               "max": 20.0})
     # |command - encoder| larger than this is a servo fault risk (hrpsys error limit)

@@ -1,5 +1,5 @@
-"""The experiments' declared disturbances: defaults are the README's experiments, values are checked by name and
-range, the CLI's --disturb names what is allowed."""
+"""The experiments' declared disturbances: defaults are the experiments of docs/estop-study.md, values are checked by
+name and range, the CLI's --disturb names what is allowed."""
 
 import math
 

@@ -916,8 +916,8 @@ RATE_WINDOW_S = 3.0  # [s] of wall time over which the camera's and the plots' u
 def test_the_camera_and_every_plot_keep_updating_while_watched(page, hrp2_console, artifacts):
     """Over RATE_WINDOW_S at once, each stream delivers to a script beside the page and each view of the page
     shows new frames, samples and redraws, viser's CP-error plot too. How fast is the `page-rates` benchmark's
-    (`hrp2-console bench --scenario page-rates`, README): the issue's camera >= 10 Hz and plots >= 20 Hz are speed
-    goals, not this test's."""
+    (`hrp2-console bench --scenario page-rates`, docs/measurements/speed.md): the issue's camera >= 10 Hz and
+    plots >= 20 Hz are speed goals, not this test's."""
     from app.bench_browser import measure_page_rates
 
     page.locator("#camera").scroll_into_view_if_needed()

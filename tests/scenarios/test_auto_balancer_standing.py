@@ -33,8 +33,9 @@ def test_arms_forward_keeps_the_simulated_com_over_the_feet_only_with_the_auto_b
     assert snap.truth.com_world[0] - mid[0] > 0.03
 
 
-#: [m] |measured ZMP x - feet middle| under the 50 N pull with Eq. 6: measured 2.0 mm (README; 6.8 mm while the
-#: F/T weight compensation read a phantom moment at the wrist), margin 3 mm.
+#: [m] |measured ZMP x - feet middle| under the 50 N pull with Eq. 6: measured 2.0 mm
+#: (docs/measurements/walking-and-balance.md; 6.8 mm while the F/T weight compensation read a phantom moment at
+#: the wrist), margin 3 mm.
 PULL_ZMP_ERROR_M = 0.005
 
 

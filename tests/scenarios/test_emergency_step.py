@@ -1,9 +1,9 @@
 """Issue 13.3: standing pushes on BODY (0.1 s) that the ankles cannot absorb are caught by the capture-point
 emergency step; without it (AutoBalancer emergency_step off) the robot falls.
 
-The largest impulses absorbed standing without a step (README): 28 N s forward (29 falls), 20 N s backward (21
-falls), 40 N s sideways (41 falls). Tested: 1.5x and 2x the forward one rounded to 42 and 56 N s, 1.5x the
-backward one (30 N s) and 1.5x the sideways one (60 N s).
+The largest impulses absorbed standing without a step (docs/measurements/walking-and-balance.md): 28 N s forward
+(29 falls), 20 N s backward (21 falls), 40 N s sideways (41 falls). Tested: 1.5x and 2x the forward one rounded to
+42 and 56 N s, 1.5x the backward one (30 N s) and 1.5x the sideways one (60 N s).
 
 Measured (this machine; "e": the foot touched down before its planned time, where it was):
 

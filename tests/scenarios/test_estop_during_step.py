@@ -17,9 +17,9 @@ The settle: frozen at its touchdown the robot pushed forward fell (42 and 56 N s
 the e-stop 0.3 s after the 56 N s push, it stood frozen 0.05, 0.08-0.12 and 0.25 s after the touchdown and fell at
 0.03, 0.06-0.07 and 0.15-0.2 s (frozen, it rocks 5-7 deg on its diagonal stance and, at those instants, tips over
 sideways after the release or in a longer hold): the default landing_settle_s 0.1 s sits in the middle of a window
-that stands, not on a margin that grows with the settle. Swept further (README): 42 and 30 N s stand for every
-press 0.05-1.0 s after the push; 56 N s falls for presses 0.5, 0.55 and 1.0 s after it (the step down and settled,
-frozen at once as before), and every push for a press within 0.025 s of its start (read as standing still).
+that stands, not on a margin that grows with the settle. Swept further (docs/safety-path.md): 42 and 30 N s stand for
+every press 0.05-1.0 s after the push; 56 N s falls for presses 0.5, 0.55 and 1.0 s after it (the step down and
+settled, frozen at once as before), and every push for a press within 0.025 s of its start (read as standing still).
 """
 
 import numpy as np

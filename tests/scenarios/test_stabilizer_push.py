@@ -54,8 +54,9 @@ def test_a_push_on_body_is_absorbed_with_the_stabilizer_on(impulse, measured_til
     ids=["st-forward-26Ns", "st-left-40Ns", "st-right-40Ns", "st-backward-20Ns", "no-st-forward-22Ns",
          "no-st-left-40Ns", "no-st-right-40Ns"])
 def test_the_largest_pushes_the_readme_claims_are_absorbed(impulse, stabilizer, measured_tilt_deg):
-    # the README's table (28 N s forward measured; 26 asserted), 20 N s backward (21 falls), 40 N s sideways,
-    # 22 N s forward and 40 N s sideways without it (41 N s sideways falls with it, README). Sideways the robot
+    # the table in docs/measurements/walking-and-balance.md (28 N s forward measured; 26 asserted), 20 N s
+    # backward (21 falls), 40 N s sideways, 22 N s forward and 40 N s sideways without it (41 N s sideways falls
+    # with it, same page). Sideways the robot
     # rocks on one sole edge (tilt up to 11 deg) and settles within 6-7 s.
     # without the Stabilizer the ankles alone (its capture point would start an emergency step, issue 13.3); with
     # it these pushes are absorbed without a step

@@ -33,7 +33,8 @@ def test_a_small_push_stays_within_the_sole_and_needs_no_step():
 
 
 def test_the_standing_bound_is_the_measured_one_within_two_newton_seconds():
-    # measured standing (README): 28 N s forward, 20 backward, 40 sideways absorbed without a step
+    # measured standing (docs/measurements/walking-and-balance.md): 28 N s forward, 20 backward, 40 sideways
+    # absorbed without a step
     assert abs(largest_absorbed(FORWARD) - 28) <= 2
     assert abs(largest_absorbed(BACKWARD) - 20) <= 2
     assert abs(largest_absorbed(LEFT) - 40) <= 2
@@ -42,7 +43,8 @@ def test_the_standing_bound_is_the_measured_one_within_two_newton_seconds():
 def test_a_step_catches_twice_the_forward_bound_standing_but_not_sideways():
     c = push_capturability(56.0, FORWARD, STANDING, 0.0, LIP)  # stands in the simulation with the emergency step
     assert c.steps == 1 and c.landing_xy[0] > 0.3 and c.touchdown_s == pytest.approx(0.29)
-    # sideways a step would have to cross the stance leg (README: the LIP says 60 N s cannot be caught)
+    # sideways a step would have to cross the stance leg (docs/measurements/walking-and-balance.md: the LIP says
+    # 60 N s cannot be caught)
     assert push_capturability(60.0, LEFT, STANDING, 0.0, LIP).steps is None
 
 

@@ -28,6 +28,7 @@ def test_a_bad_option_is_refused_naming_it_and_what_is_allowed(argv, expected, c
 
 
 def test_the_defaults_are_the_readme_study():
+    """The study docs/estop-study.md reports (it was in the README)."""
     args = parser().parse_args([])
     assert args.thresholds_mm == [20, 30, 40, 50, 60] and args.t1_s == [0.5, 1.0]
     assert args.t2_s == [0.25, 0.5, 1.0] and (args.cases, args.validate, args.seed) == (12, 30, 1)
