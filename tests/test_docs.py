@@ -1,5 +1,6 @@
 """The README states the architecture the code has: its Layout tree lists exactly the controller's packages and
-modules, and its layer table lists the layers in CHAIN_ORDER."""
+modules, and its layer table lists the layers in CHAIN_ORDER. The README stays a front door (<= 300 lines, the
+rest in docs/), and every relative link of it and of docs/ reaches a file."""
 
 import re
 from pathlib import Path
@@ -63,3 +64,33 @@ def test_the_readme_layer_table_is_in_chain_order_and_names_each_layers_file():
 def test_the_readme_chain_line_is_in_chain_order():
     line = next(x for x in section("What runs").splitlines() if x.startswith("plant.read()"))
     assert tuple(line.split(" -> ")[1:-1]) == CHAIN_ORDER
+
+
+def markdown_pages() -> list[Path]:
+    return [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]
+
+
+def relative_links(text: str) -> list[str]:
+    """The targets of the Markdown links and images in `text` that are paths (no URL, no bare #anchor), outside
+    fenced code blocks, without their #anchor."""
+    text = re.sub(r"^```.*?^```", "", text, flags=re.M | re.S)
+    targets = re.findall(r"\]\(([^)\s]+)(?:\s+\"[^\"]*\")?\)", text)
+    return [t.split("#")[0] for t in targets if not re.match(r"^[a-zA-Z][a-zA-Z+.-]*:", t) and not t.startswith("#")]
+
+
+def test_every_relative_link_in_the_readme_and_docs_reaches_a_file():
+    broken = {}
+    for page in markdown_pages():
+        missing = [t for t in relative_links(page.read_text()) if not (page.parent / t).exists()]
+        if missing:
+            broken[str(page.relative_to(ROOT))] = missing
+    assert broken == {}
+
+
+def test_the_link_check_sees_links_and_images():
+    assert relative_links("[a](x.md#b) ![i](img/p.png) [u](https://e.org) [s](#here)\n```\n[c](no.md)\n```") == [
+        "x.md", "img/p.png"]
+
+
+def test_the_readme_is_a_front_door():
+    assert len(README.splitlines()) <= 300  # issue 28: what it is, how to run it, the tables; the rest in docs/
