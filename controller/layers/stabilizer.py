@@ -102,6 +102,11 @@ class StabilizerParams(Params):
     # use_sole_tilt) and the LIP-predicted COG velocity the walking CP error stays under 25 mm on the standard
     # walks (p99 14-18 mm), so a rise means a push; the AutoBalancer stops the walk on it (walking_stop_on_cp_flag)
     estop_while_walking: bool = field(default=True, metadata={"unit": "-"})
+    # the flag's hysteresis ("cp_error" mode): once up it stays up until |cp_error| has stayed below
+    # cp_release_ratio x cp_threshold_m for cp_release_s, no emergency step being taken meanwhile (one rise per
+    # disturbance, not one per threshold crossing)
+    cp_release_ratio: float = field(default=0.5, metadata={"unit": "-", "min": 0.0, "max": 1.0})
+    cp_release_s: float = field(default=0.5, metadata={"unit": "s", "min": 0.0, "max": 10.0})
 
 
 @dataclass(frozen=True, slots=True)
@@ -164,6 +169,7 @@ class Stabilizer(Layer):
         self.cp_error = np.zeros(2)
         self.omega_1_s = math.sqrt(GRAVITY_M_S2 / 0.8)  # [1/s] the LIP's, from the last estimate
         self.emergency = False
+        self._flag_low_s = 0.0  # [s] the raised flag's error has been below the release level this long
         self.flag_rose_at_s: float | None = None
         self.flag_cp_error_m: float | None = None  # |CP error| of the tick the flag last rose [m]
         self.new_zmp = np.zeros(3)
@@ -224,7 +230,7 @@ class Stabilizer(Layer):
             # the hard e-stop freezes the command: estimate only, integrate nothing, raise no flag
             self.emergency = False
             return self._last_out
-        self._update_emergency(ctx.time_s, gait, contact_act)
+        self._update_emergency(ctx.time_s, gait, contact_act, ctx.ports.emergency_step)
         ctx.ports.cp_flag = self.emergency
         if self.active and self._transition is None:  # balancing (the flag's condition too)
             ex, ey = self.cp_error.tolist()
@@ -452,7 +458,9 @@ class Stabilizer(Layer):
         xy = cog_offset_against_hand_forces(cog[:2], self.total_mass, hands, -f_on, zmp_z, GRAVITY_M_S2)
         return np.array([xy[0], xy[1], cog[2]])
 
-    def _update_emergency(self, time_s: float, gait, contact_act: np.ndarray) -> None:
+    def _update_emergency(self, time_s: float, gait, contact_act: np.ndarray, stepping: bool = False) -> None:
+        """The flag; `stepping`: the AutoBalancer's emergency step is being taken (its plan follows the measured
+        state, so the error is small meanwhile: the disturbance is not over until the step is)."""
         p = self.params
         settled = self.active and self._transition is None  # hrpsys: only in MODE_ST, transition done
         if (p.emergency_mode == "none" or not settled or (gait.walking and not p.estop_while_walking)
@@ -460,7 +468,14 @@ class Stabilizer(Layer):
             flag = False
         elif p.emergency_mode == "cp_error":
             ex, ey = self.cp_error.tolist()
-            flag = bool(math.hypot(ex, ey) > p.cp_threshold_m)
+            error = math.hypot(ex, ey)
+            flag = error > p.cp_threshold_m
+            if flag:
+                self._flag_low_s = 0.0
+            elif self.emergency:  # up: it falls once the error has stayed low long enough
+                low = error < p.cp_release_ratio * p.cp_threshold_m and not stepping
+                self._flag_low_s = self._flag_low_s + self.dt_s if low else 0.0
+                flag = self._flag_low_s < p.cp_release_s
         else:
             feet = []
             for i, (pos, R) in enumerate(((gait.p_rsole_world, gait.R_rsole_world),

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from controller.layers.stabilizer import StabilizerParams
 from tests.scenarios.helpers import make_system, tilt_deg
 
 PUSH_S = 0.1  # the impulse is delivered as a constant force over 0.1 s
@@ -79,7 +80,15 @@ def test_the_capture_point_error_is_in_every_snapshot_and_the_flag_rises_past_th
     # 2. the push drives the error past the threshold and the flag follows it
     assert errors.max() > threshold
     assert flags.any()
-    assert np.array_equal(flags, errors > threshold)
+    over = errors > threshold
+    assert flags[over].all()  # up whenever the error is over the threshold
+    first = int(np.argmax(over))
+    assert not flags[:first].any() and flags[first]  # rises at the first tick over it
+    # and falls only once the error has stayed under half the threshold for the release time (hysteresis)
+    params = StabilizerParams()
+    n = round(params.cp_release_s / 0.005)
+    for i in np.flatnonzero(flags[:-1] & ~flags[1:]) + 1:
+        assert i >= n and (errors[i - n + 1:i + 1] < params.cp_release_ratio * threshold).all()
     assert snaps[-1].layers["st"].flag_rose_at is not None
 
 

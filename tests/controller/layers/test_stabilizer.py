@@ -198,3 +198,32 @@ def test_the_feet_are_softer_during_an_emergency_step_than_walking():
             st.tick(ctx, ref)
         rates.append(abs(st.d_foot_rpy[0, 1]))
     assert rates[1] == pytest.approx(3.0 * rates[0], rel=0.05)
+
+
+def test_the_flag_falls_only_after_the_error_has_stayed_below_half_the_threshold_for_the_release_time():
+    """One rise per disturbance: an error hovering about the threshold keeps the flag up (the old flag rose and
+    fell at each crossing); it falls cp_release_s after the error went below cp_release_ratio x threshold."""
+    p = StabilizerParams(cp_threshold_m=0.05, transition_time_s=0.01)
+    st = Stabilizer(0.005, p)
+    calm = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
+    run_ticks(st, calm, 5)
+    over = calm.with_(gait=gait(cog_vel_xy=(0.3, 0.0)))  # CP error ~86 mm
+    near = calm.with_(gait=gait(cog_vel_xy=(0.14, 0.0)))  # ~40 mm: below the threshold, above half of it
+    run_ticks(st, over, 5)
+    rose = st.flag_rose_at_s
+    assert st.emergency and rose is not None
+    for _ in range(3):  # crossing the threshold down and up again: still the first rise
+        run_ticks(st, near, 40)
+        assert st.emergency
+        run_ticks(st, over, 5)
+        assert st.emergency and st.flag_rose_at_s == rose
+    release_ticks = round(p.cp_release_s / 0.005)
+    run_ticks(st, calm, release_ticks - 5)
+    assert st.emergency  # low, but not for long enough yet
+    run_ticks(st, calm, 10)
+    assert not st.emergency
+    st.set_params(StabilizerParams(cp_threshold_m=0.05, transition_time_s=0.01, cp_release_s=0.0,
+                                   cp_release_ratio=1.0))
+    run_ticks(st, over, 5)
+    run_ticks(st, near, 2)
+    assert not st.emergency  # without hysteresis: down at the first tick under the threshold
