@@ -666,9 +666,22 @@ class GaitGenerator:
                           read_only(lf.position), read_only(R_l), 0.5, read_only(np.zeros(2)),
                           read_only(np.zeros(2)))
 
-    def _finish(self) -> None:
+    def abort(self) -> str:
+        """End the walk at the sample handed out last: the feet stay where the plan has them now, a swing foot in
+        the air included (the caller's next plan must land it: the capture step while walking). Returns the
+        support of that sample ('rleg', 'lleg' or 'both'); 'both' when not walking."""
+        if not self._walking:
+            return "both"
+        j = max(self._tick - 1 - self._origin, 0)
+        support = _SUPPORT_NAMES[int(self._arrays["support"][j])]
+        self._pending_goal = None
+        self._stopping_from_rest = False
+        self._finish(j)
+        return support
+
+    def _finish(self, j: int | None = None) -> None:
         a = self._arrays
-        j = self._end_tick - 1 - self._origin
+        j = self._end_tick - 1 - self._origin if j is None else j
         for leg, f in (("rleg", _R), ("lleg", _L)):
             T = np.eye(4)
             T[:3, :3] = a["R"][f, j]

@@ -372,3 +372,22 @@ def test_swing_samples_left_counts_down_to_the_touchdown_of_every_swing(goal):
         assert set(supports[k:k + n]) == {support} and supports[k + n] == "both"
         swings += supports[k - 1] == "both"
     assert swings >= 2
+
+
+def test_abort_ends_the_walk_where_the_plan_is_a_swing_foot_in_the_air_included():
+    gg = GaitGenerator(dt_s=DT)
+    gg.go_velocity(0.1, 0.0, 0.0)
+    while True:  # into the first swing, half way
+        last = gg.tick()
+        if last.support != "both" and gg.swing_samples_left() < 60:
+            break
+    swing = "lfoot" if last.support == "rleg" else "rfoot"
+    p_swing = getattr(last, f"p_{swing}_world").copy()
+    assert p_swing[2] > 0.01  # in the air
+    assert gg.abort() == last.support
+    assert not gg.walking and gg.swing_samples_left() == 0
+    T = gg.T_world_lfoot if swing == "lfoot" else gg.T_world_rfoot
+    assert T[:3, 3] == pytest.approx(p_swing, abs=1e-12)  # the next plan starts from the foot where it is
+    idle = gg.tick()
+    assert not idle.walking and getattr(idle, f"p_{swing}_world") == pytest.approx(p_swing, abs=1e-12)
+    assert gg.abort() == "both"  # not walking: nothing to end
