@@ -60,6 +60,13 @@ EMERGENCY_STEP_MIN_LOAD_RATIO = 0.5
 #: swing (the force sensor of a foot swung fast reads its inertia: up to 110 N measured 5 cm above the ground)
 TOUCHDOWN_LOAD_RATIO = 0.25
 TOUCHDOWN_SWING_SHARE = 0.6
+#: [s] the swing of a capture step from a walk: the walk's remaining swing, within these (the foot needs time to go
+#: where the capture point calls it; a long swing is shortened so the foot lands before the capture point runs away)
+CATCH_SWING_S = (0.16, 0.4)
+#: [s] after an emergency step's touchdown, a capture point still outside the two soles calls for another step
+RESTEP_AFTER_S = 0.05
+#: emergency steps one after the other at most (each from the last one's feet)
+EMERGENCY_STEPS_IN_A_ROW = 3
 #: emergency steps remembered in the status
 EMERGENCY_STEPS_KEPT = 10
 #: [s] the BODY lowering of an emergency step comes in over this time, and goes back over 4 times it once standing
@@ -124,6 +131,10 @@ class AutoBalancerParams(Params):
     # the Stabilizer's capture-point flag rising while walking (Ports.cp_flag, its estop_while_walking) calls the
     # emergency walking stop: the steps end in place while the EmergencyStopper holds the motion
     walking_stop_on_cp_flag: bool = field(default=True, metadata={"unit": "-"})
+    # ... by a capture step (issue 26): the walk ends where it is, a foot in the air lands where the capture point
+    # will be (the emergency step below, from the swing in progress), both feet down stand; false: hrpsys'
+    # emergencyStop, steps in place after the committed ones
+    walking_capture_step: bool = field(default=True, metadata={"unit": "-"})
     # the capture-point emergency step (issue 13.3): standing, when the measured capture point is farther than
     # emergency_step_cp_margin_m outside the support polygon (the ankles cannot bring it back), one step where it
     # will be (controller/walking/emergency_step.py); the EmergencyStopper holds the motion, the robot ends
@@ -289,6 +300,8 @@ class AutoBalancer(Layer):
         self._estep_k = 0  # samples of its plan handed out
         self._estep_lifted = False  # the swinging foot has been unloaded in this swing
         self._estep_records: tuple[EmergencyStepRecord, ...] = ()
+        self._estep_in_a_row = 0  # emergency steps taken one after the other (the first included)
+        self._estep_from_walk = False  # the emergency step in progress caught a walk (it may step again)
         self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
         self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
         self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
@@ -536,7 +549,10 @@ class AutoBalancer(Layer):
         flag = ctx.last_ports.cp_flag
         if flag and not self._last_cp_flag and self.params.walking_stop_on_cp_flag and self.gait.walking \
                 and not self.walking_stop and self._estep is None:
-            self.emergency_stop_walking()
+            if self._can_catch_while_walking(ctx):
+                self._catch_while_walking(ctx)
+            else:
+                self.emergency_stop_walking()
         self._last_cp_flag = flag
         cmd = ctx.ports.walk_command
         if cmd is not None or self._port_walking or not self._walk_armed:
@@ -634,21 +650,67 @@ class AutoBalancer(Layer):
             return
         self._start_emergency_step(ctx, bal, fz_r, fz_l)
 
-    def _start_emergency_step(self, ctx: TickContext, bal: BalanceEstimate, fz_r: float, fz_l: float) -> None:
-        """Plan the step from the feet where the (idle) gait has them and start it this tick."""
+    def _can_catch_while_walking(self, ctx: TickContext) -> bool:
+        return (self.params.walking_capture_step and self.params.emergency_step and self._blend is None
+                and not self.gait.stopping_from_rest and ctx.last_ports.balance is not None
+                and not ctx.last_ports.landing)
+
+    def _catch_while_walking(self, ctx: TickContext) -> None:
+        """The capture-point flag rose while walking: the walk ends where it is. A foot in the air lands where the
+        capture point will be, as the emergency step does (the swing's time kept, within CATCH_SWING_S); with both
+        feet down the robot stands there, and the standing emergency step follows if the ankles cannot hold it."""
+        bal = ctx.last_ports.balance
+        swing_left = self.gait.swing_samples_left()
+        support = self.gait.abort()
+        self._disarm_walk_point()
+        if support == "both" or swing_left == 0:
+            return  # the COG plan goes on to rest over the feet; the Stabilizer's feedback takes the push
+        self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
+        swing_leg = "lleg" if support == "rleg" else "rleg"
+        T_swing = self.gait.T_world_lfoot if swing_leg == "lleg" else self.gait.T_world_rfoot
+        T_stance = self.gait.T_world_rfoot if swing_leg == "lleg" else self.gait.T_world_lfoot
+        p = self.params.emergency_step_params()
+        lo, hi = CATCH_SWING_S
+        swing_s = min(max(swing_left * self.dt_s, lo), hi)
+        height = float(T_swing[2, 3] - T_stance[2, 3])  # the foot is this high already: the arc adds the rest
+        p = p.replaced(initial_double_support_s=self.dt_s,
+                       step_time_s=max(swing_s / (1.0 - p.double_support_ratio), 0.2),
+                       step_height_m=min(max(p.step_height_m - height, 0.01), p.step_height_m))
+        rows = ctx.estimate.wrenches_ext.tolist()
+        self._start_emergency_step(ctx, bal, rows[FEET[0]][2], rows[FEET[1]][2], swing_leg=swing_leg, params=p)
+        self._walking_stop_requested = True  # the walking stop is in force until the robot stands
+        self._estep_from_walk = True
+
+    def _start_emergency_step(self, ctx: TickContext, bal: BalanceEstimate, fz_r: float, fz_l: float,
+                              swing_leg: str | None = None, params: EmergencyStepParams | None = None) -> None:
+        """Plan the step from the feet where the (idle) gait has them and start it this tick; `swing_leg`: the foot
+        in the air of a walk that ended (else the leg the capture point calls for)."""
         gait = self.gait
         rfoot, lfoot = Footstep.from_T("rleg", gait.T_world_rfoot), Footstep.from_T("lleg", gait.T_world_lfoot)
-        yaw = math.atan2(math.sin(rfoot.yaw) + math.sin(lfoot.yaw), math.cos(rfoot.yaw) + math.cos(lfoot.yaw))
-        dx = float(bal.cp_world_xy[0]) - 0.5 * (rfoot.x + lfoot.x)
-        dy = float(bal.cp_world_xy[1]) - 0.5 * (rfoot.y + lfoot.y)
-        c, s_ = math.cos(yaw), math.sin(yaw)
-        leg = swing_leg_for((c * dx + s_ * dy, -s_ * dx + c * dy), fz_r, fz_l)
+        leg = swing_leg
+        if leg is None:
+            yaw = math.atan2(math.sin(rfoot.yaw) + math.sin(lfoot.yaw), math.cos(rfoot.yaw) + math.cos(lfoot.yaw))
+            dx = float(bal.cp_world_xy[0]) - 0.5 * (rfoot.x + lfoot.x)
+            dy = float(bal.cp_world_xy[1]) - 0.5 * (rfoot.y + lfoot.y)
+            c, s_ = math.cos(yaw), math.sin(yaw)
+            leg = swing_leg_for((c * dx + s_ * dy, -s_ * dx + c * dy), fz_r, fz_l)
+        self._begin_emergency_step(ctx, bal, self._plan_emergency_step(bal, rfoot, lfoot, leg, params))
+
+    def _plan_emergency_step(self, bal: BalanceEstimate, rfoot: Footstep, lfoot: Footstep, leg: str,
+                             params: EmergencyStepParams | None = None) -> EmergencyStepPlan:
         stance, swing = (rfoot, lfoot) if leg == "lleg" else (lfoot, rfoot)
-        plan = EmergencyStepPlan(self.params.emergency_step_params(), self.dt_s, stance, swing, bal.cp_world_xy,
-                                 bal.zmp_world, bal.omega_1_s)
+        return EmergencyStepPlan(params or self.params.emergency_step_params(), self.dt_s, stance, swing,
+                                 bal.cp_world_xy, bal.zmp_world, bal.omega_1_s)
+
+    def _begin_emergency_step(self, ctx: TickContext, bal: BalanceEstimate, plan: EmergencyStepPlan) -> None:
+        """Walk `plan` from this tick (the gait idle, its feet where the plan starts)."""
+        gait, leg = self.gait, plan.swing.leg
         gait.plan(plan.footsteps(), params=plan.gait_params(gait.params))
         gait.set_zmp(plan.zmp(0))
         self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
+        again = self._estep is not None
+        self._estep_in_a_row = self._estep_in_a_row + 1 if again else 1
+        self._estep_from_walk = self._estep_from_walk and again
         self._estep, self._estep_k = plan, 0
         self._walking_stop_requested = False
         self._disarm_walk_point()  # a stick held through the step must be released before it walks again
@@ -668,21 +730,56 @@ class AutoBalancer(Layer):
             return
         ctx.ports.emergency_step = True
         bal = ctx.last_ports.balance
+        if self._step_again(ctx, plan, k):
+            return
         moved = False
         if plan.swinging(k) and self._touched_down(ctx, plan, k):
             x, y = self._measured_sole_xy(ctx, plan)
             plan.land(k, (x, y))
             self.gait.move_footsteps({1: (x, y)}, landed=True)
             moved = True
-        elif bal is not None and plan.replan(k, bal.cp_world_xy):
-            self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())})
-            moved = True
+        elif bal is not None:
+            landing = plan.landing_xy
+            moved = plan.replan(k, bal.cp_world_xy)
+            if plan.landing_xy is not landing:
+                self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())})
         if moved:
             self.gait.set_zmp(plan.zmp(k))
         if moved or k == plan.touchdown_k:
             self._update_record(plan, landed=k >= plan.touchdown_k)
         if bal is not None and k < plan.touchdown_k:  # the COG plan follows the measured COG until the foot is down
             self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
+
+    def _step_again(self, ctx: TickContext, plan: EmergencyStepPlan, k: int) -> bool:
+        """A step from a walk (the catch): once the foot is down and the weight shared (RESTEP_AFTER_S), a capture
+        point still outside the new support polygon calls for another step, from where the feet are (at most
+        EMERGENCY_STEPS_IN_A_ROW). The standing emergency step stays one step (its [MLC] experiments' verdicts)."""
+        bal = ctx.last_ports.balance
+        if bal is None or not self._estep_from_walk or k < plan.touchdown_k + round(RESTEP_AFTER_S / self.dt_s) \
+                or ctx.last_ports.landing or self._estep_in_a_row >= EMERGENCY_STEPS_IN_A_ROW:
+            return False
+        support = self._support
+        if support is None or support[0] is not plan:
+            support = self._support = (plan, SupportRegion(plan.support_polygon_after()))
+        cx, cy = bal.cp_world_xy.tolist()
+        if support[1].outside_m(cx, cy) <= self.params.emergency_step_cp_margin_m:
+            return False
+        rows = ctx.estimate.wrenches_ext.tolist()
+        fz_r, fz_l = rows[FEET[0]][2], rows[FEET[1]][2]
+        if fz_r + fz_l < EMERGENCY_STEP_MIN_LOAD_RATIO * self.total_mass * GRAVITY_M_S2:
+            return False
+        # the leg whose landing leaves the capture point predicted at its touchdown least outside the feet
+        g = self.last_gait
+        rfoot = Footstep.from_T("rleg", _homogeneous(g.p_rsole_world, g.R_rsole_world))
+        lfoot = Footstep.from_T("lleg", _homogeneous(g.p_lsole_world, g.R_lsole_world))
+        again = min((self._plan_emergency_step(bal, rfoot, lfoot, leg) for leg in (plan.stance.leg, plan.swing.leg)),
+                    key=lambda c: SupportRegion(c.support_polygon_after()).outside_m(*c.cp_touchdown_xy.tolist()))
+        self._update_record(plan, landed=True)
+        walking_stop = self._walking_stop_requested
+        self.gait.abort()
+        self._begin_emergency_step(ctx, bal, again)
+        self._walking_stop_requested = walking_stop
+        return True
 
     def _touched_down(self, ctx: TickContext, plan: EmergencyStepPlan, k: int) -> bool:
         """The swing foot, in the air before, carries TOUCHDOWN_LOAD_RATIO of the weight late in its swing: it has

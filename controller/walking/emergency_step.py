@@ -241,15 +241,25 @@ class EmergencyStepPlan:
 
     # ---- re-planning
     def replan(self, k: int, cp_world_xy) -> bool:
-        """The capture point measured before sample k: until n_freeze the landing follows it. True when it moved
-        (by more than 1 mm)."""
-        if k >= self.n_freeze or self.landed_k is not None:
+        """The capture point measured before sample k: until the touchdown the stance ZMP follows it (the point of
+        the sole nearest it: a capture point still inside the sole stays where it is instead of running away from
+        a ZMP chosen when it was elsewhere), and until n_freeze the landing too. True when either moved (by more
+        than 1 mm)."""
+        if k >= self.n_touchdown or self.landed_k is not None:
             return False
-        self._cp_measured = (k, np.asarray(cp_world_xy, dtype=float)[:2].copy())
+        cp = np.asarray(cp_world_xy, dtype=float)[:2].copy()
+        s = self.stance
+        zmp = stance_zmp(cp, s.leg, (s.x, s.y), s.yaw, self.params.zmp_margin_m)
+        moved = float(np.hypot(*(zmp - self.zmp_stance_xy))) > 1e-3
+        if moved:
+            self.zmp_stance_xy = zmp
+        if k >= self.n_freeze:
+            return moved
+        self._cp_measured = (k, cp)
         self.cp_touchdown_xy = self._cp_at(self.n_touchdown)
         landing = self._landing()
         if float(np.hypot(*(landing - self.landing_xy))) <= 1e-3:
-            return False
+            return moved
         self.landing_xy = landing
         return True
 
