@@ -104,6 +104,7 @@ class GaitMoment:
     timing of the foot in the air (single support) or of the double support."""
 
     support: str  # "both", "rleg" or "lleg" (the stance leg)
+    leading: str  # the sole that touched down last (the stance sole in single support)
     soles_xy: dict[str, tuple[float, float]]  # the soles on the ground
     zmp_xy: tuple[float, float]
     swing_elapsed_s: float  # [s] since the foot in the air lifted (single support; 0 in double support)
@@ -123,9 +124,10 @@ def gait_moment(phase: float, speed_m_s: float, timing: GaitTiming = GaitTiming(
         s = t / timing.double_support_s
         old, new = np.array(soles[OTHER[leading]]), np.array(soles[leading])
         zmp = old + (new - old) * s
-        return GaitMoment("both", soles, (float(zmp[0]), float(zmp[1])), 0.0, 0.0)
+        return GaitMoment("both", leading, soles, (float(zmp[0]), float(zmp[1])), 0.0, 0.0)
     origin = (0.0, side[leading] * w)
-    return GaitMoment(leading, {leading: origin}, origin, t - timing.double_support_s, timing.step_time_s - t)
+    return GaitMoment(leading, leading, {leading: origin}, origin, t - timing.double_support_s,
+                      timing.step_time_s - t)
 
 
 @dataclass(frozen=True)
@@ -248,11 +250,15 @@ def _one_step(c0: np.ndarray, accel: np.ndarray, push_s: float, omega: float, do
 
 
 def push_capturability(impulse_ns: float, direction_rad: float, phase: float, speed_m_s: float, lip: Lip,
-                       timing: GaitTiming = GaitTiming(), limits: StepLimits | None = None, push_s: float = 0.1
-                       ) -> Capturability:
+                       timing: GaitTiming = GaitTiming(), limits: StepLimits | None = None, push_s: float = 0.1,
+                       cp_from_sole_xy: tuple[float, float] | None = None) -> Capturability:
     """Capturable with 0 or 1 step, or not: a push of `impulse_ns` [N s] over `push_s` [s] in direction
     `direction_rad` of the robot's frame (0 forward, pi/2 left) at `phase` of the gait cycle of a walk at
-    `speed_m_s` (0 with phase in a double support: standing). The assumptions are the module's."""
+    `speed_m_s` (0 with phase in a double support: standing). The assumptions are the module's.
+
+    `cp_from_sole_xy`: the capture point at the push as measured [m], in the frame of the stance sole (single
+    support) or of the sole that landed last (double support), instead of the nominal one (ahead of the nominal
+    ZMP by speed / omega): the walk's lateral sway puts it up to 6 cm nearer the stance sole's outer edge."""
     if impulse_ns < 0.0 or push_s <= 0.0:
         raise ValueError(f"impulse_ns must be >= 0 and push_s > 0, got {impulse_ns}, {push_s}")
     limits = limits or StepLimits.of()
@@ -261,6 +267,8 @@ def push_capturability(impulse_ns: float, direction_rad: float, phase: float, sp
     accel = u * impulse_ns / (lip.mass_kg * push_s)  # [m/s^2]
     g = gait_moment(phase, speed_m_s, timing)
     c0 = np.array(g.zmp_xy) + np.array([speed_m_s / omega, 0.0])
+    if cp_from_sole_xy is not None:
+        c0 = np.array(g.soles_xy[g.leading]) + np.asarray(cp_from_sole_xy, dtype=float)
     polygon = support_polygon([((x, y, 0.0), SOLES[leg]) for leg, (x, y) in g.soles_xy.items()])
     e_push = math.exp(omega * push_s)
     a = accel / omega**2
@@ -289,11 +297,12 @@ def push_capturability(impulse_ns: float, direction_rad: float, phase: float, sp
 
 def largest_capturable_ns(direction_rad: float, phase: float, speed_m_s: float, lip: Lip, steps: int,
                           timing: GaitTiming = GaitTiming(), limits: StepLimits | None = None, push_s: float = 0.1,
-                          high_ns: float = 200.0, tol_ns: float = 0.25) -> float:
+                          high_ns: float = 200.0, tol_ns: float = 0.25,
+                          cp_from_sole_xy: tuple[float, float] | None = None) -> float:
     """The largest impulse [N s] (to tol_ns) in this direction and phase that `steps` (0 or 1) steps capture: the
     LIP's boundary across impulses (capturability shrinks as the push grows: bisection)."""
     def ok(j: float) -> bool:
-        c = push_capturability(j, direction_rad, phase, speed_m_s, lip, timing, limits, push_s)
+        c = push_capturability(j, direction_rad, phase, speed_m_s, lip, timing, limits, push_s, cp_from_sole_xy)
         return c.steps is not None and c.steps <= steps
 
     if ok(high_ns):

@@ -50,8 +50,10 @@ def cells_of(specs: Sequence[PushSpec], store: RunStore, lip: Lip) -> list[Cell]
     for s in specs:
         if s.key() in store:
             speed = WALKS[s.walk][0]
-            cap = push_capturability(s.impulse_ns, math.radians(s.direction_deg), s.phase, speed, lip, push_s=PUSH_S)
-            out.append(Cell(s, store.get(s.key())["result"], cap))
+            result = store.get(s.key())["result"]
+            cap = push_capturability(s.impulse_ns, math.radians(s.direction_deg), s.phase, speed, lip, push_s=PUSH_S,
+                                     cp_from_sole_xy=result.get("cp_push_rel_xy"))
+            out.append(Cell(s, result, cap))
     return out
 
 
@@ -149,8 +151,10 @@ def plot_push_map(cells: Sequence[Cell], walk: str, path: Path, lip: Lip | None 
     axes[0] = axes[0][:panels]
     if lip is not None:
         speed = WALKS[walk][0]
+        measured = {c.spec.phase: c.result.get("cp_push_rel_xy") for c in mine}  # the same walk at each phase
         for ax, steps, name in zip(axes[0][len(impulses):], (0, 1), ("the ankles", "one step"), strict=True):
-            bound = np.array([[largest_capturable_ns(math.radians(d), ph, speed, lip, steps, push_s=PUSH_S)
+            bound = np.array([[largest_capturable_ns(math.radians(d), ph, speed, lip, steps, push_s=PUSH_S,
+                                                     cp_from_sole_xy=measured[ph])
                                for ph in phases] for d in directions])
             ax.imshow(bound, origin="lower", cmap="viridis", vmin=0.0, vmax=100.0, aspect="auto")
             for (r, k), v in np.ndenumerate(bound):

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 #: Bump when a change makes stored results stale (what a run does or what it reports).
-STORE_FORMAT = 1
+STORE_FORMAT = 3
 SETTLE_S = 2.5  # [s] standing before the walk
 PUSH_S = 0.1  # [s] the push's duration: its force is impulse / PUSH_S
 WARMUP_S = 2.0  # [s] phase 0 is the first right touchdown at least this long after goVelocity (a steady walk)
@@ -73,14 +73,34 @@ def grid(walks, impulses_ns, directions: int, phases: int, watch_s: float = WATC
 
 
 #: The result fields a run reports; the same run gives the same values wherever it runs.
-RESULT_FIELDS = ("outcome", "fall_after_push_s", "peak_cp_error_m", "flag", "flag_after_push_s", "walking_stop",
-                 "emergency_steps", "support_at_push", "since_touchdown_s", "cycle_measured_s", "push_time_s",
-                 "error")
+RESULT_FIELDS = ("outcome", "fall_after_push_s", "peak_cp_error_m", "flag", "flag_after_push_s", "flag_rises",
+                 "walking_stop", "emergency_steps", "support_at_push", "since_touchdown_s", "cycle_measured_s",
+                 "push_time_s", "cp_push_rel_xy", "walk_end_after_push_s", "motion_stop", "walking_at_end",
+                 "end_tilt_deg", "end_base_z_m", "error")
 
 
 def _yaw(quat_wxyz) -> float:
     w, x, y, z = (float(v) for v in quat_wxyz)
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+def _tilt_deg(quat_wxyz) -> float:
+    """[deg] BODY's z axis from the vertical."""
+    _, x, y, _ = (float(v) for v in quat_wxyz)
+    return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
+
+
+def _cp_from_sole(robot, obs, phase: float) -> list[float]:
+    """The capture point the Stabilizer estimates at the push, from the sole the LIP's model places (the stance sole
+    in single support, the one that landed last in double support: the right one in the first half of the cycle),
+    in that sole's frame [m]: the walk's own state for the capturability (its model's nominal one has no sway)."""
+    g = robot.chain["abc"].last_gait
+    right = g.support == "rleg" or (g.support == "both" and phase < 0.5)
+    p, R = (g.p_rsole_world, g.R_rsole_world) if right else (g.p_lsole_world, g.R_lsole_world)
+    yaw = math.atan2(float(R[1, 0]), float(R[0, 0]))
+    dx, dy = (float(obs.layers["st"].cp_act[i]) - float(p[i]) for i in (0, 1))
+    c, s_ = math.cos(yaw), math.sin(yaw)
+    return [c * dx + s_ * dy, -s_ * dx + c * dy]  # a list: as it reads back from the store
 
 
 def _push_run(s: PushSpec) -> tuple[dict[str, Any], float]:
@@ -121,24 +141,36 @@ def _push_run(s: PushSpec) -> tuple[dict[str, Any], float]:
     yaw = _yaw(obs.truth.base_quat_wxyz) + math.radians(s.direction_deg)
     force = s.impulse_ns / PUSH_S * np.array([math.cos(yaw), math.sin(yaw), 0.0])
     support_at_push, since = obs.layers["abc"].support, obs.time_s - last_change
+    cp_rel = _cp_from_sole(robot, obs, s.phase)
     t0 = obs.time_s
     robot.submit(Push(PUSH_BODY, tuple(float(f) for f in force), PUSH_S)).result()
-    peak, flag_t, walking_stop, fall_t, steps = 0.0, None, False, None, set()
+    peak, flag_t, walking_stop, fall_t, steps, rises, was_up = 0.0, None, False, None, set(), 0, False
+    walk_end_t, motion_stop = None, None
     for _ in range(int(round((PUSH_S + s.watch_s) / robot.loop.dt_control_s))):
         obs = robot.step()
         st, abc = obs.layers["st"], obs.layers["abc"]
         peak = max(peak, float(st.cp_error_norm))
         if st.emergency and flag_t is None:
             flag_t = obs.time_s - t0
+        rises += bool(st.emergency and not was_up)
+        was_up = bool(st.emergency)
         walking_stop = walking_stop or bool(abc.walking_stop)
+        if walk_end_t is None and not abc.walking:
+            walk_end_t = obs.time_s - t0
+        if motion_stop is None and obs.layers["es"].stopped:
+            motion_stop = obs.layers["es"].reason
         steps.update(r.time_s for r in abc.emergency_steps if r.time_s >= t0)
         if obs.fallen:
             fall_t = obs.time_s - t0
             break
     result = {"outcome": "fell" if fall_t is not None else "stood", "fall_after_push_s": fall_t,
-              "peak_cp_error_m": peak, "flag": flag_t is not None, "flag_after_push_s": flag_t,
+              "peak_cp_error_m": peak, "flag": flag_t is not None, "flag_after_push_s": flag_t, "flag_rises": rises,
               "walking_stop": walking_stop, "emergency_steps": len(steps), "support_at_push": support_at_push,
-              "since_touchdown_s": since, "cycle_measured_s": cycle, "push_time_s": t0, "error": None}
+              "since_touchdown_s": since, "cycle_measured_s": cycle, "push_time_s": t0,
+              "cp_push_rel_xy": cp_rel, "walk_end_after_push_s": walk_end_t, "motion_stop": motion_stop,
+              "walking_at_end": bool(obs.layers["abc"].walking), "end_tilt_deg": _tilt_deg(obs.truth.base_quat_wxyz),
+              "end_base_z_m": float(obs.truth.base_pos_world[2]),
+              "error": None}
     return result, obs.time_s
 
 
