@@ -90,7 +90,9 @@ class Checker:
         return f"Checker(violations={len(self.violations)}, expectations={len(self.expectations)})"
 
     def violate(self, invariant: int, detail: str, time_s: float | None = None) -> None:
-        self.violations.append(Violation(invariant, round(self.time_s if time_s is None else time_s, 4), detail))
+        v = Violation(invariant, round(self.time_s if time_s is None else time_s, 4), detail)
+        if v not in self.violations:  # the same state seen twice says it once
+            self.violations.append(v)
 
     # ---- what the session did -----------------------------------------------------------------------------------
     def acted(self, kind: str) -> None:
