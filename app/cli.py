@@ -129,7 +129,7 @@ def run_parser() -> argparse.ArgumentParser:
         description="Operator console for the simulated HRP-2 No.10: simulation + controller loop, "
                     "HTTP API (OpenAPI at /docs, operator page at /) and a viser 3D view.",
         epilog="Subcommands: `hrp2-console bench --help` times the controller chain; `hrp2-console replay --help` "
-               "replays a recorded session.")
+               "replays a recorded session; `hrp2-console campaign --help` runs random-operator sessions.")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
     p.add_argument("--speed", type=_speed, default=1.0,
                    help="real-time factor (1.0 = real time) or 'max' (as fast as possible)")
@@ -539,6 +539,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         code = floor_main(argv[2:])
     elif argv and argv[0] == "experiment":
         code = experiment(argv[1:])
+    elif argv and argv[0] == "campaign":
+        from app.campaign.cli import main as campaign_main
+
+        code = campaign_main(argv[1:])
     elif argv and argv[0] == "replay":
         code = replay(argv[1:])
     else:
