@@ -1,5 +1,6 @@
-"""`stand`: back to half-sitting: the operation layer's targets back onto the reference, the joints (all but
-the grippers) interpolated to HRP-2's half-sitting posture by the SequencePlayer."""
+"""`stand`: back to half-sitting: feet apart or turned (after an emergency step, a walk cut short) first step back
+side by side (goPos(0, 0, 0): the aligning steps), then the operation layer's targets back onto the reference and
+the joints (all but the grippers) interpolated to HRP-2's half-sitting posture by the SequencePlayer."""
 
 from __future__ import annotations
 
@@ -14,6 +15,18 @@ from robot.names import JOINT_NAMES
 #: the posture stand goes to, by joint [rad]; the grippers keep what they hold
 HALF_SITTING_RAD = {n: math.radians(v) for n, v in zip(JOINT_NAMES, half_sitting_deg(), strict=True)
                     if not n.endswith("ARM_JOINT6")}
+#: the left sole in the right sole's frame at half-sitting (x, y [m], yaw [rad]), and how far from it the feet may be
+#: and still count as side by side (the leg joints then within ~1 deg of half-sitting)
+HALF_SITTING_STANCE = (0.0, 0.19, 0.0)
+STANCE_TOLERANCE_M = 0.01
+STANCE_TOLERANCE_RAD = math.radians(2.0)
+ALIGN_START_TIMEOUT_S = 0.5  # [s] the aligning walk shows in the view a tick after goPos
+
+
+def feet_side_by_side(lsole_from_rsole) -> bool:
+    x, y, yaw = lsole_from_rsole
+    x0, y0, yaw0 = HALF_SITTING_STANCE
+    return math.hypot(x - x0, y - y0) <= STANCE_TOLERANCE_M and abs(yaw - yaw0) <= STANCE_TOLERANCE_RAD
 
 
 @dataclass(frozen=True)
@@ -25,23 +38,46 @@ class StandParams(BehaviorParams):
 class Stand(Behavior):
     name = "stand"
     Params = StandParams
-    summary = "Back to half-sitting (operation targets reset, joints interpolated)"
+    _walk_s = 0.0  # [s] the aligning steps' planned duration
+    _posture_from_s: float | None = None  # [s] run time the posture's interpolation started (None: not yet)
+    summary = "Back to half-sitting (feet side by side first, operation targets reset, joints interpolated)"
 
     def points(self) -> tuple[str, ...]:
-        return ("rhand", "lhand", "head", "waist")
+        return ("rhand", "lhand", "head", "waist", "walk")
 
     def nominal_duration_s(self) -> float:
-        return self.params.time_s + 0.5
+        return self.params.time_s + 0.5 + self._walk_s
 
     def start(self, ctx: Context) -> None:
         view = ctx.require_view()
         if view.walking:
             raise InvalidState("stand refused: the robot is walking; stop it first")
+        self._walk_s, self._posture_from_s, self._walked = 0.0, None, False
+        if not feet_side_by_side(view.lsole_from_rsole):
+            self._walk_s = ctx.commands.go_pos(0.0, 0.0, 0.0)  # the aligning steps
+        else:
+            self._to_half_sitting(ctx)
+
+    def _to_half_sitting(self, ctx: Context) -> None:
         ctx.commands.reset_operation_targets()
         ctx.commands.set_joint_angles(HALF_SITTING_RAD, self.params.time_s)
+        self._posture_from_s = ctx.elapsed_s
 
     def step(self, ctx: Context) -> Output:
-        if ctx.elapsed_s >= self.params.time_s and not ctx.commands.is_interpolating():
+        if self._posture_from_s is None:
+            view = ctx.require_view()
+            self._walked = self._walked or view.walking
+            if not self._walked and ctx.elapsed_s > ALIGN_START_TIMEOUT_S:
+                return self.fail(f"timeout: the aligning steps did not start within {ALIGN_START_TIMEOUT_S:g} s")
+            if view.walking or not self._walked:  # the view is the last tick's: the walk shows from the next one
+                return NOTHING
+            if not feet_side_by_side(view.lsole_from_rsole):
+                x, y, yaw = view.lsole_from_rsole
+                return self.fail(f"the aligning steps ended with the feet not side by side (left sole {x:.3f}, "
+                                 f"{y:.3f} m, {math.degrees(yaw):.1f} deg from the right one)")
+            self._to_half_sitting(ctx)
+            return NOTHING
+        if ctx.elapsed_s - self._posture_from_s >= self.params.time_s and not ctx.commands.is_interpolating():
             view = ctx.view
             return self.succeed("standing in half-sitting",
                                 waist_height_m=None if view is None else round(view.waist_height_m, 4))

@@ -27,6 +27,7 @@ from controller.kinematics.rotations import (
     rows_tmulv,
     rpy_to_matrix,
     rpy_to_rows,
+    wrap_rad,
 )
 from controller.operation.deadman import deadman_factor
 from controller.operation.limits import (
@@ -624,9 +625,21 @@ class OperationLayer(Layer):
         view = OperationView(time_s=self._time_s, feet_p_world_m=frozen_array(F_world.p), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
                              waist_height_m=float(points["waist"].p_feet_m[2]), walking=self._walking,
-                             motion_stopped=self._stopped, collision_pairs=self._collision_pairs)
+                             motion_stopped=self._stopped, collision_pairs=self._collision_pairs,
+                             lsole_from_rsole=self._lsole_from_rsole())
         self._view_cache = (key, view)
         return view
+
+    def _lsole_from_rsole(self) -> tuple[float, float, float]:
+        g = self._gait
+        if g is None:
+            return OperationView.__dataclass_fields__["lsole_from_rsole"].default
+        (r00, _, _), (r10, _, _), _ = g.R_rsole_world.tolist()
+        (l00, _, _), (l10, _, _), _ = g.R_lsole_world.tolist()
+        yaw_r = math.atan2(r10, r00)
+        dx, dy = (float(g.p_lsole_world[i] - g.p_rsole_world[i]) for i in (0, 1))
+        c, s = math.cos(yaw_r), math.sin(yaw_r)
+        return (c * dx + s * dy, -s * dx + c * dy, wrap_rad(math.atan2(l10, l00) - yaw_r))
 
     def status(self) -> OperationStatus:
         return self._status.get((self._version, self.enabled), self._build_status)

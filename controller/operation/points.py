@@ -153,6 +153,9 @@ class OperationView:
     #: the CollisionDetector holds the last collision-free posture (these body pairs would collide): the
     #: poses above are the reference, not where the robot is
     collision_pairs: tuple[tuple[str, str], ...] = ()
+    #: the left sole in the right sole's frame: (x [m], y [m], yaw [rad]) as the gait plan has them (half-sitting:
+    #: side by side, 0.19 m apart; after an emergency step wherever it landed)
+    lsole_from_rsole: tuple[float, float, float] = (0.0, 0.19, 0.0)
 
     def placed_in_world(self, world_from_control) -> OperationView:
         """This view with its world coordinates (the feet frame F, the points' world poses) moved from the

@@ -201,3 +201,34 @@ def test_a_squat_started_in_the_hard_estops_release_blend_makes_no_jump_when_the
     assert not snap.layers["es"].stopped and snap.safety.fall is None
     assert worst < 0.010, f"CP error {1e3 * worst:.1f} mm"  # measured 3.5 mm; the flag's threshold is 40 mm
     assert jump < 0.001, f"BODY reference jumped {1e3 * jump:.1f} mm in a tick"  # 0.05 m/s: 0.25 mm a tick
+
+
+@pytest.mark.slow
+def test_stand_after_a_catch_step_steps_the_feet_side_by_side_then_takes_half_sitting(rig):
+    """A 20 N s push backward while walking ends in a catch step with the feet apart; `stand` (the stops released)
+    first steps them back side by side, so the legs, not only the arms, end in half-sitting."""
+    from app.service.verbs import GoVelocity, Push
+    from behaviors.stand import HALF_SITTING_RAD, HALF_SITTING_STANCE
+    from robot.names import JOINT_NAMES
+
+    robot = rig.robot
+    robot.submit(GoVelocity(0.1, 0.0, 0.0)).result()
+    robot.run_for(3.3)  # the left foot in the air
+    robot.submit(Push("BODY", (-200.0, 0.0, 0.0), 0.1)).result()
+    robot.run_for(4.0)
+    assert not robot.host.observation.fallen
+    view = robot.chain["op"].view()
+    apart = np.subtract(view.lsole_from_rsole, HALF_SITTING_STANCE)
+    print(f"after the catch: left sole {view.lsole_from_rsole} from the right one")
+    assert math.hypot(apart[0], apart[1]) > 0.05  # the catch left the feet apart
+    rig.service.release_motion()
+    status = rig.run("stand", {"time_s": 1.5})
+    assert status.state == "succeeded", status.message
+    rig.settle(1.0)
+    x, y, yaw = robot.chain["op"].view().lsole_from_rsole
+    assert math.hypot(x - HALF_SITTING_STANCE[0], y - HALF_SITTING_STANCE[1]) < 0.01 and abs(yaw) < math.radians(2)
+    q = robot.loop.snapshot.q_meas_rad
+    legs = [i for i, n in enumerate(JOINT_NAMES) if n.startswith(("RLEG", "LLEG"))]
+    worst = max(abs(q[i] - HALF_SITTING_RAD[JOINT_NAMES[i]]) for i in legs)
+    print(f"legs off half-sitting by {np.degrees(worst):.2f} deg at most")
+    assert worst < math.radians(1.5)
