@@ -62,7 +62,7 @@ TOUCHDOWN_LOAD_RATIO = 0.25
 TOUCHDOWN_SWING_SHARE = 0.6
 #: [s] the swing of a capture step from a walk: the walk's remaining swing, within these (the foot needs time to go
 #: where the capture point calls it; a long swing is shortened so the foot lands before the capture point runs away)
-CATCH_SWING_S = (0.16, 0.4)
+CATCH_SWING_S = (0.16, 0.25)
 #: [s] after an emergency step's touchdown, a capture point still outside the two soles calls for another step
 RESTEP_AFTER_S = 0.05
 #: emergency steps one after the other at most (each from the last one's feet)
