@@ -463,9 +463,10 @@ class Stabilizer(Layer):
         state, so the error is small meanwhile: the disturbance is not over until the step is)."""
         p = self.params
         settled = self.active and self._transition is None  # hrpsys: only in MODE_ST, transition done
-        if (p.emergency_mode == "none" or not settled or (gait.walking and not p.estop_while_walking)
-                or not any(contact_act)):
+        if p.emergency_mode == "none" or not settled or (gait.walking and not p.estop_while_walking):
             flag = False
+        elif not any(contact_act):  # in the air: no flag rises, and one up stays up (both feet unloaded a moment)
+            flag = self.emergency
         elif p.emergency_mode == "cp_error":
             ex, ey = self.cp_error.tolist()
             error = math.hypot(ex, ey)

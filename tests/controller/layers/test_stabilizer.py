@@ -25,20 +25,20 @@ def gait(cog_xy=(0.0095, 0.0), cog_vel_xy=(0.0, 0.0)):
                      cog_pc_world=np.array([*cog_xy, 0.81]))
 
 
-def standing_ctx(t=0.0):
-    """Sensors of the robot standing still in half-sitting: each foot carries half the weight."""
+def standing_ctx(t=0.0, load=1.0):
+    """Sensors of the robot standing still in half-sitting: each foot carries half the weight (x load)."""
     w = np.zeros((4, 6))
-    w[:2, 2] = 0.5 * (58.0 - 2 * 1.63877) * 9.80665
+    w[:2, 2] = 0.5 * (58.0 - 2 * 1.63877) * 9.80665 * load
     s = Sensors(t, HALF.copy(), np.zeros(30), w, np.zeros(3), np.array([0.0, 0.0, 9.80665]))
     return TickContext(tick=0, time_s=t, dt_s=0.005, sensors=s, estimate=Estimate())
 
 
-def run_ticks(st, ref, n):
+def run_ticks(st, ref, n, load=1.0):
     from controller.layers.remove_force_offset import RemoveForceOffset
     rmfo = RemoveForceOffset(RobotKinematics())
     out = None
     for k in range(n):
-        ctx = standing_ctx(0.005 * k)
+        ctx = standing_ctx(0.005 * k, load)
         rmfo.tick(ctx, ref)
         out = st.tick(ctx, ref)
     return out
@@ -227,3 +227,18 @@ def test_the_flag_falls_only_after_the_error_has_stayed_below_half_the_threshold
     run_ticks(st, over, 5)
     run_ticks(st, near, 2)
     assert not st.emergency  # without hysteresis: down at the first tick under the threshold
+
+
+def test_in_the_air_no_flag_rises_and_one_up_stays_up():
+    """Both feet unloaded (a robot lifted, or both soles light for a moment during a catch step): a flag does not
+    rise there, and one that is up is not dropped by it (it fell mid-catch, then rose again: two rises for a push)."""
+    st = Stabilizer(0.005, StabilizerParams(cp_threshold_m=0.05, transition_time_s=0.01))
+    calm = Reference.from_arrays(HALF, base_pos_world=BASE).with_(gait=gait())
+    over = calm.with_(gait=gait(cog_vel_xy=(0.3, 0.0)))
+    run_ticks(st, calm, 5)
+    run_ticks(st, over, 5, load=0.0)
+    assert not st.emergency  # in the air: no flag
+    run_ticks(st, over, 5)
+    assert st.emergency
+    run_ticks(st, calm, 20, load=0.0)
+    assert st.emergency  # unloaded a moment: still up
