@@ -90,11 +90,11 @@ def _tilt_deg(quat_wxyz) -> float:
     return math.degrees(math.acos(max(-1.0, min(1.0, 1.0 - 2.0 * (x * x + y * y)))))
 
 
-def _cp_from_sole(robot, obs, phase: float) -> list[float]:
+def _cp_from_sole(obs, phase: float) -> list[float]:
     """The capture point the Stabilizer estimates at the push, from the sole the LIP's model places (the stance sole
     in single support, the one that landed last in double support: the right one in the first half of the cycle),
     in that sole's frame [m]: the walk's own state for the capturability (its model's nominal one has no sway)."""
-    g = robot.chain["abc"].last_gait
+    g = obs.snapshot.reference.gait  # the AutoBalancer's plan as published, in the controller's frame (as cp_act)
     right = g.support == "rleg" or (g.support == "both" and phase < 0.5)
     p, R = (g.p_rsole_world, g.R_rsole_world) if right else (g.p_lsole_world, g.R_lsole_world)
     yaw = math.atan2(float(R[1, 0]), float(R[0, 0]))
@@ -141,7 +141,7 @@ def _push_run(s: PushSpec) -> tuple[dict[str, Any], float]:
     yaw = _yaw(obs.truth.base_quat_wxyz) + math.radians(s.direction_deg)
     force = s.impulse_ns / PUSH_S * np.array([math.cos(yaw), math.sin(yaw), 0.0])
     support_at_push, since = obs.layers["abc"].support, obs.time_s - last_change
-    cp_rel = _cp_from_sole(robot, obs, s.phase)
+    cp_rel = _cp_from_sole(obs, s.phase)
     t0 = obs.time_s
     robot.submit(Push(PUSH_BODY, tuple(float(f) for f in force), PUSH_S)).result()
     peak, flag_t, walking_stop, fall_t, steps, rises, was_up = 0.0, None, False, None, set(), 0, False
