@@ -411,7 +411,8 @@ class Session:
             self.wait_until(lambda s: not s["emergency"]["hard_stop"], 2.0, "the e-stop's release")
         self.request("POST", "/api/walk/stop")
         self.wait_until(lambda s: not s["walking"] and not s["emergency"]["walking_stop"], 20.0, "the walk's end")
-        if self.emergency().get("motion_stop"):
+        if self.emergency().get("motion_stop"):  # refused while the flag is up: it would latch again
+            self.wait_until(lambda s: not s["emergency"]["flag"], 6.0, "the CP flag down")
             self.request("POST", "/api/motion/release")
             self.wait_until(lambda s: not s["emergency"]["motion_stop"], 6.0, "the motion stop's release")
         stand = None

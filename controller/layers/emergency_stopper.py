@@ -127,6 +127,7 @@ class EmergencyStopper(Layer):
         self.cp_error_m: float | None = None  # reason 'capture_point': |CP error| when the flag rose [m]
         self._last_out: np.ndarray | None = None
         self._prev_out: np.ndarray | None = None
+        self._signal_up = False  # the flag or an emergency step on the last tick: a release would re-latch
 
     def set_params(self, params: EmergencyStopperParams) -> None:
         self.params = params
@@ -143,6 +144,9 @@ class EmergencyStopper(Layer):
     def release_motion(self) -> None:
         if not self.stopped and self._requested is None:
             raise InvalidState("motion is not stopped; nothing to release")
+        if self.stopped and self._signal_up:  # refused, not answered 'released' and latched again next tick
+            raise InvalidState("the capture-point flag or an emergency step is still up; the motion stop stays "
+                               "latched until it drops (CP error under the release threshold for the hold time)")
         self._requested = None
         if self.stopped:
             self.reverter.release()
@@ -159,6 +163,7 @@ class EmergencyStopper(Layer):
         last = ctx.last_ports
         flag = last.cp_flag and not last.hold
         step = last.emergency_step and not last.hold
+        self._signal_up = bool(flag or step)
         if not self.stopped and (flag or step or self._requested):
             self.reason = self._requested or ("emergency_step" if step else "capture_point")
             self.flag_time_s = t

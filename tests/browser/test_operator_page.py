@@ -530,6 +530,8 @@ def test_a_push_that_raises_the_cp_flag_latches_a_motion_stop_shown_as_an_alert(
     s = hrp2_console.state()
     assert s["emergency"]["motion_stop"] and not s["fallen"]  # acknowledged, still latched
     playwright_api.expect(page.locator("#s-motion")).to_have_text("STOPPED (capture_point)")
+    # a release is refused while the flag is still up (it would latch again on the next tick), taken once it drops
+    wait_until(lambda: not hrp2_console.state()["emergency"]["flag"], 10.0, "the CP flag down")
     page.get_by_role("button", name="Release motion", exact=True).click()
     wait_until(lambda: not hrp2_console.state()["emergency"]["motion_stop"], 5.0, "released")
     playwright_api.expect(page.locator("#s-motion")).to_have_text("off")

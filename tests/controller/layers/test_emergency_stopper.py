@@ -112,5 +112,23 @@ def test_an_emergency_step_stops_the_motion_like_the_flag_and_says_so():
         es.tick(ctx, ref_at(t))
     assert es.stopped and es.status().reason == "emergency_step"
     assert ctx.ports.motion_stopped  # the operation layer freezes too
+    with pytest.raises(InvalidState, match="still up"):  # the step still being taken: refused, not re-latched
+        es.release_motion()
+    ctx = make_ctx(t=2.0, dt=DT)
+    es.tick(ctx, ref_at(2.0))  # the step is over
     es.release_motion()
     assert not es.stopped
+
+
+@pytest.mark.parametrize("up_s", [0.005, 0.5, 2.0])
+def test_a_release_while_the_flag_is_still_up_is_refused_and_succeeds_once_it_drops(up_s):
+    es = EmergencyStopper(DT, EmergencyStopperParams(t1_s=0.1, t2_s=0.1))
+    run(es, 0.0, 1.0 + up_s - DT, flag=lambda t: t >= 1.0)
+    assert es.stopped and es.status().reason == "capture_point"
+    with pytest.raises(InvalidState, match="capture-point flag"):
+        es.release_motion()
+    assert es.stopped
+    run(es, 1.0 + up_s, 1.0 + up_s + DT)  # the flag dropped
+    es.release_motion()
+    run(es, 1.0 + up_s + 2 * DT, 2.0 + up_s)
+    assert not es.stopped  # released, and not latched again
