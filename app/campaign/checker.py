@@ -15,7 +15,7 @@ INVARIANTS: Mapping[int, str] = {
     2: "every refusal and every failed or cancelled behaviour names its cause from a closed set",
     3: "an e-stop answered ok is engaged in the loop's state",
     4: "an answer that says ok was applied (where the state shows it)",
-    5: "no 5xx, the robot process alive, no tick late by more than 2 ms when paced",
+    5: "no 5xx, no controller fault, the robot process alive, no tick late by more than 2 ms when paced",
     6: "after the session, releasing the stops and `stand` bring the robot back to half-sitting unless it fell",
 }
 
@@ -85,6 +85,7 @@ class Checker:
         self.last_state: Mapping[str, Any] | None = None
         self._runs_seen: set[tuple[int, str]] = set()
         self.falls: list[dict[str, Any]] = []
+        self._fault: str | None = None  # the fault the last state showed (each one is said once)
 
     def __repr__(self) -> str:
         return f"Checker(violations={len(self.violations)}, expectations={len(self.expectations)})"
@@ -174,6 +175,10 @@ class Checker:
         self.time_s = float(s["time"])
         self.tick = int(s["tick"])
         self.last_state = s
+        fault = (s.get("emergency") or {}).get("fault")
+        if fault and fault != self._fault:  # the campaign injects none: a fault from valid input is a defect
+            self.violate(5, f"a controller fault: {fault}")
+        self._fault = fault
         if s.get("fallen") and self.fell_at is None:
             self.fell_at = self.time_s
             beyond = [p for p in self.pushes if p[1] > p[2]]

@@ -392,7 +392,7 @@ class AutoBalancer(Layer):
         and a velocity walk (the walking point's too) ends in it. Returns 0 when the walk is in its last
         step: the new goal is then walked to from where the robot stands at its end."""
         self._require_active("goPos")
-        self._require_no_emergency_step("goPos")
+        self._require_balanced("goPos")
         if self.walking_stop:
             raise InvalidState("goPos: the emergency walking stop is in force (stepping in place); "
                                "goPos again once the robot stands")
@@ -406,7 +406,7 @@ class AutoBalancer(Layer):
 
     def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
         self._require_active("goVelocity")
-        self._require_no_emergency_step("goVelocity")
+        self._require_balanced("goVelocity")
         self._walking_stop_requested = False
         self.gait.go_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
 
@@ -418,10 +418,13 @@ class AutoBalancer(Layer):
         """A capture-point emergency step is in progress."""
         return self._estep is not None
 
-    def _require_no_emergency_step(self, what: str) -> None:
+    def _require_balanced(self, what: str) -> None:
         if self._estep is not None:
             raise InvalidState(f"{what}: a capture-point emergency step is in progress; {what} again once the "
                                "robot stands (status: abc.emergency_step false)")
+        if self._last_cp_flag and not self.gait.walking:  # a walk started off balance falls (campaign seed 1009)
+            raise InvalidState(f"{what}: the capture-point flag is up (the robot is balancing a disturbance); "
+                               f"{what} again once it drops (status: st.emergency false)")
 
     def emergency_stop_walking(self) -> None:
         """Remaining footsteps replaced so the robot stops in place (manipulation is left alone). The walking
@@ -465,6 +468,8 @@ class AutoBalancer(Layer):
     def _walk_point_refusal(self, cmd: WalkCommand) -> str | None:
         if self._estep is not None:
             return "ignored: a capture-point emergency step is in progress"
+        if self._last_cp_flag and not self.gait.walking:
+            return "ignored: the capture-point flag is up; the walking point must read zero once after it drops"
         if not self._walk_armed:
             return "ignored: stopped; the walking point must read zero once before walking again"
         if self.walking_stop:
@@ -483,7 +488,7 @@ class AutoBalancer(Layer):
         """hrpsys setFootSteps: `(leg, pos [m], rpy [rad])`, relative to the first, which is snapped to
         the current pose of that leg."""
         self._require_active("setFootSteps")
-        self._require_no_emergency_step("setFootSteps")
+        self._require_balanced("setFootSteps")
         if self.gait.walking:
             raise InvalidState("setFootSteps while walking is not supported; wait for the steps to finish")
         self._walking_stop_requested = False
@@ -554,6 +559,8 @@ class AutoBalancer(Layer):
             else:
                 self.emergency_stop_walking()
         self._last_cp_flag = flag
+        if flag and not self.gait.walking:
+            self._walk_armed = False  # a stick held through the flag does not walk off when it drops
         cmd = ctx.ports.walk_command
         if cmd is not None or self._port_walking or not self._walk_armed:
             self._walk_at(cmd)

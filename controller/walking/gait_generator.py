@@ -172,6 +172,7 @@ class GaitGenerator:
         self._rest_from: tuple | None = None  # the pose stop_from_rest planned from (feet p, R, support, footstep)
         self._walk_origin = mid_coords(self._feet["rleg"], self._feet["lleg"])  # (x, y, yaw) where the walk began
         self._pending_goal: tuple[float, float, float] | None = None  # goPos goal mid-coords for after this walk
+        self._pending_velocity: tuple[float, float, float] | None = None  # goVelocity for after this walk
         self._velocity_step: tuple[float | None, float | None] = (None, None)  # (max stride, foot distance) [m]
         self._plan_params: GaitParams | None = None  # the plan's own timing (an emergency step's), else params
         self._swing_end: tuple[np.ndarray, int, int] | None = None  # swing_samples_left's last search
@@ -293,7 +294,7 @@ class GaitGenerator:
         goal = _compose_planar(self._walk_origin, (dx_m, dy_m, dtheta_rad))
         k = self._free_index()
         if k > len(self._footsteps):
-            self._pending_goal = goal
+            self._pending_goal, self._pending_velocity = goal, None
             return []
         steps = go_pos_from(self._footsteps[:k], goal, self.footstep_params, self.stride_limits)
         self._stepper = None
@@ -315,10 +316,13 @@ class GaitGenerator:
         if self._walking:
             if self._stepper is None or self._stepper.state not in ("walking", "ending"):
                 raise InvalidState("walking a fixed footstep list: go_velocity needs idle or velocity mode")
+            if self._stepper.state == "ending" and not any(t >= self._tick for t in self._checks):
+                self._pending_velocity = (vx_m_s, vy_m_s, vtheta_rad_s)  # no check left to resume at: after it
+                return
             self._stepper.resume()
             self._stepper.set_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
             return
-        self._pending_goal = None
+        self._pending_goal = self._pending_velocity = None
         self._stepper = VelocityStepper(self.T_world_rfoot, self.T_world_lfoot, *self._velocity_params())
         self.plan(self._stepper.start(vx_m_s, vy_m_s, vtheta_rad_s))
 
@@ -366,15 +370,17 @@ class GaitGenerator:
     def go_stop(self) -> None:
         """hrpsys goStop: in velocity mode, the steps after the overwritable one become the aligning steps
         (a goPos waiting for the end of the walk is dropped)."""
-        self._pending_goal = None
+        self._pending_goal = self._pending_velocity = None
         if self._walking and self._stepper is not None and self._stepper.state == "walking":
             k = self._overwritable_index()
+            if k > len(self._footsteps):
+                return  # already in the final double support
             self._stepper.advance_to(k - 1)
             self.replan(self._stepper.finalize(), k)
 
     def emergency_stop(self) -> None:
         """hrpsys emergencyStop: the steps after the overwritable one are replaced by steps in place."""
-        self._pending_goal = None
+        self._pending_goal = self._pending_velocity = None
         if not self._walking or self._stopping_from_rest:
             return
         k = self._overwritable_index()
@@ -407,7 +413,7 @@ class GaitGenerator:
         swing foot's landing takes [s] (0 in double support or when there is no walk to stop)."""
         if not self._walking or self._tick == 0:
             return 0.0
-        self._pending_goal = None
+        self._pending_goal = self._pending_velocity = None
         a = self._arrays
         j = self._tick - 1 - self._origin  # the sample handed out last: where the plan is now
         if j >= 0:
@@ -569,9 +575,13 @@ class GaitGenerator:
         """The plan at the next tick (the idle pose when not walking). O(1): slices precomputed samples
         (except the tick that starts a goPos left waiting for the end of the previous walk)."""
         if not self._walking:
-            if self._pending_goal is None:
+            if self._pending_velocity is not None:
+                velocity, self._pending_velocity = self._pending_velocity, None
+                self.go_velocity(*velocity)
+            elif self._pending_goal is None:
                 return self._idle
-            self._start_pending_goal()
+            else:
+                self._start_pending_goal()
         if self._tick in self._checks:
             self._velocity_check(self._checks[self._tick])
         j = self._tick - self._origin
@@ -674,7 +684,7 @@ class GaitGenerator:
             return "both"
         j = max(self._tick - 1 - self._origin, 0)
         support = _SUPPORT_NAMES[int(self._arrays["support"][j])]
-        self._pending_goal = None
+        self._pending_goal = self._pending_velocity = None
         self._stopping_from_rest = False
         self._finish(j)
         return support

@@ -178,3 +178,12 @@ def test_stand_back_at_half_sitting_the_grippers_aside_or_a_fallen_robot_is_not_
                            fallen=False)
     c.back_to_half_sitting(None, {}, HALF, fallen=True)
     assert invariants(c) == []
+
+
+def test_a_controller_fault_is_caught_once_while_it_shows():
+    c = Checker()
+    c.state(state(1.0))
+    for t in (2.0, 2.005, 2.01):
+        c.state(state(t, fault="InvalidCommand: advance_to(9); valid: 0..8"))
+    c.state(state(3.0))
+    assert invariants(c) == [5] and "advance_to(9)" in c.violations[0].detail and c.violations[0].time_s == 2.0

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.system import initial_reference
 from controller.core.types import Ports
 from controller.kinematics.model import RobotKinematics
@@ -30,10 +30,10 @@ class Ticker:
         self.tick_no = 0
         self.run(2.1, None)  # blended in
 
-    def run(self, seconds, command, hold=False):
+    def run(self, seconds, command, hold=False, cp_flag=False):
         for _ in range(int(round(seconds / DT))):
             ctx = make_ctx(q=HALF_SITTING, t=self.tick_no * DT, tick=self.tick_no)
-            ctx.last_ports = Ports(hold=hold)
+            ctx.last_ports = Ports(hold=hold, cp_flag=cp_flag)
             ctx.ports.walk_command = command
             self.abc.tick(ctx, self.ref)
             self.tick_no += 1
@@ -133,3 +133,16 @@ def test_an_invalid_command_is_ignored_in_the_loop_and_refused_by_the_check_nami
     with pytest.raises(InvalidCommand, match=r"walk\.max_stride_m"):
         check_walk_command(WalkCommand(0.1, 0.0, 0.0, max_stride_m=-0.1))
     check_walk_command(WalkCommand(0.1, 0.0, 0.0, max_stride_m=0.1, foot_distance_m=0.2))
+
+
+def test_no_walk_starts_while_the_cp_flag_is_up_and_a_held_stick_must_read_zero_after_it():
+    # campaign seed 1009: a walk started while the flag was still up (the robot off balance) fell
+    t = Ticker()
+    status = t.run(0.2, FORWARD, cp_flag=True)
+    assert not t.abc.gait.walking and "capture-point flag is up" in status.walk_point
+    for verb in (lambda: t.abc.go_pos(0.2, 0.0, 0.0), lambda: t.abc.go_velocity(0.1, 0.0, 0.0)):
+        with pytest.raises(InvalidState, match="capture-point flag is up"):
+            verb()
+    assert "read zero" in t.run(0.5, FORWARD).walk_point and not t.abc.gait.walking  # the flag down, stick held
+    t.run(0.05, None)
+    assert t.run(0.1, FORWARD).walk_point == "walking" and t.abc.gait.walking

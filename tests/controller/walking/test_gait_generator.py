@@ -226,6 +226,34 @@ def test_go_velocity_after_go_stop_resumes_the_walk_instead_of_ending_it():
     assert feet_mid(gg)[1] > 0.05  # and sideways at the new velocity
 
 
+def test_go_velocity_at_any_moment_of_the_ending_walks_on_and_go_stop_then_never_raises():
+    # campaign seed 1009: a walk point pressed in the final double support raised in go_stop (a controller fault)
+    ending = GaitGenerator(dt_s=DT)
+    ending.go_velocity(0.1, 0.0, 0.0)
+    n_end = len(run(ending, {500: lambda g: g.go_stop()}))
+    for offset in range(1, n_end - 500, 23):
+        gg = GaitGenerator(dt_s=DT)
+        gg.go_velocity(0.1, 0.0, 0.0)
+        commands = {500: lambda g: g.go_stop(), 500 + offset: lambda g: g.go_velocity(0.0, 0.05, 0.0)}
+        commands.update({k: lambda g: g.go_stop() for k in range(500 + offset + 1200, 500 + offset + 1600, 37)})
+        samples = []
+        for k in range(20000):
+            if k in commands:
+                commands[k](gg)
+            sample = gg.tick()
+            if not sample.walking and k > 500 + offset + 1600:
+                break
+            samples.append(sample)
+        assert not gg.walking
+        assert feet_mid(gg)[1] > 0.04, offset  # the new velocity was walked, on or after the ending walk
+        gg = GaitGenerator(dt_s=DT)
+        gg.go_velocity(0.1, 0.0, 0.0)
+        run(gg, {500: lambda g: g.go_stop(), 500 + offset: lambda g: g.go_velocity(0.0, 0.05, 0.0),
+                 501 + offset: lambda g: g.go_stop()})  # the stick let go at once: no raise, the walk ends
+        gg.tick()
+        assert not gg.walking
+
+
 def test_go_pos_while_walking_replaces_the_rest_of_the_plan_relative_to_where_the_walk_began():
     gg = GaitGenerator(dt_s=DT)
     origin = gg.walk_origin
