@@ -4,6 +4,7 @@ findings saved as JSON, a markdown report; exits 1 on a violation."""
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import logging
 import queue
@@ -14,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from app.campaign.grammar import Action, catalogue_of
+from app.campaign.memory import growth_violations, tree_rss_mb
 from app.campaign.report import render
 from app.campaign.session import Session, SessionResult
 from app.campaign.shrink import ddmin
@@ -52,7 +54,9 @@ def run_campaign(seeds: Sequence[int], seconds: float, workers: int = 1, speed: 
     results: dict[int, dict[str, Any]] = {}
     errors: list[BaseException] = []
 
-    def worker() -> None:
+    order = itertools.count()
+
+    def worker(k: int) -> None:
         try:
             with Console("--speed", "max" if speed is None else str(speed)) as console:
                 _, behaviors = console.request("GET", "/api/behaviors")
@@ -64,7 +68,7 @@ def run_campaign(seeds: Sequence[int], seconds: float, workers: int = 1, speed: 
                     except queue.Empty:
                         return
                     r = Session(console.port, seed, seconds, catalogue, defaults=defaults).run()
-                    d = r.to_dict()
+                    d = {**r.to_dict(), "worker": k, "order": next(order), "rss_mb": tree_rss_mb(console.proc.pid)}
                     if r.violations:
                         d["console_tail"] = "".join(console.lines[-40:])
                         if shrink:
@@ -75,13 +79,16 @@ def run_campaign(seeds: Sequence[int], seconds: float, workers: int = 1, speed: 
         except BaseException as exc:  # noqa: BLE001 - reported by the caller
             errors.append(exc)
 
-    threads = [threading.Thread(target=worker, name=f"campaign-{k}") for k in range(min(workers, len(seeds)))]
+    threads = [threading.Thread(target=worker, args=(k,), name=f"campaign-{k}")
+               for k in range(min(workers, len(seeds)))]
     for t in threads:
         t.start()
     for t in threads:
         t.join()
     if errors:
         raise errors[0]
+    for v in growth_violations(list(results.values())):  # invariant 5's memory bound, said on the last session
+        results[v.pop("seed")]["violations"].append(v)
     return [results[s] for s in seeds]
 
 
