@@ -114,3 +114,26 @@ class FullbodyIK:
         cx, cy, _ = com.tolist()
         self._com_minus_base_xy = (cx - bx, cy - by)
         return FullbodyIKResult(q_rad=q, base_pos_world=base, com_world=com, reachable=reachable, iterations=it)
+
+
+
+#: [rad] walking swings the legs' joints up to ~10 deg past their standing angles (measured: the ankle roll, walks
+#: at the velocity limits): a walk starts only with this much range left in every leg joint
+WALK_LEG_LIMIT_MARGIN_RAD = math.radians(12.0)
+
+
+def nearest_leg_limit(q_rad, q_lower_rad, q_upper_rad) -> tuple[int, float]:
+    """The leg joint of q_rad (30,) nearest a position limit and how far inside it is [rad] (negative: past it)."""
+    best = (-1, math.inf)
+    for idx in (_RLEG, _LLEG):
+        for i in idx:
+            m = min(q_rad[i] - q_lower_rad[i], q_upper_rad[i] - q_rad[i])
+            if m < best[1]:
+                best = (int(i), float(m))
+    return best
+
+
+def legs_within_limits(q_rad, q_lower_rad, q_upper_rad, margin_rad: float) -> bool:
+    """Both legs' joints of q_rad (30,) at least margin_rad inside their position limits: a leg pose past one is
+    clamped downstream and the sole no longer lies flat (the robot tips onto its edge)."""
+    return nearest_leg_limit(q_rad, q_lower_rad, q_upper_rad)[1] >= margin_rad

@@ -21,7 +21,7 @@ from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
 from controller.core.types import BalanceEstimate, GaitState, Reference, StepInProgress, TickContext, read_only
 from controller.interpolation.blend import Transition
-from controller.kinematics.fullbody_ik import FullbodyIK
+from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, nearest_leg_limit
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
 from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M, WalkCommand
@@ -30,7 +30,7 @@ from controller.walking.footsteps import Footstep, FootstepParams, StepParams, S
 from controller.walking.gait_generator import GaitGenerator, GaitParams
 from controller.walking.preview_control import PreviewController, PreviewControlParams
 from controller.walking.toe_heel import ToeHeelParams
-from robot.names import FORCE_SENSOR_NAMES
+from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
 
 HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
 REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this far inside the sole
@@ -259,6 +259,7 @@ class AutoBalancer(Layer):
         self.dt_s = dt_s
         self.kin = kinematics or RobotKinematics()
         self.ik = FullbodyIK(self.kin)
+        self._q_lower_rad, self._q_upper_rad = self.kin.q_lower.tolist(), self.kin.q_upper.tolist()
         self.total_mass = self.kin.total_mass
         self.kin.update_rpy(initial.base_pos_world, initial.base_rpy_rad, initial.q_rad)
         T_r, T_l = (_homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
@@ -407,8 +408,11 @@ class AutoBalancer(Layer):
     def go_velocity(self, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float) -> None:
         self._require_active("goVelocity")
         self._require_balanced("goVelocity")
-        self._walking_stop_requested = False
+        if self.walking_stop:  # campaign seed 1012: a refused goVelocity had cleared the stop, and the walk went on
+            raise InvalidState("goVelocity: the emergency walking stop is in force (stepping in place); "
+                               "goVelocity again once the robot stands")
         self.gait.go_velocity(vx_m_s, vy_m_s, vtheta_rad_s)
+        self._walking_stop_requested = False
 
     def go_stop(self) -> None:
         self.gait.go_stop()
@@ -425,6 +429,20 @@ class AutoBalancer(Layer):
         if self._last_cp_flag and not self.gait.walking:  # a walk started off balance falls (campaign seed 1009)
             raise InvalidState(f"{what}: the capture-point flag is up (the robot is balancing a disturbance); "
                                f"{what} again once it drops (status: st.emergency false)")
+        near = self._legs_near_limit()
+        if near is not None:
+            raise InvalidState(f"{what}: {near}")
+
+    def _legs_near_limit(self) -> str | None:
+        """Why a walk cannot start from the legs' pose (the waist tilted until a leg joint has too little range
+        left to walk; campaign seeds 1017, 1018), or None."""
+        if self.gait.walking or self._last_out is None:
+            return None
+        i, margin = nearest_leg_limit(self._last_out.q_rad, self._q_lower_rad, self._q_upper_rad)
+        if margin >= WALK_LEG_LIMIT_MARGIN_RAD:
+            return None
+        return (f"{JOINT_NAMES[i]} is {math.degrees(margin):.1f} deg from its limit (the waist's tilt) and walking "
+                f"needs {math.degrees(WALK_LEG_LIMIT_MARGIN_RAD):g} deg; straighten the waist first")
 
     def emergency_stop_walking(self) -> None:
         """Remaining footsteps replaced so the robot stops in place (manipulation is left alone). The walking
@@ -470,6 +488,9 @@ class AutoBalancer(Layer):
             return "ignored: a capture-point emergency step is in progress"
         if self._last_cp_flag and not self.gait.walking:
             return "ignored: the capture-point flag is up; the walking point must read zero once after it drops"
+        near = self._legs_near_limit()
+        if near is not None:
+            return f"ignored: {near}"
         if not self._walk_armed:
             return "ignored: stopped; the walking point must read zero once before walking again"
         if self.walking_stop:

@@ -15,7 +15,7 @@ from controller.core.errors import InvalidCommand
 from controller.core.layer import Layer, Params, SharedStatus, Status, described, plain
 from controller.core.types import Reference, TickContext, frozen_array, read_only
 from controller.interpolation.blend import Transition
-from controller.kinematics.fullbody_ik import FullbodyIK
+from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, legs_within_limits
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
 from controller.kinematics.rotations import (
@@ -55,6 +55,9 @@ from controller.operation.targets import GazeAngles, HandPose, WaistPose, feet_f
 from robot.names import JOINT_GROUPS, JOINT_NAMES
 
 _HANDS = ("rhand", "lhand")
+#: [rad] a waist target keeps the legs' joints this far inside their limits (campaign seeds 1017, 1018: a 19 deg
+#: roll put a hip roll at its limit, the sole tipped onto its edge and the robot fell walking)
+WAIST_LEG_LIMIT_MARGIN_RAD = math.radians(3.0)
 IK_POINTS = ("rhand", "lhand", "head", "waist")  # the points the IK realises ("walk" goes to the AutoBalancer)
 _FRAMES = {"rhand": "rarm_end", "lhand": "larm_end", "head": "HEAD_LINK1", "waist": "BODY"}
 _NECK = "HEAD_LINK0"  # the gaze ray's origin
@@ -182,6 +185,8 @@ class OperationLayer(Layer):
         self.kin = RobotKinematics()  # the reference's own kinematics in F (seeding, view)
         # the AutoBalancer's closed-form legs: can they carry the waist target?
         self._balanced = FullbodyIK(RobotKinematics())
+        self._leg_lower_rad = self._balanced.kin.q_lower.tolist()
+        self._leg_upper_rad = self._balanced.kin.q_upper.tolist()
         self._gait = None
         self._motion: dict[str, tuple[Twist, float]] = {}  # point -> (twist, control time it arrived)
         self._motion_walk: WalkCommand | None = None
@@ -499,7 +504,9 @@ class OperationLayer(Layer):
             res = self._balanced.solve(ref.q_rad, float(F.p[2] + target.height_m), R_w, gait.cog_world[:2],
                                        (gait.p_rsole_world, gait.R_rsole_world),
                                        (gait.p_lsole_world, gait.R_lsole_world))
-            if not res.reachable and "waist" in self._achieved:
+            margin = WALK_LEG_LIMIT_MARGIN_RAD if getattr(gait, "walking", False) else WAIST_LEG_LIMIT_MARGIN_RAD
+            legs_ok = legs_within_limits(res.q_rad, self._leg_lower_rad, self._leg_upper_rad, margin)
+            if not (res.reachable and legs_ok) and "waist" in self._achieved:
                 target = self._targets["waist"] = self._achieved["waist"]
                 self._limited["waist"] = REACH
                 R_F = rpy_to_matrix(target.rpy_rad)

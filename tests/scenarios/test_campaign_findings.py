@@ -6,6 +6,7 @@ import math
 import pytest
 
 from app.service.local import LocalRobot
+from app.service.errors import Refused
 from app.service.setpoints import Setpoint
 from app.service.verbs import GoVelocity, WalkStop
 
@@ -55,9 +56,32 @@ def test_seed_1009_a_walk_stick_in_the_final_double_support_walks_on_without_a_f
 
 
 @pytest.mark.slow
-def test_seed_1009_a_walk_stick_while_the_cp_flag_is_up_is_ignored_and_the_robot_stands():
-    # a waist stick through the walk raises the flag at its end; a walk started under the flag fell 3 s later
+def test_seed_1009_a_waist_stick_through_a_backward_walk_and_a_walk_stick_after_it_end_standing():
+    # the waist stick raised the CP flag at the walk's end and a walk stick started a walk under it, which fell;
+    # now the waist keeps the legs' walking range (no flag) and no walk starts under a raised flag (unit-tested)
     actions = [*BACKWARD_TURNING, (7.95, (WAIST_STICK, 1.54)), (11.27, (WALK_STICK, 0.48))]
-    obs = replay(actions, 16.0)
-    assert not obs.fallen
-    assert obs.layers["es"].reason == "capture_point"  # the flag did rise (and the motion stop is latched)
+    assert not replay(actions, 16.0).fallen
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("roll_deg_s", [7.61, -7.61])
+def test_seeds_1017_1018_the_waist_rolls_until_the_hip_has_range_left_and_a_walk_then_waits_for_it(roll_deg_s):
+    # a waist stick rolled BODY 19 deg: a hip roll sat at its limit, the sole tipped onto its edge, the CP flag
+    # rose standing, and a walk then fell
+    robot = LocalRobot("default")
+    robot.run_for(2.5)
+    stick = Setpoint("waist", (0.0, 0.0, 0.0), (math.radians(roll_deg_s), 0.0, 0.0))
+    limited = False
+    for k in range(int(round(3.5 / 0.005))):
+        if k % STICK_PERIOD_TICKS == 0 and k * 0.005 < 2.47:
+            robot.put_setpoint(stick)
+        obs = robot.step()
+        assert not obs.layers["st"].emergency, f"the CP flag rose at {k * 0.005:.3f} s into the roll"
+        limited = limited or obs.layers["op"].points["waist"].limited == "reach"
+    assert limited  # the operator was told while pushing the stick
+    waist = obs.layers["op"].points["waist"]
+    assert 8.0 < abs(math.degrees(waist.achieved[1])) < 14.0, waist  # held at 11.5 deg (measured), not 19
+    with pytest.raises(Refused, match=r"LEG_JOINT1 is .* deg from its limit"):
+        robot.submit(GoVelocity(0.16, 0.096, math.radians(27.3))).result()
+    obs = robot.run_for(3.0)
+    assert not obs.fallen and not obs.layers["abc"].walking

@@ -41,3 +41,27 @@ def test_warm_started_solve_converges_in_one_or_two_iterations():
         res = ik.solve(HALF, 0.64, np.eye(3), np.array([0.0, 0.04 * np.sin(0.05 * k)]), rs, ls)
         iters.append(res.iterations)
     assert max(iters) <= 3
+
+
+def test_the_leg_joint_nearest_its_limit_is_found_and_a_margin_checked():
+    from controller.kinematics.fullbody_ik import legs_within_limits, nearest_leg_limit
+    from robot.names import JOINT_NAMES
+
+    kin = RobotKinematics()
+    lo, hi = kin.q_lower.tolist(), kin.q_upper.tolist()
+    q = HALF.copy()
+    i = JOINT_NAMES.index("LLEG_JOINT1")
+    q[i] = hi[i] - np.deg2rad(2.0)  # the hip roll 2 deg from its upper limit
+    q[0] = lo[0] - 1.0  # RLEG_JOINT0 past its lower limit by 1 rad
+    j, margin = nearest_leg_limit(q, lo, hi)
+    assert JOINT_NAMES[j] == "RLEG_JOINT0" and np.isclose(margin, -1.0)
+    q[0] = HALF[0]
+    j, margin = nearest_leg_limit(q, lo, hi)
+    assert JOINT_NAMES[j] == "LLEG_JOINT1" and np.isclose(np.rad2deg(margin), 2.0)
+    assert legs_within_limits(q, lo, hi, np.deg2rad(1.9)) and not legs_within_limits(q, lo, hi, np.deg2rad(2.1))
+    q[i] = hi[i] + 0.5
+    assert not legs_within_limits(q, lo, hi, 0.0)
+    q[i] = HALF[i]
+    k = JOINT_NAMES.index("RARM_JOINT0")
+    q[k] = hi[k] + 0.5  # an arm joint past its limit is not the legs' business
+    assert legs_within_limits(q, lo, hi, np.deg2rad(5.0))

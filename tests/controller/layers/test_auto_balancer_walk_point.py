@@ -146,3 +146,35 @@ def test_no_walk_starts_while_the_cp_flag_is_up_and_a_held_stick_must_read_zero_
     assert "read zero" in t.run(0.5, FORWARD).walk_point and not t.abc.gait.walking  # the flag down, stick held
     t.run(0.05, None)
     assert t.run(0.1, FORWARD).walk_point == "walking" and t.abc.gait.walking
+
+
+@pytest.mark.parametrize("roll_deg, walks", [(0.0, True), (4.0, True), (-4.0, True), (12.0, False), (-12.0, False)])
+def test_a_walk_starts_only_with_the_leg_range_walking_needs_left(roll_deg, walks):
+    # campaign seeds 1017, 1018: the waist rolled until a hip roll sat at its limit; a walk then fell
+    t = Ticker()
+    t.ref = t.ref.with_(base_rpy_rad=np.array((math.radians(roll_deg), 0.0, 0.0)))
+    t.run(0.5, None)
+    if walks:
+        t.abc.go_velocity(0.1, 0.0, 0.0)
+        assert t.abc.gait.walking
+        return
+    with pytest.raises(InvalidState, match=r"LEG_JOINT1 is .* deg from its limit .* walking needs 12 deg"):
+        t.abc.go_velocity(0.1, 0.0, 0.0)
+    assert "straighten the waist" in t.run(0.1, FORWARD).walk_point and not t.abc.gait.walking
+
+
+@pytest.mark.parametrize("verb", ["go_velocity", "go_pos"])
+def test_walk_verbs_under_the_emergency_walking_stop_are_refused_and_leave_it_in_force(verb):
+    # campaign seed 1012: a goVelocity refused (a footstep list walked) had cleared the stop: the walk went on
+    t = Ticker()
+    t.abc.go_pos(1.0, 0.0, 0.0)
+    t.run(1.5, None)
+    t.abc.emergency_stop_walking()
+    assert t.abc.walking_stop
+    with pytest.raises(InvalidState, match="emergency walking stop is in force"):
+        getattr(t.abc, verb)(0.1, 0.0, 0.0)
+    assert t.abc.walking_stop
+    t.run(6.0, None)
+    assert not t.abc.gait.walking and not t.abc.walking_stop  # it ended in place
+    getattr(t.abc, verb)(0.1, 0.0, 0.0)  # and the robot walks again
+    assert t.abc.gait.walking
