@@ -38,12 +38,14 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--workers", type=_positive_int, default=1, help="consoles run side by side (default 1)")
     p.add_argument("--speed", type=_speed, default=None, help="the consoles' speed (default max)")
     p.add_argument("--shrink", action="store_true", help="reduce a failing session's actions (delta debugging)")
+    p.add_argument("--no-record", action="store_true",
+                   help="do not record the sessions (by default a stretch with a violation is kept as MCAP)")
     p.add_argument("--out", default="out/campaign", help="where report.md and findings/ go")
     return p
 
 
 def run_campaign(seeds: Sequence[int], seconds: float, workers: int = 1, speed: float | None = None,
-                 shrink: bool = False) -> list[dict[str, Any]]:
+                 shrink: bool = False, record: bool = True) -> list[dict[str, Any]]:
     """Each seed's session on one of `workers` consoles; their SessionResult.to_dict() in seed order (with
     `shrunk`: the reduced failing action list, when asked)."""
     from app.console_process import Console
@@ -67,8 +69,9 @@ def run_campaign(seeds: Sequence[int], seconds: float, workers: int = 1, speed: 
                         seed = todo.get_nowait()
                     except queue.Empty:
                         return
-                    r = Session(console.port, seed, seconds, catalogue, defaults=defaults).run()
-                    d = {**r.to_dict(), "worker": k, "order": next(order), "rss_mb": tree_rss_mb(console.proc.pid)}
+                    r = Session(console.port, seed, seconds, catalogue, defaults=defaults, record=record).run()
+                    d = {**r.to_dict(), "worker": k, "order": next(order), "rss_mb": tree_rss_mb(console.proc.pid),
+                         "recordings": r.recordings}
                     if r.violations:
                         d["console_tail"] = "".join(console.lines[-40:])
                         if shrink:
@@ -107,11 +110,15 @@ def save_findings(results: Sequence[dict[str, Any]], out: Path) -> list[str]:
     """One JSON per violating session under out/findings: seed, actions, the violations (invariant, time)."""
     saved = []
     for r in results:
+        recordings = r.pop("recordings", None) or {}
         if not r["violations"]:
             continue
         first = r["violations"][0]
         path = out / "findings" / f"seed-{r['seed']}-invariant-{first['invariant']}.json"
         path.parent.mkdir(parents=True, exist_ok=True)
+        for name, data in recordings.items():  # `hrp2-console replay` replays each bit for bit
+            (path.parent / name).write_bytes(data)
+        r["recordings"] = sorted(recordings)
         path.write_text(json.dumps(r, indent=1), encoding="utf-8")
         saved.append(str(path))
     return saved
@@ -122,7 +129,7 @@ def main(argv: Sequence[str]) -> int:
     logging.basicConfig(level=logging.INFO, format="%(message)s")
     seeds = [args.seed + i for i in range(args.sessions)]
     wall = time.monotonic()
-    results = run_campaign(seeds, args.seconds, args.workers, args.speed, args.shrink)
+    results = run_campaign(seeds, args.seconds, args.workers, args.speed, args.shrink, record=not args.no_record)
     wall_s = time.monotonic() - wall
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)

@@ -16,7 +16,6 @@ NOT_CHECKED = (
     "and one JSON per violating session",
     "the e-stop's 10 ms of control time (invariant 3) is not timed at `--speed max`: an answered e-stop is checked "
     "engaged on the first published state at or after the tick its answer names",
-    "sessions are not recorded as MCAP; a finding keeps its seed, action list and the trace of requests",
     "the late-tick bound (invariant 5) applies to paced consoles only; at `--speed max` nothing is paced",
 )
 

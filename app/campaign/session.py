@@ -13,6 +13,7 @@ import math
 import time
 from collections import Counter
 from collections.abc import Mapping, Sequence
+from pathlib import PurePath
 from typing import Any
 
 from websockets.sync.client import ClientConnection, connect
@@ -50,6 +51,7 @@ class SessionResult:
     falls: list[dict[str, Any]]
     pushes: list[tuple[float, float, float]]
     trace: list[dict[str, Any]] = dataclasses.field(default_factory=list)
+    recordings: dict[str, bytes] = dataclasses.field(default_factory=dict)  # MCAP of the stretches that violated
 
     def to_dict(self) -> dict[str, Any]:
         return {"seed": self.seed, "seconds": self.seconds, "actions": [a.to_dict() for a in self.actions],
@@ -76,8 +78,14 @@ class Session:
     """Drives one session on the console listening on `port`; `run()` returns its SessionResult."""
 
     def __init__(self, port: int, seed: int, seconds: float, catalogue: Mapping[str, Sequence[Mapping[str, Any]]],
-                 actions: Sequence[Action] | None = None, defaults: Mapping[str, Any] | None = None) -> None:
+                 actions: Sequence[Action] | None = None, defaults: Mapping[str, Any] | None = None,
+                 record: bool = False) -> None:
         self.port, self.seed, self.seconds = port, int(seed), float(seconds)
+        # each stretch between resets is one recorded session (MCAP; a replay starts from a reset): (file name,
+        # the violations before it); a stretch with a violation is kept with the finding
+        self.record = record
+        self.segments: list[tuple[str, int]] = []
+        self.recordings: dict[str, bytes] = {}
         self.actions = list(actions) if actions is not None else actions_for(seed, seconds, catalogue)
         self.defaults = defaults
         self.checker = Checker()
@@ -229,11 +237,13 @@ class Session:
                 time.sleep(POLL_SLEEP_S)
                 self.poll()
             self.finish(half_sitting)
+            if self.record:
+                self.keep_recordings()
         finally:
             self.close()
         c = self.checker
         return SessionResult(self.seed, self.seconds, self.actions, list(c.violations), self.counts,
-                             self.simulated_s, time.monotonic() - wall, c.falls, [], self.trace)
+                             self.simulated_s, time.monotonic() - wall, c.falls, [], self.trace, self.recordings)
 
     def start(self) -> None:
         """A fresh robot: the defaults of the parameters, a reset, the warm-up."""
@@ -245,7 +255,14 @@ class Session:
     def reset_and_warm_up(self, first: bool = False) -> int:
         """Reset and wait for the warm-up; `first`: the state before is the previous session's, not checked."""
         before = self.poll(check=not first)
-        status, body = self.request("POST", "/api/sim/reset", {"scene": "default"})
+        if self.record:
+            self._stop_recording()
+            status, body = self.request("POST", "/api/sessions/start",
+                                        {"name": f"campaign-{self.seed}-{len(self.segments)}"})
+            if status == 200:
+                self.segments.append((PurePath(body["recording"]["path"]).name, len(self.checker.violations)))
+        else:
+            status, body = self.request("POST", "/api/sim/reset", {"scene": "default"})
         if status != 200:
             return status
         self.checker.reset()
@@ -262,6 +279,22 @@ class Session:
         self.checker.reset()
         self.wait_until(lambda st: st["time"] >= WARM_UP_S, WARM_UP_S + 1.0, "the warm-up")
         return status
+
+    def _stop_recording(self) -> None:
+        if self.segments and self.request("GET", "/api/sessions")[1].get("recording"):
+            self.request("POST", "/api/sessions/stop")
+
+    def keep_recordings(self) -> None:
+        """Finish the recording; download each stretch in which a violation was seen (`recordings`)."""
+        self._stop_recording()
+        ends = [n for _, n in self.segments[1:]] + [len(self.checker.violations)]
+        for (name, before), after in zip(self.segments, ends, strict=True):
+            if after > before:
+                self.conn.request("GET", f"/api/sessions/{name}")
+                r = self.conn.getresponse()
+                data = r.read()
+                if r.status == 200:
+                    self.recordings[name] = data
 
     def close(self) -> None:
         for st in self.streams.values():

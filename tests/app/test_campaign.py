@@ -15,6 +15,8 @@ sessions: the legs ended 3-10 deg off half-sitting."""
 from __future__ import annotations
 
 import json
+import threading
+from pathlib import Path
 
 import pytest
 
@@ -54,3 +56,34 @@ def test_the_command_writes_the_report_and_a_finding_per_violating_session_and_e
     for f in findings:
         finding = json.loads(f.read_text())
         assert finding["seed"] == CI_SEED and finding["actions"] and finding["violations"][0]["invariant"] in INVARIANTS
+
+
+def test_a_violating_stretch_is_kept_as_mcap_that_replays_bit_for_bit_and_a_clean_one_is_not_kept(tmp_path,
+                                                                                                 monkeypatch):
+    from app.campaign.cli import save_findings
+    from app.campaign.grammar import catalogue_of
+    from app.campaign.session import Session
+    from app.console_process import Console
+    from app.session.reader import read_session
+    from app.session.replay import replay
+
+    monkeypatch.setenv("HRP2_TEST_HOOKS", "1")  # POST /api/sim/fault
+    with Console("--speed", "max", "--sessions-dir", str(tmp_path / "sessions")) as console:
+        _, behaviors = console.request("GET", "/api/behaviors")
+        catalogue = catalogue_of(behaviors)
+        clean = Session(console.port, CI_SEED, 3.0, catalogue, actions=[], record=True).run()
+        assert not clean.violations and not clean.recordings
+        faulty = Session(console.port, CI_SEED, 4.0, catalogue, actions=[], record=True)
+        # the campaign sends no fault: one injected here (the simulation's test door) is invariant 5's violation
+        injected = threading.Timer(1.5, lambda: console.request("POST", "/api/sim/fault", {"kind": "layer",
+                                                                                            "layer": "st"}))
+        injected.start()
+        result = faulty.run()
+        injected.join()
+    assert [v.invariant for v in result.violations][:1] == [5] and "controller fault" in result.violations[0].detail
+    [(name, data)] = result.recordings.items()
+    saved = save_findings([{**result.to_dict(), "recordings": result.recordings}], tmp_path / "out")
+    finding = json.loads(Path(saved[0]).read_text())
+    assert finding["recordings"] == [name]
+    replayed = replay(read_session(tmp_path / "out" / "findings" / name))
+    assert replayed.identical, replayed.summary()
