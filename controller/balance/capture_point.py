@@ -221,6 +221,13 @@ def shrink_polygon_xy(vertices, margin_m: float) -> list[tuple[float, float]]:
     return hull if len(hull) >= 3 else []
 
 
+def slack_in_shrunk_polygon_m(x_m: float, y_m: float, vertices, margin_m: float) -> float:
+    """How far [m] the point lies inside the convex polygon shrunk by margin_m (shrink_polygon is the polygon cut
+    by each edge moved in by it): its least distance to those moved edges' lines, negative outside. Plain floats:
+    a point inside by far more than their rounding is inside the shrunk polygon, whatever its vertices' last bits."""
+    return min((x_m - ax) * nx + (y_m - ay) * ny for ax, ay, _, _, nx, ny in _edges_xy(_ccw_xy(vertices))) - margin_m
+
+
 def nearest_point_in_convex_polygon_xy(x_m: float, y_m: float, vertices) -> tuple[float, float]:
     """nearest_point_in_convex_polygon on floats: the point itself if inside, else its projection on the nearest
     edge [m]."""

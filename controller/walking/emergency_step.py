@@ -20,6 +20,7 @@ from controller.balance.capture_point import (
     nearest_point_in_convex_polygon_xy,
     shrink_polygon,
     shrink_polygon_xy,
+    slack_in_shrunk_polygon_m,
     support_polygon,
 )
 from controller.core.errors import InvalidCommand
@@ -370,8 +371,12 @@ class EmergencyStepPlan:
         landing, cp = self.landing_xy.tolist(), self.cp_touchdown_xy.tolist()
         cache = self._zmp_after
         if cache is None or cache[0] != landing or cache[1] != cp:  # a stance ZMP's re-plan keeps both
-            poly = shrink_polygon_xy(self._support_after_xy(), self.params.zmp_margin_m)
-            cache = self._zmp_after = (landing, cp, np.array(nearest_point_in_convex_polygon_xy(*cp, poly)))
+            hull, margin = self._support_after_xy(), self.params.zmp_margin_m
+            if slack_in_shrunk_polygon_m(*cp, hull, margin) > 1e-9:  # inside for sure: the CP itself, as exactly
+                zmp = cp
+            else:  # near or past an edge: the exact shrunk polygon's nearest point
+                zmp = nearest_point_in_convex_polygon_xy(*cp, shrink_polygon_xy(hull, margin))
+            cache = self._zmp_after = (landing, cp, np.array(zmp))
         return cache[2].copy()
 
     def feet_middle_xy(self) -> np.ndarray:

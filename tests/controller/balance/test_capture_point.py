@@ -136,3 +136,20 @@ def test_the_float_polygon_functions_give_the_numpy_ones_floats_bit_for_bit():
                 for p in rng.normal(size=(4, 2)) * 0.4:
                     assert tuple(nearest_point_in_convex_polygon(p, shrunk).tolist()) == \
                         nearest_point_in_convex_polygon_xy(*p.tolist(), shrunk_xy)
+
+
+def test_the_slack_in_the_shrunk_polygon_is_the_distance_inside_its_edges():
+    from controller.balance.capture_point import slack_in_shrunk_polygon_m
+
+    square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+    assert slack_in_shrunk_polygon_m(0.5, 0.3, square, 0.1) == pytest.approx(0.2)
+    assert slack_in_shrunk_polygon_m(0.5, 0.05, square, 0.1) == pytest.approx(-0.05)
+    assert slack_in_shrunk_polygon_m(0.5, 0.05, square[::-1], 0.1) == pytest.approx(-0.05)  # clockwise given
+    rng = np.random.default_rng(3)
+    for _ in range(200):  # its sign is shrink_polygon's inside, away from the boundary
+        hull = support_polygon(_random_feet(rng))
+        shrunk = shrink_polygon(hull, 0.015)
+        p = rng.normal(size=2) * 0.3
+        slack = slack_in_shrunk_polygon_m(*p.tolist(), hull.tolist(), 0.015)
+        if abs(slack) > 1e-9:
+            assert (slack > 0.0) == (len(shrunk) > 0 and distance_to_polygon_edge(p, shrunk) > 0.0)
