@@ -732,18 +732,17 @@ class AutoBalancer(Layer):
         bal = ctx.last_ports.balance
         if self._step_again(ctx, plan, k):
             return
-        moved = False
+        moved, foot_moved, landed = False, False, False
         if plan.swinging(k) and self._touched_down(ctx, plan, k):
-            x, y = self._measured_sole_xy(ctx, plan)
-            plan.land(k, (x, y))
-            self.gait.move_footsteps({1: (x, y)}, landed=True)
-            moved = True
+            plan.land(k, self._measured_sole_xy(ctx, plan))
+            moved = foot_moved = landed = True
         elif bal is not None:
             landing = plan.landing_xy
             moved = plan.replan(k, bal.cp_world_xy)
-            if plan.landing_xy is not landing:
-                self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())})
-        if moved:
+            foot_moved = plan.landing_xy is not landing
+        if foot_moved:  # the footstep and the plan's ZMP in one (the ZMP the moved feet give would be overwritten)
+            self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())}, landed=landed, zmp_world=plan.zmp(k))
+        elif moved:
             self.gait.set_zmp(plan.zmp(k))
         if moved or k == plan.touchdown_k:
             self._update_record(plan, landed=k >= plan.touchdown_k)

@@ -343,6 +343,32 @@ def test_only_the_footstep_being_stepped_on_or_a_later_one_moves():
         gg.move_footsteps({1: (0.4, 0.2)})
 
 
+def _sampled(gg):
+    return [(s.support, s.footstep_index, s.zmp_world.tolist(), s.p_rfoot_world.tolist(), s.p_lfoot_world.tolist(),
+             s.R_rfoot_world.tolist(), s.R_lfoot_world.tolist(), s.r_lleg) for s in run(gg)]
+
+
+@pytest.mark.parametrize("ticks", [20, 40, 60])  # before the swing, mid-swing, late in it
+def test_a_landing_moved_with_its_zmp_walks_the_floats_of_the_move_then_set_zmp(ticks):
+    plans = []
+    for combined in (False, True):
+        gg = GaitGenerator(dt_s=DT)
+        gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+        for _ in range(ticks):
+            gg.tick()
+        for x, y in ((0.38, 0.2), (0.381, 0.205)):  # moved twice: the second from the first
+            zmp = np.column_stack((np.linspace(0.1, 0.2, 400 - gg._tick), np.zeros(400 - gg._tick),
+                                   np.zeros(400 - gg._tick)))
+            if combined:
+                gg.move_footsteps({1: (x, y)}, zmp_world=zmp)
+            else:
+                gg.move_footsteps({1: (x, y)})
+                gg.set_zmp(zmp)
+            gg.tick()
+        plans.append((gg.footsteps, _sampled(gg), gg.T_world_lfoot.tolist()))
+    assert plans[0] == plans[1]
+
+
 def test_set_zmp_overwrites_the_next_ticks_reference_and_nothing_before():
     gg = GaitGenerator(dt_s=DT)
     gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
