@@ -299,6 +299,7 @@ class AutoBalancer(Layer):
         self._estep: EmergencyStepPlan | None = None  # the emergency step being taken
         self._estep_k = 0  # samples of its plan handed out
         self._estep_lifted = False  # the swinging foot has been unloaded in this swing
+        self._estep_landing_pending = False  # the plan's landing moved before the swing; the gait's not yet
         self._estep_records: tuple[EmergencyStepRecord, ...] = ()
         self._estep_in_a_row = 0  # emergency steps taken one after the other (the first included)
         self._estep_from_walk = False  # the emergency step in progress caught a walk (it may step again)
@@ -712,6 +713,7 @@ class AutoBalancer(Layer):
         self._estep_in_a_row = self._estep_in_a_row + 1 if again else 1
         self._estep_from_walk = self._estep_from_walk and again
         self._estep, self._estep_k = plan, 0
+        self._estep_landing_pending = False
         self._walking_stop_requested = False
         self._disarm_walk_point()  # a stick held through the step must be released before it walks again
         self._estep_records = (*self._estep_records, EmergencyStepRecord(
@@ -740,7 +742,14 @@ class AutoBalancer(Layer):
             landing = plan.landing_xy
             moved = plan.replan(k, bal.cp_world_xy)
             foot_moved = plan.landing_xy is not landing
+        if foot_moved and k < plan.n_lift - 1:
+            # the gait gets the landing once, the tick before the swing: nothing samples the foot's path before it
+            # (a move then resamples the whole step; the last one is what counts)
+            self._estep_landing_pending, foot_moved = True, False
+        elif self._estep_landing_pending and k >= plan.n_lift - 1:
+            foot_moved = True
         if foot_moved:  # the footstep and the plan's ZMP in one (the ZMP the moved feet give would be overwritten)
+            self._estep_landing_pending = False
             self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())}, landed=landed, zmp_world=plan.zmp(k))
         elif moved:
             self.gait.set_zmp(plan.zmp(k))
