@@ -219,6 +219,18 @@ def zmp_path_weights(n_lift: int, touchdown_k: int, n_step_end: int, n_end: int,
     return lift, shift, final
 
 
+@functools.lru_cache(maxsize=64)
+def zmp_path_column(n_lift: int, touchdown_k: int, n_step_end: int, n_end: int,
+                    n_shift: int) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+    """zmp_path_weights end to end, (n_end, 1), with 0 for the samples held on the stance sole, and the four phases'
+    sample counts (lift, held, shift, final): every sample's ZMP is start + w (end - start) of its phase."""
+    lift, shift, final = zmp_path_weights(n_lift, touchdown_k, n_step_end, n_end, n_shift)
+    held = np.zeros((touchdown_k - len(lift), 1))
+    column = np.concatenate((lift, held, shift, final))
+    column.flags.writeable = False
+    return column, (len(lift), len(held), len(shift), len(final))
+
+
 def _fill_path(out_xy: np.ndarray, k_from: int, lo: int, hi: int, weights: np.ndarray, w0: int, start_xy: np.ndarray,
                end_xy: np.ndarray) -> None:
     """Rows of samples max(lo, k_from) .. hi - 1 of out_xy (row 0: sample k_from) = start + w (end - start), w the
@@ -389,15 +401,17 @@ class EmergencyStepPlan:
         stance, after touchdown, feet's middle) with weights of the timing alone (zmp_path_weights)."""
         td, n_lift, n_step_end, n_end = self.touchdown_k, self.n_lift, self.n_step_end, self.n_end
         n_shift = min(max(1, round(self.params.zmp_shift_s / self.dt_s)), max(n_step_end - td, 1))
-        lift, shift, final = zmp_path_weights(n_lift, td, n_step_end, n_end, n_shift)
-        z0, zs = self.zmp_start_xy, self.zmp_stance_xy
-        zl, zm = self.zmp_after_touchdown_xy(), self.feet_middle_xy()
-        out = np.empty((n_end - k_from, 3))
-        out[:, 2] = self.z_m
-        xy = out[:, :2]
-        _fill_path(xy, k_from, 0, min(n_lift, td), lift, 0, z0, zs)  # to the stance sole
-        if max(n_lift, k_from) < td:
-            xy[max(n_lift, k_from) - k_from:td - k_from] = zs  # held there through the swing
-        _fill_path(xy, k_from, td, n_step_end, shift, td, zs, zl)  # to the capture point once the foot is down
-        _fill_path(xy, k_from, n_step_end, n_end, final, n_step_end, zl, zm)  # to the feet's middle
+        column, counts = zmp_path_column(n_lift, td, n_step_end, n_end, n_shift)
+        z = self.z_m
+        (x0, y0), (xs, ys) = self.zmp_start_xy.tolist(), self.zmp_stance_xy.tolist()
+        (xl, yl), (xm, ym) = self.zmp_after_touchdown_xy().tolist(), self.feet_middle_xy().tolist()
+        # the phases: to the stance sole, held there, to the capture point once the foot is down, to the feet's middle
+        start = np.array(((x0, y0, z), (xs, ys, z), (xs, ys, z), (xl, yl, z)))
+        end = np.array(((xs, ys, z), (xs, ys, z), (xl, yl, z), (xm, ym, z)))
+        left, rows = k_from, []  # the phases' samples from k_from on
+        for c in counts:
+            rows.append(max(c - left, 0))
+            left = max(left - c, 0)
+        out = np.repeat(start, rows, axis=0)
+        out += column[k_from:] * np.repeat(end - start, rows, axis=0)
         return out

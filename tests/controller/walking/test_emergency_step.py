@@ -29,6 +29,7 @@ from controller.walking.emergency_step import (
     sole_corners_world,
     stance_zmp,
     swing_leg_for,
+    zmp_path_column,
     zmp_path_weights,
 )
 from controller.walking.footsteps import Footstep
@@ -276,6 +277,10 @@ def test_the_zmp_weights_depend_on_the_timing_alone_and_are_shared_read_only():
     assert lift[-1, 0] == shift[5, 0] == final[-1, 0] == 1.0 and shift[-1, 0] == 1.0
     assert zmp_path_weights(10, 60, 70, 370, 6)[1] is shift  # a re-plan reuses them
     assert not shift.flags.writeable
+    column, counts = zmp_path_column(10, 60, 70, 370, 6)  # end to end, 0 while held on the stance sole
+    assert counts == (10, 50, 10, 300) and column.shape == (370, 1)
+    assert column[:10].tolist() == lift.tolist() and column[60:70].tolist() == shift.tolist()
+    assert not column[10:60].any()
 
 
 def test_the_cp_weights_are_the_direct_computations_floats():
