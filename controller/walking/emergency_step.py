@@ -4,6 +4,7 @@ balanced ([MLC] II-B leaves stepping to future work; issue 13.3)."""
 
 from __future__ import annotations
 
+import copy
 import functools
 import math
 from dataclasses import dataclass, field
@@ -23,7 +24,7 @@ from controller.balance.capture_point import (
     slack_in_shrunk_polygon_m,
     support_polygon,
 )
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Params
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.walking.footsteps import Footstep
@@ -269,6 +270,7 @@ class EmergencyStepPlan:
         self.n_end = self.n_step_end + max(1, round(params.final_double_support_s / dt_s))
         self.n_freeze = self.n_touchdown - round(params.replan_until_s / dt_s)
         self.landed_k: int | None = None  # the sample the foot touched down before n_touchdown, if it did
+        self.revision = 0  # counts replan and land calls: a re-plan made ahead on a copy is valid for one revision
         self.z_m = stance.z
         self._a = math.exp(self.omega_1_s * self.dt_s)  # the LIP's CP over one tick: xi+ = a xi - (a - 1) zmp
         # the soles' corners and the stance sole shrunk by the margin, as (x, y) pairs: fixed for the plan
@@ -324,6 +326,7 @@ class EmergencyStepPlan:
         the sole nearest it: a capture point still inside the sole stays where it is instead of running away from
         a ZMP chosen when it was elsewhere), and until n_freeze the landing too. True when either moved (by more
         than 1 mm)."""
+        self.revision += 1
         if k >= self.n_touchdown or self.landed_k is not None:
             return False
         cx, cy = float(cp_world_xy[0]), float(cp_world_xy[1])  # floats: a tick's maths on 2-D points
@@ -343,8 +346,23 @@ class EmergencyStepPlan:
         self.landing_xy = np.array((lx, ly))
         return True
 
+    def replanned(self, k: int, cp_world_xy) -> tuple[EmergencyStepPlan, bool]:
+        """replan(k, cp_world_xy) on a copy, this plan unchanged: (the copy, replan's result), for `adopt` later.
+        A shallow copy is enough: the plan rebinds what it changes and never writes into its arrays."""
+        other = copy.copy(self)
+        return other, other.replan(k, cp_world_xy)
+
+    def adopt(self, other: EmergencyStepPlan) -> None:
+        """Take the state of `other`, a copy `replanned` made of this plan at its current revision: the same
+        attributes, the same floats, as replanning this plan would have given."""
+        if other.revision != self.revision + 1:
+            raise InvalidState(f"adopt: the copy was replanned from revision {other.revision - 1}, "
+                               f"this plan is at {self.revision}")
+        self.__dict__.update(other.__dict__)
+
     def land(self, k: int, landing_world_xy) -> None:
         """The foot touched the ground at sample k (before the planned touchdown) at landing_world_xy [m]."""
+        self.revision += 1
         self.cp_touchdown_xy = self._cp_at(k)
         self.landed_k = k
         self.landing_xy = np.asarray(landing_world_xy, dtype=float)[:2].copy()

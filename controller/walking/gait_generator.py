@@ -28,7 +28,7 @@ from controller.walking.footsteps import (
 from controller.walking.swing_trajectory import ORBIT_TYPES, swing_position, swing_rpy
 from controller.walking.toe_heel import ToeHeelParams, cop_offset_x, foot_pitch_offset
 
-__all__ = ["GaitGenerator", "GaitParams", "GaitSample"]
+__all__ = ["GaitGenerator", "GaitParams", "GaitPatch", "GaitSample"]
 
 _R, _L = 0, 1  # foot index in the (2, ...) arrays
 _SUPPORT_NAMES = ("rleg", "lleg", "both")
@@ -76,6 +76,17 @@ class GaitSample:
     @property
     def contact(self) -> tuple[bool, bool]:  # (right, left) soles meant to be on the ground
         return (self.support != "lleg", self.support != "rleg")
+
+
+@dataclass(frozen=True, slots=True)
+class GaitPatch:
+    """A change of the plan computed ahead (GaitGenerator.prepare_set_zmp / prepare_move_swing), nothing changed
+    yet; `GaitGenerator.apply` puts it in while the plan is still the one it was computed from."""
+
+    source: tuple  # (sample arrays, next tick, plan version, params) it was computed from, compared by identity
+    arrays: dict  # the sample arrays after the change
+    #: a moved landing: (segment index, the footstep moved, its segment's end pose (2, 6), a copy of it)
+    landing: tuple | None = None
 
 
 @dataclass
@@ -517,8 +528,11 @@ class GaitGenerator:
                                      f"{seg.kind}) or a later one (< {len(self._footsteps)}) may move")
         if landed and seg.index not in xy_by_index:
             raise InvalidState(f"move_footsteps(landed=True) must move the footstep being stepped on ({seg.index})")
-        if zmp_world is not None and not landed and self._move_swing_only(seg_i, xy_by_index, zmp_world):
-            return
+        if zmp_world is not None and not landed:
+            patch = self._swing_patch(seg_i, xy_by_index, zmp_world)
+            if patch is not None:
+                self.apply(patch)
+                return
         for index, (x_m, y_m) in xy_by_index.items():
             fs = self._footsteps[index]
             if index == seg.index:
@@ -529,18 +543,31 @@ class GaitGenerator:
         if zmp_world is not None:
             self.set_zmp(zmp_world)
 
-    def _move_swing_only(self, seg_i: int, xy_by_index: dict[int, tuple[float, float]],
-                         zmp_world: np.ndarray) -> bool:
+    def prepare_move_swing(self, xy_by_index: dict[int, tuple[float, float]],
+                           zmp_world: np.ndarray) -> GaitPatch | None:
+        """move_footsteps(xy_by_index, zmp_world=zmp_world) computed ahead, the plan unchanged: its patch when it
+        takes the swing-only path (_swing_patch), else None (the call itself then does it, or says what is wrong)."""
+        if not self._walking or self._stopping_from_rest:
+            return None
+        seg_i = self._segments.index(self._current_segment())
+        seg = self._segments[seg_i]
+        if any(not seg.index <= i < len(self._footsteps) or (i == seg.index and seg.kind != "step")
+               for i in xy_by_index):
+            return None
+        return self._swing_patch(seg_i, xy_by_index, zmp_world)
+
+    def _swing_patch(self, seg_i: int, xy_by_index: dict[int, tuple[float, float]],
+                     zmp_world: np.ndarray) -> GaitPatch | None:
         """move_footsteps of the footstep in the air when only the final double support follows it and the ZMP
         given replaces all of the feet's: the swing bends and the swing foot's position in the final double support
         moves, nothing else changes (what resampling gives, without it: the emergency step moves its landing
-        every tick). False (nothing done) in any other case."""
+        every tick). None (nothing to patch this way) in any other case."""
         seg = self._segments[seg_i]
         rest = self._segments[seg_i + 1:]
         j0 = self._tick - self._origin
         if (seg.kind != "step" or list(xy_by_index) != [seg.index] or len(rest) != 1 or rest[0].kind != "end"
                 or len(zmp_world) < len(self._arrays["zmp"]) - j0):
-            return False
+            return None
         end = rest[0]
         fs = self._footsteps[seg.index]
         x_m, y_m = (float(v) for v in xy_by_index[seg.index])
@@ -555,12 +582,41 @@ class GaitGenerator:
         e0 = end.start_tick - self._origin
         p[sw, e0:e0 + end.n_ticks, :2] = (x_m, y_m)  # the final double support: the feet where the step ends
         zmp[j0:] = np.asarray(zmp_world, dtype=float)[:len(zmp) - j0]
-        self._arrays = {**a, "p": read_only(p), "zmp": read_only(zmp)}
-        seg.q_end = seg.q_end.copy()
-        seg.q_end[sw, :2] = (x_m, y_m)
-        end.q_start, end.q_end = seg.q_end, seg.q_end.copy()
-        self._footsteps[seg.index] = fs.replaced(x=x_m, y=y_m)
-        self._plan_version += 1
+        q_end = seg.q_end.copy()
+        q_end[sw, :2] = (x_m, y_m)
+        return GaitPatch(self._source(), {**a, "p": read_only(p), "zmp": read_only(zmp)},
+                         (seg_i, fs.replaced(x=x_m, y=y_m), q_end, q_end.copy()))
+
+    def prepare_set_zmp(self, zmp_world: np.ndarray) -> GaitPatch:
+        """set_zmp(zmp_world) computed ahead, the plan unchanged (see there)."""
+        if not self._walking:
+            raise InvalidState("set_zmp needs a walk in progress")
+        zmp = self._arrays["zmp"].copy()
+        j0 = self._tick - self._origin
+        m = min(len(zmp_world), len(zmp) - j0)
+        zmp[j0:j0 + m] = np.asarray(zmp_world, dtype=float)[:m]
+        return GaitPatch(self._source(), {**self._arrays, "zmp": read_only(zmp)})
+
+    def _source(self) -> tuple:
+        return (self._arrays, self._tick, self._plan_version, self.params, self._plan_params, self._walking,
+                self._stopping_from_rest)
+
+    def apply(self, patch: GaitPatch) -> bool:
+        """Put in a patch computed ahead; False (nothing done) when the plan is no longer the one it was computed
+        from (a tick, a new plan or re-plan, a ZMP set, new parameters, the walk ended), the caller then redoes it."""
+        arrays, tick, version, params, plan_params, walking, stopping = patch.source
+        if not (self._arrays is arrays and self._tick == tick and self._plan_version == version
+                and self.params is params and self._plan_params is plan_params and self._walking == walking
+                and self._stopping_from_rest == stopping):
+            return False
+        self._arrays = patch.arrays
+        if patch.landing is not None:
+            seg_i, fs, q_end, q_end_copy = patch.landing
+            seg, end = self._segments[seg_i], self._segments[seg_i + 1]
+            seg.q_end = q_end
+            end.q_start, end.q_end = q_end, q_end_copy
+            self._footsteps[seg.index] = fs
+            self._plan_version += 1
         return True
 
     def _swing_blend(self, seg: _Segment, j0: int) -> np.ndarray:
@@ -602,13 +658,7 @@ class GaitGenerator:
         """Overwrite the reference ZMP of the next ticks with `zmp_world` (m, 3) [m], row 0 for the next tick
         (the emergency step plans it from the measured capture point); rows past the plan's end are dropped,
         the plan's own ZMP stays after the m given."""
-        if not self._walking:
-            raise InvalidState("set_zmp needs a walk in progress")
-        zmp = self._arrays["zmp"].copy()
-        j0 = self._tick - self._origin
-        m = min(len(zmp_world), len(zmp) - j0)
-        zmp[j0:j0 + m] = np.asarray(zmp_world, dtype=float)[:m]
-        self._arrays = {**self._arrays, "zmp": read_only(zmp)}
+        self.apply(self.prepare_set_zmp(zmp_world))
 
     # ----- per tick -------------------------------------------------------------------------------------
 

@@ -15,7 +15,7 @@ from controller.balance.capture_point import (
     shrink_polygon,
     support_polygon,
 )
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.walking.emergency_step import (
     EmergencyStepParams,
@@ -300,3 +300,24 @@ def test_the_capture_point_at_touchdown_is_the_direct_computations_floats():
         zmp = plan.zmp(0)[k:plan.n_touchdown, :2]  # the reference ZMP until touchdown
         direct = a ** (plan.n_touchdown - k) * np.array(cp) - ((a - 1.0) * a ** (plan.n_touchdown - 1 - j)) @ zmp
         assert plan.cp_touchdown_xy.tolist() == direct.tolist()
+
+
+def test_a_replan_made_on_a_copy_leaves_the_plan_alone_and_adopted_gives_the_floats_of_replanning_it():
+    direct, ahead = forward_plan(), forward_plan()
+    for k, cp in ((ahead.n_lift + 5, (0.22, 0.0)), (ahead.n_lift + 6, (0.225, 0.01)), (ahead.n_freeze, (0.4, 0.0))):
+        state = dict(vars(ahead))
+        copy, moved = ahead.replanned(k, np.array(cp))
+        assert all(vars(ahead)[name] is value for name, value in state.items())  # untouched
+        assert moved == direct.replan(k, np.array(cp))
+        ahead.adopt(copy)
+        assert ahead.landing_xy.tolist() == direct.landing_xy.tolist()
+        assert ahead.zmp_stance_xy.tolist() == direct.zmp_stance_xy.tolist()
+        assert ahead.zmp(k).tolist() == direct.zmp(k).tolist()
+
+
+def test_a_copy_replanned_from_an_older_revision_is_not_adopted():
+    plan = forward_plan()
+    copy, _ = plan.replanned(plan.n_lift + 5, np.array((0.22, 0.0)))
+    plan.replan(plan.n_lift + 5, np.array((0.21, 0.0)))
+    with pytest.raises(InvalidState, match="revision"):
+        plan.adopt(copy)
