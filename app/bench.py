@@ -189,7 +189,8 @@ def layers_that_ran(loop: ControlLoop, ticks: int = PROBE_TICKS) -> set[str]:
 
 
 def _clear_timers(loop: ControlLoop) -> None:
-    for timer in (*loop.chain.timers.values(), loop.tick_timer, loop.physics_timer):
+    for timer in (*loop.chain.timers.values(), *loop.chain.after_write_timers.values(), loop.tick_timer,
+                  loop.physics_timer, loop.read_to_write_timer, loop.after_write_timer):
         timer.clear()
 
 
@@ -244,7 +245,11 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     working ("disabled_but_ran", e.g. kf and hes), "passthrough" the disabled ones that passed their
     input through, with their timers. The report then also gives the whole step's wall time less physics
     (`step_ms`: chain, snapshot, state estimation, logging) and the loop's own share of it
-    (`loop_overhead_ms`: step minus the sum of all layer timers)."""
+    (`loop_overhead_ms`: step minus the sum of all layer timers and the after-write work).
+
+    `tick_ms` (the step less physics) is split at the write: `read_to_write_ms`, sensor read to command written
+    (the sensor-to-actuator path: the layers' ticks), and `after_write_ms`, the layers' work once the command is out
+    (Layer.after_write: the next tick's preparation; per layer in `after_write_layers`)."""
     if scenario in CAMERA_SCENARIOS:
         if layers is not None:
             raise ValueError(f"scenario {scenario!r} times the cameras; --layers/--chain do not apply")
@@ -296,9 +301,13 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     watched = np.zeros(n, dtype=bool)
     tick_ms = np.empty(n)
     physics_ms = np.empty(n)
+    read_to_write_ms = np.empty(n)
+    after_write_ms = np.empty(n)
     layer_ms = {name: np.empty(n) for name in names}
-    timers = [loop.tick_timer, loop.physics_timer, *(loop.chain.timers[name] for name in names)]
-    outputs = [tick_ms, physics_ms, *(layer_ms[name] for name in names)]
+    after_write_layer_ms = {name: [] for name in loop.chain.after_write_timers}  # (no sample after a faulted tick)
+    timers = [loop.tick_timer, loop.physics_timer, loop.read_to_write_timer, loop.after_write_timer,
+              *(loop.chain.timers[name] for name in names)]
+    outputs = [tick_ms, physics_ms, read_to_write_ms, after_write_ms, *(layer_ms[name] for name in names)]
     chunk = min(t.capacity for t in timers)  # ticks the timers' ring buffers hold
     clock = time.perf_counter
     step = loop.step
@@ -319,6 +328,8 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         wall_s += clock() - t0
         for timer, out in zip(timers, outputs, strict=True):
             out[first:last] = timer.samples()
+        for name, samples in after_write_layer_ms.items():
+            samples.append(loop.chain.after_write_timers[name].samples())
     tick_ms -= physics_ms  # the controller's share
     step_ms -= physics_ms
     snap = loop.snapshot
@@ -336,19 +347,26 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         "wall_time_s": round(wall_s, 4),
         "real_time_factor": round(sim_s / wall_s, 3) if wall_s > 0 else float("inf"),
         "tick_ms": _percentiles(tick_ms),
+        # the tick split at the write: what the command waits for, and the work done once it is out (after_write)
+        "read_to_write_ms": _percentiles(read_to_write_ms),
+        "after_write_ms": _percentiles(after_write_ms),
         "physics_ms": _percentiles(physics_ms),
         "layers": {name: _percentiles(layer_ms[name]) for name in working},
+        "after_write_layers": {name: _percentiles(np.concatenate(samples))
+                               for name, samples in after_write_layer_ms.items() if name in working},
         "fallen": fallen,
         "fault": snap.fault,
     }
     if spec.watch is not None:
         for label, mask in ((spec.watch[0], watched), ("other", ~watched)):
             report[label] = {"ticks": int(mask.sum()), "tick_ms": _percentiles(tick_ms[mask]),
+                             "read_to_write_ms": _percentiles(read_to_write_ms[mask]),
+                             "after_write_ms": _percentiles(after_write_ms[mask]),
                              "layers": {name: _percentiles(layer_ms[name][mask]) for name in working}}
     if selected is not None:
         report["disabled_but_ran"] = [name for name in disabled if name in ran]
         report["passthrough"] = {name: _percentiles(layer_ms[name]) for name in passthrough}
         report["step_ms"] = _percentiles(step_ms)
         report["layers_sum_ms"] = _percentiles(_summed(layer_ms, working, n))
-        report["loop_overhead_ms"] = _percentiles(step_ms - _summed(layer_ms, names, n))
+        report["loop_overhead_ms"] = _percentiles(step_ms - _summed(layer_ms, names, n) - after_write_ms)
     return report

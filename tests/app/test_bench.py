@@ -67,3 +67,9 @@ def test_the_catch_scenario_pushes_the_walk_and_reports_the_ticks_of_the_capture
     catching, other = report["catching"], report["other"]
     assert catching["ticks"] > 100 and catching["ticks"] + other["ticks"] == report["ticks"]
     assert set(catching["layers"]) == set(report["layers"]) and "p99_ms" in catching["layers"]["abc"]
+    # the tick split at the write: the catch's re-plan runs once the command is out, reported apart from what the
+    # command waits for
+    assert catching["after_write_ms"]["p99_ms"] > 0.0 and set(report["after_write_layers"]) == {"abc"}
+    for part in (report, catching, other):
+        assert part["read_to_write_ms"]["p50_ms"] < part["tick_ms"]["p50_ms"]
+
