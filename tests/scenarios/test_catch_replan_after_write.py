@@ -50,7 +50,7 @@ def test_the_re_plan_made_after_the_write_gives_the_outputs_of_the_tick_computin
     monkeypatch.setattr(EmergencyStepPlan, "adopt", lambda self, other: adopted.append(1) or adopt(self, other))
     ahead, catching = _catch(interrupt)
     assert catching >= 30 and len(adopted) > 20  # the catch's re-plans came from after_write
-    monkeypatch.setattr(AutoBalancer, "after_write", Layer.after_write)  # the chain then calls nothing: the tick does it
+    monkeypatch.setattr(AutoBalancer, "after_write", Layer.after_write)  # no after-write work: the tick re-plans
     adopted.clear()
     assert _catch(interrupt) == (ahead, catching)
     assert adopted == []
