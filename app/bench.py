@@ -31,6 +31,9 @@ class Scenario:
     needs: tuple[str, ...] = ()  # layers the scenario commands
     #: called with the robot at every tick boundary of the timed part (streamed setpoints), not timed
     stream: Callable[[LocalRobot], None] | None = None
+    #: (label, predicate on the snapshot after each timed tick, not timed): the report adds the tick's and the
+    #: layers' figures over the ticks it holds for under that label, and over the others under "other"
+    watch: tuple[str, Callable[[Any], bool]] | None = None
 
 
 def _stand(service: OperatorService) -> None:
@@ -70,6 +73,29 @@ def _teleop_stream(robot: LocalRobot) -> None:
     }, t)
 
 
+# the catch: the push map's run 0.1 m/s, 20 N s from 135 deg at phase 0.6875 (app.study.push_walking), one gait
+# cycle earlier; the walk goes straight ahead, so the direction in the robot's frame is the world's
+CATCH_WALK_START_S = 2.5  # [s] the warm-up's end: goVelocity
+CATCH_PUSH_AFTER_S = 3.275  # [s] after goVelocity: late in the left foot's swing, the capture step follows
+CATCH_PUSH = ("BODY", 20.0, 135.0, 0.1)  # body, impulse [N s], direction [deg], duration [s]
+
+
+def _catch_push(robot: LocalRobot) -> None:
+    """The push, once, at CATCH_PUSH_AFTER_S into the walk (the simulator's operation, as the push map's)."""
+    from app.service.verbs import Push
+
+    t_push = CATCH_WALK_START_S + CATCH_PUSH_AFTER_S
+    if abs(robot.plant.time_s - t_push) < 0.5 * robot.loop.dt_control_s:
+        body, impulse_ns, direction_deg, duration_s = CATCH_PUSH
+        yaw = math.radians(direction_deg)
+        force = (impulse_ns / duration_s * math.cos(yaw), impulse_ns / duration_s * math.sin(yaw), 0.0)
+        robot.submit(Push(body, force, duration_s)).result()
+
+
+def _catching(snapshot) -> bool:
+    return bool(snapshot.layers["abc"].emergency_step)
+
+
 #: Benchmark scenarios by name.
 SCENARIOS: dict[str, Scenario] = {
     "stand": Scenario("hold half-sitting", _stand),
@@ -80,6 +106,11 @@ SCENARIOS: dict[str, Scenario] = {
     "teleop": Scenario("walk at 0.1 m/s through the operation layer's walking point while both hands and the "
                        "head are streamed through it every tick, after 2.5 s of standing", _teleop_walk,
                        warmup_s=2.5, needs=("op", "abc"), stream=_teleop_stream),
+    "catch": Scenario(f"goVelocity(0.1 m/s) as 'walk', pushed {CATCH_PUSH_AFTER_S:g} s into the walk "
+                      f"({CATCH_PUSH[1]:g} N s from {CATCH_PUSH[2]:g} deg, late in a swing): the capture step; "
+                      "'catching' reports the ticks the emergency step is up (--duration 8 covers it whole)",
+                      _walk, warmup_s=CATCH_WALK_START_S, needs=("abc", "st"), stream=_catch_push,
+                      watch=("catching", _catching)),
 }
 
 
@@ -158,7 +189,8 @@ def layers_that_ran(loop: ControlLoop, ticks: int = PROBE_TICKS) -> set[str]:
 
 
 def _clear_timers(loop: ControlLoop) -> None:
-    for timer in (*loop.chain.timers.values(), loop.tick_timer, loop.physics_timer):
+    for timer in (*loop.chain.timers.values(), *loop.chain.after_write_timers.values(), loop.tick_timer,
+                  loop.physics_timer, loop.read_to_write_timer, loop.after_write_timer):
         timer.clear()
 
 
@@ -213,7 +245,11 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     working ("disabled_but_ran", e.g. kf and hes), "passthrough" the disabled ones that passed their
     input through, with their timers. The report then also gives the whole step's wall time less physics
     (`step_ms`: chain, snapshot, state estimation, logging) and the loop's own share of it
-    (`loop_overhead_ms`: step minus the sum of all layer timers)."""
+    (`loop_overhead_ms`: step minus the sum of all layer timers and the after-write work).
+
+    `tick_ms` (the step less physics) is split at the write: `read_to_write_ms`, sensor read to command written
+    (the sensor-to-actuator path: the layers' ticks), and `after_write_ms`, the layers' work once the command is out
+    (Layer.after_write: the next tick's preparation; per layer in `after_write_layers`)."""
     if scenario in CAMERA_SCENARIOS:
         if layers is not None:
             raise ValueError(f"scenario {scenario!r} times the cameras; --layers/--chain do not apply")
@@ -262,11 +298,16 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
     n = max(1, int(round(duration_s / loop.dt_control_s)))
     names = loop.chain.order()
     step_ms = np.empty(n)
+    watched = np.zeros(n, dtype=bool)
     tick_ms = np.empty(n)
     physics_ms = np.empty(n)
+    read_to_write_ms = np.empty(n)
+    after_write_ms = np.empty(n)
     layer_ms = {name: np.empty(n) for name in names}
-    timers = [loop.tick_timer, loop.physics_timer, *(loop.chain.timers[name] for name in names)]
-    outputs = [tick_ms, physics_ms, *(layer_ms[name] for name in names)]
+    after_write_layer_ms = {name: [] for name in loop.chain.after_write_timers}  # (no sample after a faulted tick)
+    timers = [loop.tick_timer, loop.physics_timer, loop.read_to_write_timer, loop.after_write_timer,
+              *(loop.chain.timers[name] for name in names)]
+    outputs = [tick_ms, physics_ms, read_to_write_ms, after_write_ms, *(layer_ms[name] for name in names)]
     chunk = min(t.capacity for t in timers)  # ticks the timers' ring buffers hold
     clock = time.perf_counter
     step = loop.step
@@ -282,9 +323,13 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
             t_step = clock()
             step()
             step_ms[i] = (clock() - t_step) * 1e3
+            if spec.watch is not None:
+                watched[i] = spec.watch[1](loop.snapshot)
         wall_s += clock() - t0
         for timer, out in zip(timers, outputs, strict=True):
             out[first:last] = timer.samples()
+        for name, samples in after_write_layer_ms.items():
+            samples.append(loop.chain.after_write_timers[name].samples())
     tick_ms -= physics_ms  # the controller's share
     step_ms -= physics_ms
     snap = loop.snapshot
@@ -302,15 +347,26 @@ def run_bench(scenario: str = "stand", duration_s: float = 5.0, scene: str = "de
         "wall_time_s": round(wall_s, 4),
         "real_time_factor": round(sim_s / wall_s, 3) if wall_s > 0 else float("inf"),
         "tick_ms": _percentiles(tick_ms),
+        # the tick split at the write: what the command waits for, and the work done once it is out (after_write)
+        "read_to_write_ms": _percentiles(read_to_write_ms),
+        "after_write_ms": _percentiles(after_write_ms),
         "physics_ms": _percentiles(physics_ms),
         "layers": {name: _percentiles(layer_ms[name]) for name in working},
+        "after_write_layers": {name: _percentiles(np.concatenate(samples))
+                               for name, samples in after_write_layer_ms.items() if name in working},
         "fallen": fallen,
         "fault": snap.fault,
     }
+    if spec.watch is not None:
+        for label, mask in ((spec.watch[0], watched), ("other", ~watched)):
+            report[label] = {"ticks": int(mask.sum()), "tick_ms": _percentiles(tick_ms[mask]),
+                             "read_to_write_ms": _percentiles(read_to_write_ms[mask]),
+                             "after_write_ms": _percentiles(after_write_ms[mask]),
+                             "layers": {name: _percentiles(layer_ms[name][mask]) for name in working}}
     if selected is not None:
         report["disabled_but_ran"] = [name for name in disabled if name in ran]
         report["passthrough"] = {name: _percentiles(layer_ms[name]) for name in passthrough}
         report["step_ms"] = _percentiles(step_ms)
         report["layers_sum_ms"] = _percentiles(_summed(layer_ms, working, n))
-        report["loop_overhead_ms"] = _percentiles(step_ms - _summed(layer_ms, names, n))
+        report["loop_overhead_ms"] = _percentiles(step_ms - _summed(layer_ms, names, n) - after_write_ms)
     return report

@@ -149,6 +149,110 @@ def nearest_point_in_convex_polygon(p_xy, vertices) -> np.ndarray:
     return _nearest_on_boundary(p, v)
 
 
+
+# ---------------------------------------------------------------------------- the same on plain floats
+# The emergency step re-plans every tick: numpy's per-call overhead on these few vertices costs more than the
+# maths. These take and give lists of (x, y) tuples and give the same floats as their numpy twins above (the
+# one dot product numpy does with BLAS, which fuses multiply-adds, stays numpy's).
+
+
+def convex_hull_xy(points) -> list[tuple[float, float]]:
+    """convex_hull_2d on (x, y) pairs [m]: counter-clockwise from the lowest-x vertex, collinear points dropped."""
+    pts = sorted(set((float(x), float(y)) for x, y in points))  # np.unique's order: by x, then y
+
+    def half(seq):
+        chain: list[tuple[float, float]] = []
+        for bx, by in seq:
+            while len(chain) >= 2:
+                (ox, oy), (ax, ay) = chain[-2], chain[-1]
+                if (ax - ox) * (by - oy) - (ay - oy) * (bx - ox) > _EPS:
+                    break
+                chain.pop()
+            chain.append((bx, by))
+        return chain
+
+    if len(pts) < 3:
+        return pts
+    lower, upper = half(pts), half(pts[::-1])
+    return lower[:-1] + upper[:-1]
+
+
+def _ccw_xy(vertices) -> list[tuple[float, float]]:
+    v = [(float(x), float(y)) for x, y in vertices]
+    if len(v) < 3:
+        raise InvalidCommand(f"polygon with {len(v)} vertices; give at least 3 (M, 2) vertices")
+    area2 = sum(ax * by - bx * ay for (ax, ay), (bx, by) in zip(v, v[1:] + v[:1], strict=True))  # [m^2]
+    return v[::-1] if area2 < 0.0 else v
+
+
+def _edges_xy(v: list[tuple[float, float]]) -> list[tuple[float, float, float, float, float, float]]:
+    """(ax, ay, dx, dy, nx, ny) per edge of a CCW polygon: start, edge vector, inward unit normal (_edges)."""
+    out = []
+    for (ax, ay), (bx, by) in zip(v, v[1:] + v[:1], strict=True):
+        dx, dy = bx - ax, by - ay
+        length = max(math.sqrt(dx * dx + dy * dy), _EPS)
+        out.append((ax, ay, dx, dy, -dy / length, dx / length))
+    return out
+
+
+def shrink_polygon_xy(vertices, margin_m: float) -> list[tuple[float, float]]:
+    """shrink_polygon on (x, y) pairs [m]: the convex polygon offset inward by margin_m; [] if nothing is left."""
+    if margin_m < 0.0:
+        raise InvalidCommand(f"margin_m={margin_m}; use a margin >= 0 [m] (this shrinks, never grows)")
+    v = _ccw_xy(vertices)
+    poly = v
+    for ax, ay, _, _, nx, ny in _edges_xy(v):
+        if not poly:
+            break
+        # (poly - a) @ n as numpy computes it (BLAS): the same floats as shrink_polygon
+        s = ((np.array(poly) - (ax, ay)) @ np.array((nx, ny)) - margin_m).tolist()
+        out = []
+        m = len(poly)
+        for i in range(m):
+            j = (i + 1) % m
+            if s[i] >= 0.0:
+                out.append(poly[i])
+            if (s[i] >= 0.0) != (s[j] >= 0.0):
+                t = s[i] / (s[i] - s[j])
+                (px, py), (qx, qy) = poly[i], poly[j]
+                out.append((px + t * (qx - px), py + t * (qy - py)))
+        poly = out
+    hull = convex_hull_xy(poly) if poly else poly
+    return hull if len(hull) >= 3 else []
+
+
+def slack_in_shrunk_polygon_m(x_m: float, y_m: float, vertices, margin_m: float) -> float:
+    """How far [m] the point lies inside the convex polygon shrunk by margin_m (shrink_polygon is the polygon cut
+    by each edge moved in by it): its least distance to those moved edges' lines, negative outside. Plain floats:
+    a point inside by far more than their rounding is inside the shrunk polygon, whatever its vertices' last bits."""
+    return min((x_m - ax) * nx + (y_m - ay) * ny for ax, ay, _, _, nx, ny in _edges_xy(_ccw_xy(vertices))) - margin_m
+
+
+def nearest_point_in_convex_polygon_xy(x_m: float, y_m: float, vertices) -> tuple[float, float]:
+    """nearest_point_in_convex_polygon on floats: the point itself if inside, else its projection on the nearest
+    edge [m]."""
+    edges = _edges_xy(_ccw_xy(vertices))
+    # point_in_convex_polygon (distance_to_polygon_edge >= -1e-12), its floats
+    inside_m, boundary_m = math.inf, math.inf
+    for ax, ay, dx, dy, _, _ in edges:
+        length2 = dx * dx + dy * dy
+        inside_m = min(inside_m, (dx * (y_m - ay) - dy * (x_m - ax)) / max(math.sqrt(length2), _EPS))
+        t = min(1.0, max(0.0, ((x_m - ax) * dx + (y_m - ay) * dy) / max(length2, _EPS)))
+        boundary_m = min(boundary_m, math.hypot(x_m - (ax + t * dx), y_m - (ay + t * dy)))
+    if (inside_m if inside_m >= 0.0 else -boundary_m) >= -1e-12:
+        return (x_m, y_m)
+    best, best_d = (x_m, y_m), math.inf
+    for ax, ay, dx, dy, _, _ in edges:
+        t = ((x_m - ax) * dx + (y_m - ay) * dy) / max(dx * dx + dy * dy, _EPS)
+        t = min(max(t, 0.0), 1.0)
+        cx, cy = ax + t * dx, ay + t * dy
+        ex, ey = cx - x_m, cy - y_m
+        d = math.sqrt(ex * ex + ey * ey)
+        if d < best_d:  # the first of equals, as argmin
+            best, best_d = (cx, cy), d
+    return best
+
+
 # ---------------------------------------------------------------------------- feet and support polygon
 
 

@@ -10,7 +10,7 @@ import numpy as np
 
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Layer
-from controller.core.types import Reference, TickContext
+from controller.core.types import Ports, Reference, TickContext
 
 #: The order of the real-time layers ([MLC] Fig. 3, hrpsys getJointAngleControllerList).
 #: kf: KalmanFilter, rmfo: RemoveForceOffset, seq: SequencePlayer, op: OperationLayer ([OP] Eq. 5),
@@ -68,6 +68,11 @@ class Chain:
                 raise InvalidCommand(f"layer registered as {name!r} calls itself {layer.name!r}")
         self.layers: dict[str, Layer] = {n: layers[n] for n in CHAIN_ORDER if n in layers}
         self.timers: dict[str, TickTimer] = {n: TickTimer() for n in self.layers}
+        #: the layers with after-write work (Layer.after_write overridden): the loop calls nothing for the others
+        self._after_write = [(n, layer) for n, layer in self.layers.items()
+                             if type(layer).after_write is not Layer.after_write]
+        #: their after-write work [ms] per call (0 when disabled), apart from their tick's timers
+        self.after_write_timers: dict[str, TickTimer] = {n: TickTimer() for n, _ in self._after_write}
         stops = [layer for layer in self.layers.values() if layer.safe_stop]
         if len(stops) > 1:
             raise InvalidCommand(f"more than one safe-stop layer: {[s.name for s in stops]}")
@@ -97,6 +102,18 @@ class Chain:
             ref = layer.tick(ctx, ref)
             self.timers[name].add((clock() - t0) * 1e3)
         return ref
+
+    def after_write(self, ports: Ports) -> None:
+        """Each enabled layer's after-write work (Layer.after_write) in chain order, on this tick's `ports`."""
+        clock = time.perf_counter
+        timers = self.after_write_timers
+        for name, layer in self._after_write:
+            if not layer.enabled:
+                timers[name].add(0.0)  # one sample per call for every timer: the bench lines them up by tick
+                continue
+            t0 = clock()
+            layer.after_write(ports)
+            timers[name].add((clock() - t0) * 1e3)
 
     def timing(self) -> dict[str, dict[str, float]]:
         return {n: t.percentiles() for n, t in self.timers.items()}

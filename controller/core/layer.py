@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 from controller.core.errors import InvalidCommand
-from controller.core.types import Reference, TickContext
+from controller.core.types import Ports, Reference, TickContext
 
 
 @dataclass(frozen=True)
@@ -134,6 +134,13 @@ class Layer:
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
         raise NotImplementedError
+
+    def after_write(self, ports: Ports) -> None:
+        """Called by the loop once this tick's command is written to the servos, before the next tick (and its
+        commands): work for the next tick that needs only `ports` (this tick's, the next one's last_ports) and the
+        layer's own state, done off the sensor-to-actuator path. It may prepare, never change what the next tick
+        or a reader sees: the next tick adopts the result only if its inputs are still the ones it was made from.
+        Not called for a disabled layer nor after a faulted tick; an exception is a fault (safe stop)."""
 
     def status(self) -> Status:
         """The layer's frozen Status (a subclass per layer), published in every snapshot."""

@@ -111,6 +111,10 @@ class ControlLoop:
         self.speed: float | None = 1.0
         self.tick_timer = TickTimer()
         self.physics_timer = TickTimer()
+        #: [ms] sensor read to command written (the chain, the fall check): what actuation waits for
+        self.read_to_write_timer = TickTimer()
+        #: [ms] the layers' after-write work (Layer.after_write), after the command is out: not on that path
+        self.after_write_timer = TickTimer()
         self.lateness = LatenessMeter()
         self.resets = 0  # replace_plant calls: a paced run starts a new schedule at each
         self.nap_s = 0.0  # [s] run_paced waits for the next tick in naps this long (0: one sleep)
@@ -183,17 +187,20 @@ class ControlLoop:
                 hook(self.plant.time_s)
             except Exception:  # noqa: BLE001 - a behaviour or a setpoint never kills the loop
                 log.exception("before_tick failed at t=%.3f s", self.plant.time_s)
+        t_read = time.perf_counter()
         sensors = self.plant.read()
         est = Estimate.for_tick()
         ctx = TickContext(tick=self.tick_count, time_s=sensors.time_s, dt_s=self.dt_control_s,
                           sensors=sensors, estimate=est, last_ports=self._ports, ports=Ports())
         ref_in = self._last_ref
+        faulted = False
         try:
             ref = self.chain.tick(ctx, ref_in)
             q_cmd = np.asarray(ref.q_rad, dtype=float)
             if not np.isfinite(q_cmd).all():
                 raise FloatingPointError("non-finite joint command")
         except Exception as exc:  # noqa: BLE001 - a fault ends in a safe stop, reported
+            faulted = True
             self._on_fault(exc)
             ref = ref_in.with_(q_rad=self._last_q_cmd)
             q_cmd = self._last_q_cmd
@@ -206,8 +213,14 @@ class ControlLoop:
                 log.error("fall detected at t=%.3f s: %s", sensors.time_s, fall.reason)
                 self.safe_stop("fallen", q_cmd)
         self.plant.write(q_cmd)
+        t_written = time.perf_counter()
+        self.read_to_write_timer.add((t_written - t_read) * 1e3)
         self._last_q_cmd = frozen_array(q_cmd)  # read-only (a copy unless already immutable): the snapshot shares it
         self._last_ref = ref
+        t_after = time.perf_counter()
+        if not faulted:  # a faulted tick's layers are suspect: nothing is prepared from it
+            self._after_write()
+        self.after_write_timer.add((time.perf_counter() - t_after) * 1e3)
         t_phys = time.perf_counter()
         try:
             self.plant.step(self.substeps)
@@ -221,6 +234,15 @@ class ControlLoop:
         if self._on_snapshot is not None:
             self._on_snapshot(self.snapshot)
         return self.snapshot
+
+    def _after_write(self) -> None:
+        """The layers' after-write work (Layer.after_write): the command is out, the next tick will read its
+        result. An exception there is a fault as one in the chain: safe stop, and the next tick's layers hold."""
+        try:
+            self.chain.after_write(self._ports)
+        except Exception as exc:  # noqa: BLE001 - a fault ends in a safe stop, reported
+            self._on_fault(exc)
+            self._ports.hold = True  # as after a faulted tick: the layers before hes hold from the next tick on
 
     def _on_fault(self, exc: BaseException) -> None:
         msg = f"{type(exc).__name__}: {exc}"

@@ -19,7 +19,15 @@ from controller.balance.tilt_anchor import TiltAnchor
 from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Layer, Params, Status, described
-from controller.core.types import BalanceEstimate, GaitState, Reference, StepInProgress, TickContext, read_only
+from controller.core.types import (
+    BalanceEstimate,
+    GaitState,
+    Ports,
+    Reference,
+    StepInProgress,
+    TickContext,
+    read_only,
+)
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, nearest_leg_limit
 from controller.kinematics.model import RobotKinematics
@@ -27,7 +35,7 @@ from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to
 from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M, WalkCommand
 from controller.walking.emergency_step import EmergencyStepParams, EmergencyStepPlan, SupportRegion, swing_leg_for
 from controller.walking.footsteps import Footstep, FootstepParams, StepParams, StrideLimits
-from controller.walking.gait_generator import GaitGenerator, GaitParams
+from controller.walking.gait_generator import GaitGenerator, GaitParams, GaitPatch
 from controller.walking.preview_control import PreviewController, PreviewControlParams
 from controller.walking.toe_heel import ToeHeelParams
 from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
@@ -238,6 +246,21 @@ class AutoBalancerStatus(Status):
         "the emergency steps taken, oldest first (the last 10)"))
 
 
+@dataclass(frozen=True, slots=True)
+class PreparedReplan:
+    """The emergency step's re-plan of sample k, made after the last tick's command was written (after_write) from
+    the ports that tick published: the next tick adopts it if it re-plans the same plan at k from those ports."""
+
+    ports: Ports  # what it read (the next tick's last_ports)
+    plan: EmergencyStepPlan  # the live plan, unchanged; `replanned` is its copy, replanned at k
+    k: int
+    replanned: EmergencyStepPlan
+    moved: bool  # replan's result
+    gait_op: str | None  # what the gait gets with it: "move" (the landing and the ZMP), "zmp", or None
+    zmp: np.ndarray | None  # replanned.zmp(k) for that op
+    patch: GaitPatch | None  # the gait's change for that op, None if it must be done in the tick
+
+
 #: New preview gains (preview_q / preview_r) are computed off the control thread (a Riccati solve, ~15 ms) and
 #: swapped in at the first standstill tick at least this long after the change: a fixed delay in ticks keeps a
 #: run at `--speed max` deterministic, and is far longer than the solve.
@@ -300,12 +323,14 @@ class AutoBalancer(Layer):
         self._estep: EmergencyStepPlan | None = None  # the emergency step being taken
         self._estep_k = 0  # samples of its plan handed out
         self._estep_lifted = False  # the swinging foot has been unloaded in this swing
+        self._estep_landing_pending = False  # the plan's landing moved before the swing; the gait's not yet
         self._estep_records: tuple[EmergencyStepRecord, ...] = ()
         self._estep_in_a_row = 0  # emergency steps taken one after the other (the first included)
         self._estep_from_walk = False  # the emergency step in progress caught a walk (it may step again)
         self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
         self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
         self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
+        self._prepared: PreparedReplan | None = None  # after_write's re-plan, for the next tick only
         if active:
             self.start()
 
@@ -544,6 +569,7 @@ class AutoBalancer(Layer):
 
     # ---- tick ------------------------------------------------------------------------------------
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        prepared, self._prepared = self._prepared, None  # made for this tick, or dropped
         if not self.enabled:  # pass-through
             self.last_gait = None
             return ref
@@ -569,7 +595,7 @@ class AutoBalancer(Layer):
             self.last_gait = None
             return ref
         if self._estep is not None:
-            self._emergency_step_tick(ctx)
+            self._emergency_step_tick(ctx, prepared)
         elif self.params.emergency_step and not self.gait.walking and self._blend is None:
             self._check_emergency_step(ctx)
         flag = ctx.last_ports.cp_flag
@@ -740,6 +766,7 @@ class AutoBalancer(Layer):
         self._estep_in_a_row = self._estep_in_a_row + 1 if again else 1
         self._estep_from_walk = self._estep_from_walk and again
         self._estep, self._estep_k = plan, 0
+        self._estep_landing_pending = False
         self._walking_stop_requested = False
         self._disarm_walk_point()  # a stick held through the step must be released before it walks again
         self._estep_records = (*self._estep_records, EmergencyStepRecord(
@@ -747,10 +774,42 @@ class AutoBalancer(Layer):
             landing=tuple(plan.landing_xy.tolist()), landed=False, landed_early=False))[-EMERGENCY_STEPS_KEPT:]
         ctx.ports.emergency_step = True
 
-    def _emergency_step_tick(self, ctx: TickContext) -> None:
+    def after_write(self, ports: Ports) -> None:
+        """The emergency step's re-plan of the next tick's sample from the capture point this tick measured
+        (ports.balance), made once the command is out: the next tick adopts it (PreparedReplan) instead of
+        computing it, if nothing changed its inputs meanwhile. It changes nothing: the status, a command at the
+        tick boundary and a next tick that does not re-plan (held, touched down, stepping again) see none of it."""
+        self._prepared = None
+        plan, bal = self._estep, ports.balance
+        if plan is None or bal is None or not self.gait.walking:
+            return
+        k = self._estep_k
+        if k >= plan.n_touchdown or plan.landed_k is not None:
+            return  # replan does nothing any more: nothing worth preparing
+        new, moved = plan.replanned(k, bal.cp_world_xy)
+        op = self._estep_gait_op(plan, k, moved, new.landing_xy is not plan.landing_xy)
+        zmp = patch = None
+        if op is not None:
+            zmp = new.zmp(k)
+            patch = self.gait.prepare_set_zmp(zmp) if op == "zmp" else \
+                self.gait.prepare_move_swing({1: tuple(new.landing_xy.tolist())}, zmp)
+        self._prepared = PreparedReplan(ports, plan, k, new, moved, op, zmp, patch)
+
+    def _estep_gait_op(self, plan: EmergencyStepPlan, k: int, moved: bool, foot_moved: bool) -> str | None:
+        """What the gait gets after a re-plan of sample k (no touchdown): "move" (the landing with the ZMP), "zmp"
+        (the ZMP alone) or None; the landing reaches the gait once, the tick before the swing (what samples the
+        foot's path before it is not used; a move then resamples the whole step, the last one is what counts)."""
+        if foot_moved and k < plan.n_lift - 1:
+            return "zmp" if moved else None
+        if foot_moved or (self._estep_landing_pending and k >= plan.n_lift - 1):
+            return "move"
+        return "zmp" if moved else None
+
+    def _emergency_step_tick(self, ctx: TickContext, prepared: PreparedReplan | None = None) -> None:
         """One tick of the emergency step before the gait samples it: the landing follows the measured capture
         point (until shortly before touchdown), a foot that touches down early lands where it is, the COG plan
-        restarts from the measured COG until the foot is down; the plan's end ends it (standing, the feet apart)."""
+        restarts from the measured COG until the foot is down; the plan's end ends it (standing, the feet apart).
+        The re-plan is `prepared`'s when it was made from this tick's inputs (after_write)."""
         plan, k = self._estep, self._estep_k
         if not self.gait.walking:
             self._estep = None
@@ -760,19 +819,34 @@ class AutoBalancer(Layer):
         bal = ctx.last_ports.balance
         if self._step_again(ctx, plan, k):
             return
-        moved = False
+        ready = None  # the prepared re-plan, adopted
         if plan.swinging(k) and self._touched_down(ctx, plan, k):
-            x, y = self._measured_sole_xy(ctx, plan)
-            plan.land(k, (x, y))
-            self.gait.move_footsteps({1: (x, y)}, landed=True)
-            moved = True
+            plan.land(k, self._measured_sole_xy(ctx, plan))
+            moved, landed = True, True
+            op = self._estep_gait_op(plan, k, moved, True)
         elif bal is not None:
             landing = plan.landing_xy
-            moved = plan.replan(k, bal.cp_world_xy)
-            if plan.landing_xy is not landing:
-                self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())})
-        if moved:
-            self.gait.set_zmp(plan.zmp(k))
+            if prepared is not None and prepared.ports is ctx.last_ports and prepared.plan is plan \
+                    and prepared.k == k and prepared.replanned.revision == plan.revision + 1:
+                plan.adopt(prepared.replanned)
+                moved, ready = prepared.moved, prepared
+            else:
+                moved = plan.replan(k, bal.cp_world_xy)
+            op, landed = self._estep_gait_op(plan, k, moved, plan.landing_xy is not landing), False
+            if plan.landing_xy is not landing and k < plan.n_lift - 1:
+                self._estep_landing_pending = True
+        else:
+            moved, landed, op = False, False, None
+        if ready is not None and ready.gait_op != op:
+            ready = None  # the same decision from the same state: never, but then the gait's part is done here
+        if op == "move":  # the footstep and the plan's ZMP in one (the ZMP the moved feet give would be overwritten)
+            self._estep_landing_pending = False
+            if ready is None or ready.patch is None or not self.gait.apply(ready.patch):
+                zmp = plan.zmp(k) if ready is None else ready.zmp
+                self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())}, landed=landed, zmp_world=zmp)
+        elif op == "zmp":
+            if ready is None or not self.gait.apply(ready.patch):
+                self.gait.set_zmp(plan.zmp(k) if ready is None else ready.zmp)
         if moved or k == plan.touchdown_k:
             self._update_record(plan, landed=k >= plan.touchdown_k)
         if bal is not None and k < plan.touchdown_k:  # the COG plan follows the measured COG until the foot is down

@@ -4,6 +4,8 @@ balanced ([MLC] II-B leaves stepping to future work; issue 13.3)."""
 
 from __future__ import annotations
 
+import copy
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -13,12 +15,16 @@ from controller.balance.capture_point import (
     HRP2_LEFT_SOLE,
     HRP2_RIGHT_SOLE,
     FootRectangle,
+    convex_hull_xy,
     distance_to_polygon_edge,
     nearest_point_in_convex_polygon,
+    nearest_point_in_convex_polygon_xy,
     shrink_polygon,
+    shrink_polygon_xy,
+    slack_in_shrunk_polygon_m,
     support_polygon,
 )
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Params
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.walking.footsteps import Footstep
@@ -138,13 +144,20 @@ def clamp_landing(target_world_xy, stance_xy, stance_yaw_rad: float, swing_leg: 
     """The landing sole origin [m] (2,) nearest target_world_xy that the leg reaches from the stance sole: in the
     stance sole's frame forward at most max_forward_m, backward at most max_backward_m, and on the swing leg's
     side between min_width_m and max_width_m (the soles never overlap nor cross)."""
+    return np.array(_clamp_landing_xy(float(target_world_xy[0]), float(target_world_xy[1]), float(stance_xy[0]),
+                                      float(stance_xy[1]), stance_yaw_rad, swing_leg, params))
+
+
+def _clamp_landing_xy(tx_m: float, ty_m: float, sx_m: float, sy_m: float, stance_yaw_rad: float, swing_leg: str,
+                      params: EmergencyStepParams) -> tuple[float, float]:
+    """clamp_landing on floats (it runs every tick of a catch)."""
     c, s = math.cos(stance_yaw_rad), math.sin(stance_yaw_rad)
-    dx, dy = float(target_world_xy[0]) - float(stance_xy[0]), float(target_world_xy[1]) - float(stance_xy[1])
+    dx, dy = tx_m - sx_m, ty_m - sy_m
     u, v = c * dx + s * dy, -s * dx + c * dy
     u = min(max(u, -params.max_backward_m), params.max_forward_m)
     side = 1.0 if swing_leg == "lleg" else -1.0  # the left foot lands at +y of the right one
     v = side * min(max(side * v, params.min_width_m), params.max_width_m)
-    return np.array((float(stance_xy[0]) + c * u - s * v, float(stance_xy[1]) + s * u + c * v))
+    return sx_m + c * u - s * v, sy_m + s * u + c * v
 
 
 def landing_for(cp_touchdown_xy, zmp_stance_xy, stance_xy, stance_yaw_rad: float, swing_leg: str,
@@ -152,15 +165,25 @@ def landing_for(cp_touchdown_xy, zmp_stance_xy, stance_xy, stance_yaw_rad: float
     """The landing sole origin [m] (2,) for the capture point predicted at touchdown: the sole's centre
     landing_offset_m beyond it along its motion (away from the stance ZMP), clamped to the leg's reach
     (clamp_landing)."""
-    cp_td = np.asarray(cp_touchdown_xy, dtype=float)
-    motion = cp_td - np.asarray(zmp_stance_xy, dtype=float)
-    norm = float(np.hypot(motion[0], motion[1]))
-    centre = cp_td + (params.landing_offset_m / norm) * motion if norm > 1e-9 else cp_td
+    return np.array(_landing_xy(float(cp_touchdown_xy[0]), float(cp_touchdown_xy[1]), float(zmp_stance_xy[0]),
+                                float(zmp_stance_xy[1]), float(stance_xy[0]), float(stance_xy[1]), stance_yaw_rad,
+                                swing_leg, params))
+
+
+def _landing_xy(cx_m: float, cy_m: float, zx_m: float, zy_m: float, sx_m: float, sy_m: float,
+                stance_yaw_rad: float, swing_leg: str, params: EmergencyStepParams) -> tuple[float, float]:
+    """landing_for on floats (it runs every tick of a catch): capture point at touchdown (cx, cy), stance ZMP
+    (zx, zy), stance sole (sx, sy) [m]."""
+    mx, my = cx_m - zx_m, cy_m - zy_m
+    norm = float(np.hypot(mx, my))  # numpy's hypot, not math's: the floats landing_for always had
+    if norm > 1e-9:
+        f = params.landing_offset_m / norm
+        cx_m, cy_m = cx_m + f * mx, cy_m + f * my
     rect = SOLES[swing_leg]  # the sole's centre in its own frame, turned by the stance yaw (no turning step)
-    cx, cy = 0.5 * (rect.front_m - rect.rear_m), 0.5 * (rect.left_m - rect.right_m)
+    ox, oy = 0.5 * (rect.front_m - rect.rear_m), 0.5 * (rect.left_m - rect.right_m)
     c, s = math.cos(stance_yaw_rad), math.sin(stance_yaw_rad)
-    target = centre - np.array((c * cx - s * cy, s * cx + c * cy))
-    return clamp_landing(target, stance_xy, stance_yaw_rad, swing_leg, params)
+    return _clamp_landing_xy(cx_m - (c * ox - s * oy), cy_m - (s * ox + c * oy), sx_m, sy_m, stance_yaw_rad,
+                             swing_leg, params)
 
 
 # ---------------------------------------------------------------------------------------- one step, planned
@@ -170,6 +193,55 @@ def _swing_samples(n_step: int, ratio_after: float) -> int:
     """Samples of a step of n_step samples that swing: the gait generator swings while its sample time
     (i + 1) dt < (1 - ratio_after) T."""
     return int(math.ceil((1.0 - ratio_after) * n_step - 1e-9)) - 1
+
+
+@functools.lru_cache(maxsize=64)
+def cp_weights(a: float, n: int) -> np.ndarray:
+    """(n,) weights (a - 1) a^(n - 1 - i) [-] of the ZMP of the n samples i = 0 .. n - 1 in the LIP's capture point
+    n samples on: xi_n = a^n xi_0 - sum_i w_i zmp_i (xi+ = a xi - (a - 1) zmp). Per (a, n): a catch asks for the
+    same few every tick."""
+    w = (a - 1.0) * a ** np.arange(n - 1, -1, -1)
+    w.flags.writeable = False
+    return w
+
+
+@functools.lru_cache(maxsize=64)
+def zmp_path_weights(n_lift: int, touchdown_k: int, n_step_end: int, n_end: int,
+                     n_shift: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The min-jerk ratios [-] of an emergency step's reference ZMP, as (m, 1) columns over the samples of each
+    phase: the lift (samples 0 .. min(n_lift, touchdown_k) - 1, start to stance ZMP), the shift after touchdown
+    (touchdown_k .. n_step_end - 1, stance ZMP to the landing's) and the final double support (n_step_end ..
+    n_end - 1, to the feet's middle). They depend on the timing alone: a re-plan reuses them."""
+    lift = min_jerk((np.arange(0, min(n_lift, touchdown_k)) + 1) / n_lift)[:, None]
+    shift = min_jerk((np.arange(touchdown_k, n_step_end) + 1 - touchdown_k) / n_shift)[:, None]
+    final = min_jerk((np.arange(n_step_end, n_end) + 1 - n_step_end) / max(n_end - n_step_end, 1))[:, None]
+    for w in (lift, shift, final):
+        w.flags.writeable = False
+    return lift, shift, final
+
+
+@functools.lru_cache(maxsize=64)
+def zmp_path_column(n_lift: int, touchdown_k: int, n_step_end: int, n_end: int,
+                    n_shift: int) -> tuple[np.ndarray, tuple[int, int, int, int]]:
+    """zmp_path_weights end to end, (n_end, 1), with 0 for the samples held on the stance sole, and the four phases'
+    sample counts (lift, held, shift, final): every sample's ZMP is start + w (end - start) of its phase."""
+    lift, shift, final = zmp_path_weights(n_lift, touchdown_k, n_step_end, n_end, n_shift)
+    held = np.zeros((touchdown_k - len(lift), 1))
+    column = np.concatenate((lift, held, shift, final))
+    column.flags.writeable = False
+    return column, (len(lift), len(held), len(shift), len(final))
+
+
+def _fill_path(out_xy: np.ndarray, k_from: int, lo: int, hi: int, weights: np.ndarray, w0: int, start_xy: np.ndarray,
+               end_xy: np.ndarray) -> None:
+    """Rows of samples max(lo, k_from) .. hi - 1 of out_xy (row 0: sample k_from) = start + w (end - start), w the
+    weights from sample w0 on (numpy's floats of start + w * (end - start), in place)."""
+    lo = max(lo, k_from)
+    if hi <= lo:
+        return
+    rows = out_xy[lo - k_from:hi - k_from]
+    np.multiply(weights[lo - w0:hi - w0], end_xy - start_xy, out=rows)
+    rows += start_xy
 
 
 class EmergencyStepPlan:
@@ -198,13 +270,22 @@ class EmergencyStepPlan:
         self.n_end = self.n_step_end + max(1, round(params.final_double_support_s / dt_s))
         self.n_freeze = self.n_touchdown - round(params.replan_until_s / dt_s)
         self.landed_k: int | None = None  # the sample the foot touched down before n_touchdown, if it did
+        self.revision = 0  # counts replan and land calls: a re-plan made ahead on a copy is valid for one revision
         self.z_m = stance.z
+        self._a = math.exp(self.omega_1_s * self.dt_s)  # the LIP's CP over one tick: xi+ = a xi - (a - 1) zmp
+        # the soles' corners and the stance sole shrunk by the margin, as (x, y) pairs: fixed for the plan
+        rect = SOLES[swing.leg]
+        c, s_ = np.cos(stance.yaw), np.sin(stance.yaw)
+        self._stance_corners = SOLES[stance.leg].corners_world((stance.x, stance.y, stance.yaw)).tolist()
+        self._swing_corners_turned = (rect.corners_foot() @ np.array([[c, -s_], [s_, c]]).T).tolist()
+        self._stance_poly = shrink_polygon_xy(self._stance_corners, params.zmp_margin_m)
+        self._zmp_after: tuple | None = None  # (landing, CP at touchdown, its ZMP after touchdown)
         self.zmp_start_xy = np.asarray(zmp_world_xy, dtype=float)[:2].copy()
-        self.zmp_stance_xy = stance_zmp(cp_world_xy, stance.leg, (stance.x, stance.y), stance.yaw,
-                                        params.zmp_margin_m)
+        cx, cy = np.asarray(cp_world_xy, dtype=float)[:2].tolist()
+        self.zmp_stance_xy = np.array(nearest_point_in_convex_polygon_xy(cx, cy, self._stance_poly))
         self._cp_measured = (0, np.asarray(cp_world_xy, dtype=float)[:2].copy())  # (sample, CP [m])
         self.cp_touchdown_xy = self._cp_at(self.n_touchdown)
-        self.landing_xy = self._landing()
+        self.landing_xy = np.array(self._landing())
 
     def __repr__(self) -> str:
         return (f"EmergencyStepPlan({self.swing.leg} to {self.landing_xy.round(3).tolist()}; samples "
@@ -245,33 +326,51 @@ class EmergencyStepPlan:
         the sole nearest it: a capture point still inside the sole stays where it is instead of running away from
         a ZMP chosen when it was elsewhere), and until n_freeze the landing too. True when either moved (by more
         than 1 mm)."""
+        self.revision += 1
         if k >= self.n_touchdown or self.landed_k is not None:
             return False
-        cp = np.asarray(cp_world_xy, dtype=float)[:2].copy()
-        s = self.stance
-        zmp = stance_zmp(cp, s.leg, (s.x, s.y), s.yaw, self.params.zmp_margin_m)
-        moved = float(np.hypot(*(zmp - self.zmp_stance_xy))) > 1e-3
+        cx, cy = float(cp_world_xy[0]), float(cp_world_xy[1])  # floats: a tick's maths on 2-D points
+        zx, zy = nearest_point_in_convex_polygon_xy(cx, cy, self._stance_poly)  # stance_zmp
+        ox, oy = self.zmp_stance_xy.tolist()
+        moved = float(np.hypot(zx - ox, zy - oy)) > 1e-3
         if moved:
-            self.zmp_stance_xy = zmp
+            self.zmp_stance_xy = np.array((zx, zy))
         if k >= self.n_freeze:
             return moved
-        self._cp_measured = (k, cp)
+        self._cp_measured = (k, np.array((cx, cy)))
         self.cp_touchdown_xy = self._cp_at(self.n_touchdown)
-        landing = self._landing()
-        if float(np.hypot(*(landing - self.landing_xy))) <= 1e-3:
+        lx, ly = self._landing()
+        ox, oy = self.landing_xy.tolist()
+        if float(np.hypot(lx - ox, ly - oy)) <= 1e-3:
             return moved
-        self.landing_xy = landing
+        self.landing_xy = np.array((lx, ly))
         return True
+
+    def replanned(self, k: int, cp_world_xy) -> tuple[EmergencyStepPlan, bool]:
+        """replan(k, cp_world_xy) on a copy, this plan unchanged: (the copy, replan's result), for `adopt` later.
+        A shallow copy is enough: the plan rebinds what it changes and never writes into its arrays."""
+        other = copy.copy(self)
+        return other, other.replan(k, cp_world_xy)
+
+    def adopt(self, other: EmergencyStepPlan) -> None:
+        """Take the state of `other`, a copy `replanned` made of this plan at its current revision: the same
+        attributes, the same floats, as replanning this plan would have given."""
+        if other.revision != self.revision + 1:
+            raise InvalidState(f"adopt: the copy was replanned from revision {other.revision - 1}, "
+                               f"this plan is at {self.revision}")
+        self.__dict__.update(other.__dict__)
 
     def land(self, k: int, landing_world_xy) -> None:
         """The foot touched the ground at sample k (before the planned touchdown) at landing_world_xy [m]."""
+        self.revision += 1
         self.cp_touchdown_xy = self._cp_at(k)
         self.landed_k = k
         self.landing_xy = np.asarray(landing_world_xy, dtype=float)[:2].copy()
 
-    def _landing(self) -> np.ndarray:
+    def _landing(self) -> tuple[float, float]:
         s = self.stance
-        return landing_for(self.cp_touchdown_xy, self.zmp_stance_xy, (s.x, s.y), s.yaw, self.swing.leg, self.params)
+        (cx, cy), (zx, zy) = self.cp_touchdown_xy.tolist(), self.zmp_stance_xy.tolist()
+        return _landing_xy(cx, cy, zx, zy, s.x, s.y, s.yaw, self.swing.leg, self.params)  # landing_for
 
     def _cp_at(self, k: int) -> np.ndarray:
         """The LIP's capture point before sample k, from the last one measured, the ZMP following this plan's path
@@ -279,46 +378,58 @@ class EmergencyStepPlan:
         km, cp = self._cp_measured
         if k <= km:
             return cp.copy()
-        j = np.arange(km, k)
-        a = math.exp(self.omega_1_s * self.dt_s)
-        zmp = self._zmp_until_touchdown(j)
-        weights = (a - 1.0) * a ** (k - 1 - j)
-        return a ** (k - km) * cp - weights @ zmp
-
-    def _zmp_until_touchdown(self, k: np.ndarray) -> np.ndarray:
-        """(n, 2) the reference ZMP of samples k before touchdown: from where it was to the stance sole, then there."""
-        z0, zs = self.zmp_start_xy, self.zmp_stance_xy
-        lift = min_jerk((k + 1) / self.n_lift)[:, None]
-        return np.where((k < self.n_lift)[:, None], z0 + lift * (zs - z0), zs)
+        a = self._a
+        zmp = np.empty((k - km, 2))  # the reference ZMP of samples km .. k - 1: to the stance sole, then there
+        zmp[:] = self.zmp_stance_xy
+        lift = zmp_path_weights(self.n_lift, self.n_touchdown, self.n_step_end, self.n_end, 1)[0]
+        _fill_path(zmp, km, 0, min(self.n_lift, k), lift, 0, self.zmp_start_xy, self.zmp_stance_xy)
+        return a ** (k - km) * cp - cp_weights(a, k - km) @ zmp
 
     # ---- the reference ZMP
     def support_polygon_after(self) -> np.ndarray:
         """(M, 2) [m] the support polygon of the two soles once the foot is down."""
-        s, (x, y) = self.stance, self.landing_xy.tolist()
-        return support_polygon([((s.x, s.y, s.yaw), SOLES[s.leg]), ((x, y, s.yaw), SOLES[self.swing.leg])])
+        return np.array(self._support_after_xy())
+
+    def _support_after_xy(self) -> list[tuple[float, float]]:
+        """support_polygon_after as (x, y) pairs: the landing sole's corners are its turned corners moved there."""
+        x, y = self.landing_xy.tolist()
+        return convex_hull_xy(self._stance_corners + [(cx + x, cy + y) for cx, cy in self._swing_corners_turned])
 
     def zmp_after_touchdown_xy(self) -> np.ndarray:
         """Where the ZMP goes once both feet are down: the capture point predicted at touchdown, inside the support
         polygon shrunk by the margin (the CP held there stops) [m], (2,)."""
-        poly = shrink_polygon(self.support_polygon_after(), self.params.zmp_margin_m)
-        return nearest_point_in_convex_polygon(self.cp_touchdown_xy, poly)
+        landing, cp = self.landing_xy.tolist(), self.cp_touchdown_xy.tolist()
+        cache = self._zmp_after
+        if cache is None or cache[0] != landing or cache[1] != cp:  # a stance ZMP's re-plan keeps both
+            hull, margin = self._support_after_xy(), self.params.zmp_margin_m
+            if slack_in_shrunk_polygon_m(*cp, hull, margin) > 1e-9:  # inside for sure: the CP itself, as exactly
+                zmp = cp
+            else:  # near or past an edge: the exact shrunk polygon's nearest point
+                zmp = nearest_point_in_convex_polygon_xy(*cp, shrink_polygon_xy(hull, margin))
+            cache = self._zmp_after = (landing, cp, np.array(zmp))
+        return cache[2].copy()
 
     def feet_middle_xy(self) -> np.ndarray:
         """The final ZMP: midway between the two soles' origins [m], (2,) (the gait's end without ZMP offsets)."""
-        return 0.5 * (np.array((self.stance.x, self.stance.y)) + self.landing_xy)
+        x, y = self.landing_xy.tolist()
+        return np.array((0.5 * (self.stance.x + x), 0.5 * (self.stance.y + y)))
 
     def zmp(self, k_from: int) -> np.ndarray:
-        """(n_end - k_from, 3) reference ZMP [m] of samples k_from .. n_end - 1."""
-        k = np.arange(k_from, self.n_end)
-        td = self.touchdown_k
-        zs = self.zmp_stance_xy
-        zl, zm = self.zmp_after_touchdown_xy(), self.feet_middle_xy()
-        n_shift = min(max(1, round(self.params.zmp_shift_s / self.dt_s)), max(self.n_step_end - td, 1))
-        shift = min_jerk((k + 1 - td) / n_shift)[:, None]
-        final = min_jerk((k + 1 - self.n_step_end) / max(self.n_end - self.n_step_end, 1))[:, None]
-        xy = np.where((k < td)[:, None], self._zmp_until_touchdown(k),
-                      np.where((k < self.n_step_end)[:, None], zs + shift * (zl - zs), zl + final * (zm - zl)))
-        out = np.empty((len(k), 3))
-        out[:, :2] = xy
-        out[:, 2] = self.z_m
+        """(n_end - k_from, 3) reference ZMP [m] of samples k_from .. n_end - 1: affine in the four points (start,
+        stance, after touchdown, feet's middle) with weights of the timing alone (zmp_path_weights)."""
+        td, n_lift, n_step_end, n_end = self.touchdown_k, self.n_lift, self.n_step_end, self.n_end
+        n_shift = min(max(1, round(self.params.zmp_shift_s / self.dt_s)), max(n_step_end - td, 1))
+        column, counts = zmp_path_column(n_lift, td, n_step_end, n_end, n_shift)
+        z = self.z_m
+        (x0, y0), (xs, ys) = self.zmp_start_xy.tolist(), self.zmp_stance_xy.tolist()
+        (xl, yl), (xm, ym) = self.zmp_after_touchdown_xy().tolist(), self.feet_middle_xy().tolist()
+        # the phases: to the stance sole, held there, to the capture point once the foot is down, to the feet's middle
+        start = np.array(((x0, y0, z), (xs, ys, z), (xs, ys, z), (xl, yl, z)))
+        end = np.array(((xs, ys, z), (xs, ys, z), (xl, yl, z), (xm, ym, z)))
+        left, rows = k_from, []  # the phases' samples from k_from on
+        for c in counts:
+            rows.append(max(c - left, 0))
+            left = max(left - c, 0)
+        out = np.repeat(start, rows, axis=0)
+        out += column[k_from:] * np.repeat(end - start, rows, axis=0)
         return out

@@ -59,3 +59,17 @@ def test_the_record_scenario_reports_what_recording_adds_to_a_tick():
     assert r["recorder_tick_cpu_us"]["n"] == 50 and r["recorder_inputs_cpu_us"]["n"] == 50  # an input every tick
     assert r["file_bytes_per_sim_s"] > 0 and r["tick_cpu_with_us"]["n"] == r["tick_cpu_without_us"]["n"] == 50
     assert len(r["recording_per_tick_ms_each_round"]) == r["rounds"] == 2
+
+
+def test_the_catch_scenario_pushes_the_walk_and_reports_the_ticks_of_the_capture_step_apart():
+    report = run_bench("catch", duration_s=4.0)
+    assert not report["fallen"]
+    catching, other = report["catching"], report["other"]
+    assert catching["ticks"] > 100 and catching["ticks"] + other["ticks"] == report["ticks"]
+    assert set(catching["layers"]) == set(report["layers"]) and "p99_ms" in catching["layers"]["abc"]
+    # the tick split at the write: the catch's re-plan runs once the command is out, reported apart from what the
+    # command waits for
+    assert catching["after_write_ms"]["p99_ms"] > 0.0 and set(report["after_write_layers"]) == {"abc"}
+    for part in (report, catching, other):
+        assert part["read_to_write_ms"]["p50_ms"] < part["tick_ms"]["p50_ms"]
+

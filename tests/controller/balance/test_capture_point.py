@@ -102,3 +102,54 @@ def test_a_yawed_foot_rotates_its_rectangle_about_the_ankle():
     foot = FootRectangle(front_m=0.2, rear_m=0.0, left_m=0.05, right_m=0.05)
     poly = support_polygon([((1.0, 2.0, np.pi / 2), foot)])
     assert same_polygon(poly, [[1.05, 2.0], [1.05, 2.2], [0.95, 2.2], [0.95, 2.0]])
+
+
+# ---- the same on plain floats (the emergency step's every tick): the numpy functions' floats, bit for bit
+
+
+def _random_feet(rng):
+    yaw = rng.uniform(-3.0, 3.0)
+    return [((rng.normal() * 0.3, rng.normal() * 0.3, yaw), HRP2_RIGHT_SOLE),
+            ((rng.normal() * 0.3, rng.normal() * 0.3, yaw + rng.normal() * 0.1), HRP2_LEFT_SOLE)]
+
+
+def test_the_float_polygon_functions_give_the_numpy_ones_floats_bit_for_bit():
+    from controller.balance.capture_point import (
+        convex_hull_2d,
+        convex_hull_xy,
+        nearest_point_in_convex_polygon_xy,
+        shrink_polygon_xy,
+    )
+
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        feet = _random_feet(rng)
+        corners = np.concatenate([rect.corners_world(pose) for pose, rect in feet])
+        hull = convex_hull_2d(corners)
+        assert [tuple(v) for v in hull.tolist()] == convex_hull_xy(corners.tolist())
+        for poly in (hull, corners[:4]):  # the two soles' hull, one sole's corners
+            margin = float(rng.choice([0.0, 0.015, 0.05, 0.3]))
+            shrunk = shrink_polygon(poly, margin)
+            shrunk_xy = shrink_polygon_xy(poly.tolist(), margin)
+            assert [tuple(v) for v in shrunk.tolist()] == shrunk_xy
+            if len(shrunk):
+                for p in rng.normal(size=(4, 2)) * 0.4:
+                    assert tuple(nearest_point_in_convex_polygon(p, shrunk).tolist()) == \
+                        nearest_point_in_convex_polygon_xy(*p.tolist(), shrunk_xy)
+
+
+def test_the_slack_in_the_shrunk_polygon_is_the_distance_inside_its_edges():
+    from controller.balance.capture_point import slack_in_shrunk_polygon_m
+
+    square = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+    assert slack_in_shrunk_polygon_m(0.5, 0.3, square, 0.1) == pytest.approx(0.2)
+    assert slack_in_shrunk_polygon_m(0.5, 0.05, square, 0.1) == pytest.approx(-0.05)
+    assert slack_in_shrunk_polygon_m(0.5, 0.05, square[::-1], 0.1) == pytest.approx(-0.05)  # clockwise given
+    rng = np.random.default_rng(3)
+    for _ in range(200):  # its sign is shrink_polygon's inside, away from the boundary
+        hull = support_polygon(_random_feet(rng))
+        shrunk = shrink_polygon(hull, 0.015)
+        p = rng.normal(size=2) * 0.3
+        slack = slack_in_shrunk_polygon_m(*p.tolist(), hull.tolist(), 0.015)
+        if abs(slack) > 1e-9:
+            assert (slack > 0.0) == (len(shrunk) > 0 and distance_to_polygon_edge(p, shrunk) > 0.0)

@@ -234,3 +234,71 @@ def test_a_reset_starts_a_new_schedule_and_the_timing_figures_of_the_new_run_onl
     assert t.ticks == 21  # boundaries 101..121: the new run's ticks (the reset was at boundary 100)
     assert t.lateness_max_ms < 50.0, t
     assert t.speed_run is not None and 0.5 < t.speed_run < 1.5, t
+
+
+class Prepare(Layer):
+    """A layer with after-write work: records when it ran (the plant's writes so far) and on which ports."""
+
+    name = "abc"
+
+    def __init__(self, plant):
+        super().__init__()
+        self.plant = plant
+        self.calls = []  # (writes seen, the ports given)
+        self.fail = False
+
+    def tick(self, ctx, ref):
+        return ref
+
+    def after_write(self, ports):
+        if self.fail:
+            raise RuntimeError("prepare failed")
+        self.calls.append((len(self.plant.writes), ports))
+
+
+def make_loop_with_prepare():
+    plant = FakePlant()
+    layers = {}
+
+    def factory(sensors, dt):
+        layers["seq"], layers["abc"], layers["hes"] = Ramp(), Prepare(plant), Freeze()
+        return Chain(dict(layers))
+
+    return ControlLoop(plant, factory, dt_control_s=0.005), plant, layers
+
+
+def test_after_write_runs_once_per_tick_after_the_command_is_written_on_the_ports_the_next_tick_reads():
+    loop, plant, layers = make_loop_with_prepare()
+    seen = []
+    layers["seq"].tick = lambda ctx, ref: seen.append(ctx.last_ports) or Ramp.tick(layers["seq"], ctx, ref)
+    loop.run_for(0.02)
+    calls = layers["abc"].calls
+    assert [w for w, _ in calls] == [1, 2, 3, 4]  # each tick's command was out before its after-write work
+    assert [p for _, p in calls[:-1]] == seen[1:]  # the ports it was given are the next tick's last_ports
+    assert all(a is b for (_, a), b in zip(calls[:-1], seen[1:], strict=True))
+    assert loop.after_write_timer.percentiles()["n"] == 4 and loop.read_to_write_timer.percentiles()["n"] == 4
+    assert loop.chain.after_write_timers.keys() == {"abc"}  # only the layers that have after-write work
+
+
+def test_after_write_is_not_called_for_a_disabled_layer_nor_after_a_faulted_tick():
+    loop, plant, layers = make_loop_with_prepare()
+    layers["abc"].enabled = False
+    loop.run_for(0.02)
+    assert layers["abc"].calls == []
+    layers["abc"].enabled = True
+    layers["seq"].fail = True
+    loop.run_for(0.02)
+    assert loop.fault is not None and layers["abc"].calls == []
+
+
+def test_an_exception_in_after_write_is_a_fault_the_loop_survives_with_the_command_written_held():
+    loop, plant, layers = make_loop_with_prepare()
+    loop.run_for(0.02)
+    layers["abc"].fail = True
+    loop.step()
+    written = plant.writes[-1].copy()  # the tick's command went out before its after-write work failed
+    assert loop.fault is not None and "prepare failed" in loop.fault
+    assert loop.hard_stop_engaged and np.array_equal(layers["hes"].q, written)
+    assert loop._ports.hold  # the next tick's layers before hes hold, as after a faulted tick
+    snap = loop.run_for(0.02)
+    assert snap.safety.hard_stop and np.array_equal(plant.writes[-1], written)

@@ -15,18 +15,22 @@ from controller.balance.capture_point import (
     shrink_polygon,
     support_polygon,
 )
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
+from controller.interpolation.hoff_arbib import min_jerk
 from controller.walking.emergency_step import (
     EmergencyStepParams,
     EmergencyStepPlan,
     SupportRegion,
     clamp_landing,
+    cp_weights,
     landing_for,
     lip_capture_point,
     needs_step,
     sole_corners_world,
     stance_zmp,
     swing_leg_for,
+    zmp_path_column,
+    zmp_path_weights,
 )
 from controller.walking.footsteps import Footstep
 from controller.walking.gait_generator import GaitGenerator, GaitParams
@@ -236,3 +240,84 @@ def test_an_early_touchdown_lands_the_foot_where_it_is_and_the_zmp_follows():
 def test_a_plan_needs_one_foot_of_each_leg():
     with pytest.raises(InvalidCommand, match="both rleg"):
         EmergencyStepPlan(P, DT, RIGHT, RIGHT, np.zeros(2), np.zeros(2), OMEGA)
+
+
+# ---- the plan's maths made cheap for every tick: the floats of the direct computation, bit for bit
+
+
+def _zmp_direct(plan, k_from):
+    """The reference ZMP as the plan first computed it: every sample's branch by np.where over the whole queue."""
+    k = np.arange(k_from, plan.n_end)
+    td, z0, zs = plan.touchdown_k, plan.zmp_start_xy, plan.zmp_stance_xy
+    zl, zm = plan.zmp_after_touchdown_xy(), plan.feet_middle_xy()
+    n_shift = min(max(1, round(plan.params.zmp_shift_s / plan.dt_s)), max(plan.n_step_end - td, 1))
+    lift = min_jerk((k + 1) / plan.n_lift)[:, None]
+    shift = min_jerk((k + 1 - td) / n_shift)[:, None]
+    final = min_jerk((k + 1 - plan.n_step_end) / max(plan.n_end - plan.n_step_end, 1))[:, None]
+    until = np.where((k < plan.n_lift)[:, None], z0 + lift * (zs - z0), zs)
+    xy = np.where((k < td)[:, None], until,
+                  np.where((k < plan.n_step_end)[:, None], zs + shift * (zl - zs), zl + final * (zm - zl)))
+    return np.column_stack([xy, np.full(len(k), plan.z_m)])
+
+
+def test_the_zmp_queue_from_cached_weights_is_the_direct_computations_floats():
+    plan = forward_plan()
+    for k in (0, 1, plan.n_lift, plan.n_lift + 7, plan.n_touchdown - 1, plan.n_touchdown, plan.n_step_end,
+              plan.n_end - 1):
+        assert plan.zmp(k).tolist() == _zmp_direct(plan, k).tolist()
+    plan.replan(plan.n_lift + 5, np.array([0.22, 0.03]))
+    plan.land(plan.n_touchdown - 10, (0.3, 0.2))  # an early touchdown: other shift and final weights
+    for k in (plan.n_touchdown - 10, plan.n_touchdown, plan.n_step_end + 3):
+        assert plan.zmp(k).tolist() == _zmp_direct(plan, k).tolist()
+
+
+def test_the_zmp_weights_depend_on_the_timing_alone_and_are_shared_read_only():
+    lift, shift, final = zmp_path_weights(10, 60, 70, 370, 6)
+    assert (lift.shape, shift.shape, final.shape) == ((10, 1), (10, 1), (300, 1))
+    assert lift[-1, 0] == shift[5, 0] == final[-1, 0] == 1.0 and shift[-1, 0] == 1.0
+    assert zmp_path_weights(10, 60, 70, 370, 6)[1] is shift  # a re-plan reuses them
+    assert not shift.flags.writeable
+    column, counts = zmp_path_column(10, 60, 70, 370, 6)  # end to end, 0 while held on the stance sole
+    assert counts == (10, 50, 10, 300) and column.shape == (370, 1)
+    assert column[:10].tolist() == lift.tolist() and column[60:70].tolist() == shift.tolist()
+    assert not column[10:60].any()
+
+
+def test_the_cp_weights_are_the_direct_computations_floats():
+    a = math.exp(OMEGA * DT)
+    km, k = 3, 57
+    j = np.arange(km, k)
+    assert cp_weights(a, k - km).tolist() == ((a - 1.0) * a ** (k - 1 - j)).tolist()
+
+
+def test_the_capture_point_at_touchdown_is_the_direct_computations_floats():
+    for k, cp in ((0, (0.17, 0.0)), (forward_plan().n_lift + 3, (0.2, 0.01))):  # through the lift, and after it
+        plan = forward_plan()
+        if k:
+            plan.replan(k, np.array(cp))
+        j = np.arange(k, plan.n_touchdown)
+        a = math.exp(OMEGA * DT)
+        zmp = plan.zmp(0)[k:plan.n_touchdown, :2]  # the reference ZMP until touchdown
+        direct = a ** (plan.n_touchdown - k) * np.array(cp) - ((a - 1.0) * a ** (plan.n_touchdown - 1 - j)) @ zmp
+        assert plan.cp_touchdown_xy.tolist() == direct.tolist()
+
+
+def test_a_replan_made_on_a_copy_leaves_the_plan_alone_and_adopted_gives_the_floats_of_replanning_it():
+    direct, ahead = forward_plan(), forward_plan()
+    for k, cp in ((ahead.n_lift + 5, (0.22, 0.0)), (ahead.n_lift + 6, (0.225, 0.01)), (ahead.n_freeze, (0.4, 0.0))):
+        state = dict(vars(ahead))
+        copy, moved = ahead.replanned(k, np.array(cp))
+        assert all(vars(ahead)[name] is value for name, value in state.items())  # untouched
+        assert moved == direct.replan(k, np.array(cp))
+        ahead.adopt(copy)
+        assert ahead.landing_xy.tolist() == direct.landing_xy.tolist()
+        assert ahead.zmp_stance_xy.tolist() == direct.zmp_stance_xy.tolist()
+        assert ahead.zmp(k).tolist() == direct.zmp(k).tolist()
+
+
+def test_a_copy_replanned_from_an_older_revision_is_not_adopted():
+    plan = forward_plan()
+    copy, _ = plan.replanned(plan.n_lift + 5, np.array((0.22, 0.0)))
+    plan.replan(plan.n_lift + 5, np.array((0.21, 0.0)))
+    with pytest.raises(InvalidState, match="revision"):
+        plan.adopt(copy)

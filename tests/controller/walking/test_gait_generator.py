@@ -371,6 +371,32 @@ def test_only_the_footstep_being_stepped_on_or_a_later_one_moves():
         gg.move_footsteps({1: (0.4, 0.2)})
 
 
+def _sampled(gg):
+    return [(s.support, s.footstep_index, s.zmp_world.tolist(), s.p_rfoot_world.tolist(), s.p_lfoot_world.tolist(),
+             s.R_rfoot_world.tolist(), s.R_lfoot_world.tolist(), s.r_lleg) for s in run(gg)]
+
+
+@pytest.mark.parametrize("ticks", [20, 40, 60])  # before the swing, mid-swing, late in it
+def test_a_landing_moved_with_its_zmp_walks_the_floats_of_the_move_then_set_zmp(ticks):
+    plans = []
+    for combined in (False, True):
+        gg = GaitGenerator(dt_s=DT)
+        gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+        for _ in range(ticks):
+            gg.tick()
+        for x, y in ((0.38, 0.2), (0.381, 0.205)):  # moved twice: the second from the first
+            zmp = np.column_stack((np.linspace(0.1, 0.2, 400 - gg._tick), np.zeros(400 - gg._tick),
+                                   np.zeros(400 - gg._tick)))
+            if combined:
+                gg.move_footsteps({1: (x, y)}, zmp_world=zmp)
+            else:
+                gg.move_footsteps({1: (x, y)})
+                gg.set_zmp(zmp)
+            gg.tick()
+        plans.append((gg.footsteps, _sampled(gg), gg.T_world_lfoot.tolist()))
+    assert plans[0] == plans[1]
+
+
 def test_set_zmp_overwrites_the_next_ticks_reference_and_nothing_before():
     gg = GaitGenerator(dt_s=DT)
     gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
@@ -419,3 +445,56 @@ def test_abort_ends_the_walk_where_the_plan_is_a_swing_foot_in_the_air_included(
     idle = gg.tick()
     assert not idle.walking and getattr(idle, f"p_{swing}_world") == pytest.approx(p_swing, abs=1e-12)
     assert gg.abort() == "both"  # not walking: nothing to end
+
+
+# ---- a change computed ahead (the emergency step's after-write work): put in only on the plan it was computed from
+
+
+def _zmp_rows(gg, x):
+    n = 400 - gg._tick
+    return np.column_stack((np.full(n, x), np.zeros(n), np.zeros(n)))
+
+
+@pytest.mark.parametrize("ticks", [40, 60])  # mid-swing, late in it
+def test_a_move_prepared_ahead_and_applied_walks_the_floats_of_the_move_itself(ticks):
+    plans = []
+    for ahead in (False, True):
+        gg = GaitGenerator(dt_s=DT)
+        gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+        for _ in range(ticks):
+            gg.tick()
+        for x, y in ((0.38, 0.2), (0.381, 0.205)):
+            zmp = _zmp_rows(gg, 0.1 + x)
+            if ahead:
+                before = (gg._arrays, gg.footsteps, gg.plan_version)
+                patch = gg.prepare_move_swing({1: (x, y)}, zmp)
+                assert (gg._arrays, gg.footsteps, gg.plan_version) == before  # nothing changed yet
+                assert gg.apply(patch)
+            else:
+                gg.move_footsteps({1: (x, y)}, zmp_world=zmp)
+            gg.tick()
+            if ahead:
+                assert gg.apply(gg.prepare_set_zmp(_zmp_rows(gg, 0.2)))
+            else:
+                gg.set_zmp(_zmp_rows(gg, 0.2))
+        plans.append((gg.footsteps, _sampled(gg), gg.T_world_lfoot.tolist()))
+    assert plans[0] == plans[1]
+
+
+def test_a_patch_computed_before_the_plan_changed_is_refused_and_changes_nothing():
+    gg = GaitGenerator(dt_s=DT)
+    gg.plan(emergency_steps(), params=EMERGENCY_PARAMS)
+    for _ in range(40):
+        gg.tick()
+    stale = [gg.prepare_set_zmp(_zmp_rows(gg, 0.3)), gg.prepare_move_swing({1: (0.38, 0.2)}, _zmp_rows(gg, 0.3))]
+    gg.tick()  # a tick later
+    arrays, version = gg._arrays, gg.plan_version
+    assert not any(gg.apply(p) for p in stale)
+    assert gg._arrays is arrays and gg.plan_version == version
+    stale = gg.prepare_set_zmp(_zmp_rows(gg, 0.3))
+    gg.set_zmp(_zmp_rows(gg, 0.25))  # another ZMP set meanwhile
+    assert not gg.apply(stale)
+    stale = gg.prepare_set_zmp(_zmp_rows(gg, 0.3))
+    gg.configure(params=gg.params.replaced(final_double_support_s=1.0))  # new parameters
+    assert not gg.apply(stale)
+    assert gg.prepare_move_swing({0: (0.0, 0.0)}, _zmp_rows(gg, 0.3)) is None  # move_footsteps would refuse it
