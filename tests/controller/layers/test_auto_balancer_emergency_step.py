@@ -9,7 +9,7 @@ from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.system import initial_reference
 from controller.core.types import BalanceEstimate, Ports
 from controller.kinematics.model import RobotKinematics
-from controller.layers.auto_balancer import AutoBalancer, AutoBalancerParams
+from controller.layers.auto_balancer import AutoBalancer, AutoBalancerParams, capture_point_error_m
 from controller.operation.points import WalkCommand
 from robot.generate import half_sitting_deg
 from robot.names import FORCE_SENSOR_NAMES
@@ -82,7 +82,10 @@ def test_a_capture_point_past_the_toes_starts_a_step_forward_with_the_less_loade
 
 @pytest.mark.parametrize("why", ["off", "unloaded", "walking"])
 def test_no_step_when_switched_off_when_the_feet_carry_nothing_or_while_walking(why):
-    t = Ticker(AutoBalancerParams(emergency_step=False) if why == "off" else None)
+    # walking: without the catch (which ends a walk whose capture point errs with both feet down, then may step)
+    params = {"off": AutoBalancerParams(emergency_step=False),
+              "walking": AutoBalancerParams(walking_capture_step=False)}.get(why)
+    t = Ticker(params)
     if why == "walking":
         t.abc.go_velocity(0.1, 0.0, 0.0)
     st = t.run(0.2, cp_xy=(TOE_X + 0.05, 0.0), fz=(0.0, 0.0) if why == "unloaded" else (300.0, 270.0))
@@ -203,3 +206,38 @@ def test_while_the_e_stop_lets_a_step_land_the_walk_ends_after_it_and_an_emergen
     t3 = Ticker()
     st = t3.run(DT, cp_xy=(TOE_X + 0.03, 0.0), hold=True)  # frozen: no step
     assert not st.emergency_step
+
+
+def test_the_capture_point_error_is_the_plans_capture_point_minus_the_measured_one():
+    cog, vel = np.array([0.1, 0.0, 0.8]), np.array([0.0, 0.35, 0.0])
+    assert capture_point_error_m(cog, vel, (0.1, 0.1), 3.5) == pytest.approx(0.0)
+    assert capture_point_error_m(cog, vel, (0.13, 0.14), 3.5) == pytest.approx(0.05)
+
+
+def _walk_to(t: Ticker, support: str) -> None:
+    t.abc.go_velocity(0.1, 0.0, 0.0)
+    t.run(1.2)  # past the first step
+    while t.abc.status().support != support:
+        t.run(DT)
+
+
+def _planned_cp(t: Ticker) -> np.ndarray:
+    g = t.abc.last_gait
+    return g.cog_world[:2] + g.cog_vel_world[:2] / OMEGA
+
+
+@pytest.mark.parametrize("error_m, stops", [(0.015, False), (0.035, True)])
+def test_walking_with_both_feet_down_a_capture_point_error_past_the_bar_ends_the_walk_standing(error_m, stops):
+    t = Ticker()
+    _walk_to(t, "both")
+    st = t.run(DT, cp_xy=_planned_cp(t) + (0.0, error_m))
+    assert st.walking is not stops and not st.emergency_step
+    if stops:
+        assert st.support == "both" and st.walk_point != "walking"
+
+
+def test_walking_on_one_foot_the_same_error_leaves_the_walk_to_the_flag():
+    t = Ticker()
+    _walk_to(t, "lleg")
+    st = t.run(DT, cp_xy=_planned_cp(t) + (0.0, 0.035))
+    assert st.walking and not st.emergency_step
