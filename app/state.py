@@ -108,6 +108,7 @@ def state_document(pub: Published) -> dict[str, Any]:
             "motion_stop_cp_error_m": getattr(es, "cp_error_m", None),
             "flag_cp_error_m": getattr(st, "flag_cp_error_m", None),
             "walking_stop": bool(getattr(abc, "walking_stop", False)),
+            "walk_cut": getattr(abc, "walk_cut", None),  # why the last walk ended early (the CP), or None
             "stabilizer_stop": st is not None and not st.active},
         "layers": layer_docs,
         "chain": pub.chain,

@@ -272,7 +272,7 @@ function onState(s) {
   setStop("stop-hard", !!em.hard_stop);
   setText($("s-motion"), em.motion_stop ? `STOPPED (${em.motion_stop_reason || "?"})` : "off");
   setStop("stop-motion", !!em.motion_stop);
-  setText($("s-walkstop"), em.walking_stop ? "STOPPING in place" : "off");
+  setText($("s-walkstop"), em.walking_stop ? "STOPPING in place" : (em.walk_cut ? `off (last walk cut: ${em.walk_cut})` : "off"));
   setStop("stop-walking", !!em.walking_stop);
   setText($("s-ststop"), em.stabilizer_stop ? "STOPPED" : "running");
   setStop("stop-stabilizer", !!em.stabilizer_stop);

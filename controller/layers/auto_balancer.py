@@ -249,6 +249,9 @@ class AutoBalancerStatus(Status):
         "refused and the EmergencyStopper holds the motion"))
     emergency_steps: tuple[EmergencyStepRecord, ...] = field(default=(), metadata=described(
         "the emergency steps taken, oldest first (the last 10)"))
+    walk_cut: str | None = field(default=None, metadata=described(
+        "why the last walk ended before its plan, and when (the capture-point flag, or a capture-point error with "
+        "both feet down); None when it ended as planned or a new walk began"))
 
 
 @dataclass(frozen=True, slots=True)
@@ -332,6 +335,8 @@ class AutoBalancer(Layer):
         self._estep_records: tuple[EmergencyStepRecord, ...] = ()
         self._estep_in_a_row = 0  # emergency steps taken one after the other (the first included)
         self._estep_from_walk = False  # the emergency step in progress caught a walk (it may step again)
+        self._walk_cut: str | None = None  # why the last walk ended early (status)
+        self._was_walking = False
         self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
         self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
         self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
@@ -605,9 +610,12 @@ class AutoBalancer(Layer):
             self._check_emergency_step(ctx)
         flag = ctx.last_ports.cp_flag
         if not flag and self._double_support_stop(ctx):
+            self._walk_cut = (f"a capture-point error over {1000 * DOUBLE_SUPPORT_STOP_CP_ERROR_M:g} mm with both "
+                              f"feet down at t = {ctx.time_s:.3f} s: the walk ended standing there")
             self._catch_while_walking(ctx)  # both feet down: the walk ends standing there
         if flag and not self._last_cp_flag and self.params.walking_stop_on_cp_flag and self.gait.walking \
                 and not self.walking_stop and self._estep is None:
+            self._walk_cut = f"the capture-point flag at t = {ctx.time_s:.3f} s"
             if self._can_catch_while_walking(ctx):
                 self._catch_while_walking(ctx)
             else:
@@ -625,6 +633,9 @@ class AutoBalancer(Layer):
         future = self.gait.zmp_preview(self.preview.preview_length)
         cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
         g = self.gait.tick()
+        if g.walking and not self._was_walking and self._estep is None:
+            self._walk_cut = None  # a new walk began
+        self._was_walking = g.walking and self._estep is None
         zmp = g.zmp_world
         cog_abc_xy = self._hand_force_offset(ref, cog_xy, zmp[2])
         # BODY yaw follows the feet (mean of the two sole yaws); roll and pitch from the plan
@@ -1009,7 +1020,8 @@ class AutoBalancer(Layer):
                                   footsteps=self._status_footsteps() if self.gait.walking else (),
                                   walk_point=self._walk_point,
                                   preview_gains="current" if self._pending_preview is None else "pending",
-                                  emergency_step=self._estep is not None, emergency_steps=self._estep_records)
+                                  emergency_step=self._estep is not None, emergency_steps=self._estep_records,
+                                  walk_cut=self._walk_cut)
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes

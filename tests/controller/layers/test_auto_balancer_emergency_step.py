@@ -234,6 +234,11 @@ def test_walking_with_both_feet_down_a_capture_point_error_past_the_bar_ends_the
     assert st.walking is not stops and not st.emergency_step
     if stops:
         assert st.support == "both" and st.walk_point != "walking"
+        assert st.walk_cut.startswith("a capture-point error over 25 mm with both feet down")  # the page says why
+        t.abc.go_velocity(0.1, 0.0, 0.0)
+        assert t.run(DT).walk_cut is None  # a new walk clears it
+    else:
+        assert st.walk_cut is None
 
 
 def test_walking_on_one_foot_the_same_error_leaves_the_walk_to_the_flag():
