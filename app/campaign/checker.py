@@ -86,6 +86,7 @@ class Checker:
         self._runs_seen: set[tuple[int, str]] = set()
         self.falls: list[dict[str, Any]] = []
         self._fault: str | None = None  # the fault the last state showed (each one is said once)
+        self.runs_before: set[int] = set()  # runs a session before this one started on the same console
 
     def __repr__(self) -> str:
         return f"Checker(violations={len(self.violations)}, expectations={len(self.expectations)})"
@@ -152,7 +153,7 @@ class Checker:
         if state not in ("failed", "cancelled"):
             return
         key = (int(run["id"]), state)
-        if key in self._runs_seen:
+        if key in self._runs_seen or int(run["id"]) in self.runs_before:
             return
         self._runs_seen.add(key)
         if run_cause(str(run.get("message", ""))) is None:

@@ -247,6 +247,8 @@ class Session:
 
     def start(self) -> None:
         """A fresh robot: the defaults of the parameters, a reset, the warm-up."""
+        _, runs = self.request("GET", "/api/behaviors/runs")  # the console's earlier sessions' runs are theirs
+        self.checker.runs_before = {int(r["id"]) for r in runs} if isinstance(runs, list) else set()
         if self.defaults:
             self.request("PUT", "/api/params", self.defaults)
         self.reset_and_warm_up(first=True)

@@ -71,11 +71,6 @@ TOUCHDOWN_SWING_SHARE = 0.6
 #: [s] the swing of a capture step from a walk: the walk's remaining swing, within these (the foot needs time to go
 #: where the capture point calls it; a long swing is shortened so the foot lands before the capture point runs away)
 CATCH_SWING_S = (0.16, 0.25)
-#: [m] with both feet down while walking, a capture-point error above this ends the walk there (the catch's "both feet
-#: down: stand"), before the Stabilizer's flag (0.04 m): lifting a foot then leaves one sole to hold a capture point
-#: running toward the other (a 20 N s back-left push at the left touchdown rose the flag 5 ms after the right foot
-#: lifted: it fell; standing on both it stood). The standard walks' error stays below 0.025 m (p99 14-18 mm)
-DOUBLE_SUPPORT_STOP_CP_ERROR_M = 0.025
 #: [s] after an emergency step's touchdown, a capture point still outside the two soles calls for another step
 RESTEP_AFTER_S = 0.05
 #: emergency steps one after the other at most (each from the last one's feet)
@@ -609,10 +604,6 @@ class AutoBalancer(Layer):
         elif self.params.emergency_step and not self.gait.walking and self._blend is None:
             self._check_emergency_step(ctx)
         flag = ctx.last_ports.cp_flag
-        if not flag and self._double_support_stop(ctx):
-            self._walk_cut = (f"a capture-point error over {1000 * DOUBLE_SUPPORT_STOP_CP_ERROR_M:g} mm with both "
-                              f"feet down at t = {ctx.time_s:.3f} s: the walk ended standing there")
-            self._catch_while_walking(ctx)  # both feet down: the walk ends standing there
         if flag and not self._last_cp_flag and self.params.walking_stop_on_cp_flag and self.gait.walking \
                 and not self.walking_stop and self._estep is None:
             self._walk_cut = f"the capture-point flag at t = {ctx.time_s:.3f} s"
@@ -726,17 +717,6 @@ class AutoBalancer(Layer):
         return (self.params.walking_capture_step and self.params.emergency_step and self._blend is None
                 and not self.gait.stopping_from_rest and ctx.last_ports.balance is not None
                 and not ctx.last_ports.landing)
-
-    def _double_support_stop(self, ctx: TickContext) -> bool:
-        """Walking with both feet down (the sample handed out last), the capture point measured last tick is farther
-        than DOUBLE_SUPPORT_STOP_CP_ERROR_M from the planned one: stop before a foot lifts (a catch, standing)."""
-        g, bal = self.last_gait, ctx.last_ports.balance
-        if g is None or bal is None or not g.walking or g.support != "both" or not self.gait.walking \
-                or self.walking_stop or self._estep is not None or not self.params.walking_stop_on_cp_flag \
-                or self.gait.swing_samples_left() or not self._can_catch_while_walking(ctx):
-            return False
-        return capture_point_error_m(g.cog_world, g.cog_vel_world, bal.cp_world_xy, bal.omega_1_s) \
-            > DOUBLE_SUPPORT_STOP_CP_ERROR_M
 
     def _catch_while_walking(self, ctx: TickContext) -> None:
         """The capture-point flag rose while walking: the walk ends where it is. A foot in the air lands where the
@@ -1053,13 +1033,6 @@ class AutoBalancer(Layer):
         u = min(max(u, -sole.rear_m + m), sole.front_m - m)
         v = min(max(v, -sole.right_m + m), sole.left_m - m)
         return float(p[0]) + c * u - s_ * v, float(p[1]) + s_ * u + c * v
-
-
-def capture_point_error_m(cog_ref_world, cog_vel_ref_world, cp_act_xy, omega_1_s: float) -> float:
-    """|cp_ref - cp_act| [m] with cp_ref = cog + cog_vel / omega of the plan (the Stabilizer's CP error)."""
-    ex = float(cog_ref_world[0]) + float(cog_vel_ref_world[0]) / omega_1_s - float(cp_act_xy[0])
-    ey = float(cog_ref_world[1]) + float(cog_vel_ref_world[1]) / omega_1_s - float(cp_act_xy[1])
-    return math.hypot(ex, ey)
 
 
 def _homogeneous(p: np.ndarray, R: np.ndarray) -> np.ndarray:

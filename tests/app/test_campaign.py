@@ -1,16 +1,17 @@
 """The random operator in CI (issue 27): a short campaign with fixed seeds on real consoles at --speed max, through
 the public API only. Its size: CI_SESSIONS sessions of CI_SECONDS s simulated on two consoles, the issue's size
-(measured: 106-114 s of wall time on two cores).
+(measured: 180-300 s of wall time on two cores, the sessions recorded).
 
 Asserted: invariants 2-5 (the console's own promises: causes named, e-stops engaged, ok answers applied, no 5xx, the
-robot process alive) in every session. Not asserted yet, printed: invariants 1 and 6, whose open findings belong to
-the walking controller (issue 27 stays open on them). Two runs of these seeds (the sessions' timing against a
-console at --speed max is not deterministic) found:
-- invariant 6: `stand` after a walk cut by the flag fails on a capture-point motion stop raised during it (seeds
-  1004, 1009);
-- invariant 1: a fall with no push beyond the envelope (seed 1009 at 14.2 s, seed 1017 at 26.1 s).
-Before `stand` stepped the feet side by side (after a catch step, a walk cut short) invariant 6 failed in 6 of 20
-sessions: the legs ended 3-10 deg off half-sitting."""
+robot process alive, no controller fault, the consoles' memory bounded) in every session. Not asserted yet,
+printed: invariants 1 and 6, whose open findings belong to the walking controller (issue 27 stays open on them).
+The sessions' timing against a console at --speed max is not deterministic; runs of these seeds found:
+- invariant 6: `stand` at a session's end stopped by a capture-point motion stop raised during it (seed 1004);
+- invariant 1: falls with no push beyond the envelope after waist sticks, walks and motion stops (seeds 1006, 1013).
+Fixed since, each with a regression test: a walk stick in an ending walk's last double support (a controller fault),
+a walk started under the CP flag, a waist roll that put a hip at its limit, a goVelocity that cleared the emergency
+walking stop, a motion release answered ok and latched again (docs/campaign.md). Before `stand` stepped the feet
+side by side, invariant 6 failed in 6 of 20 sessions: the legs ended 3-10 deg off half-sitting."""
 
 from __future__ import annotations
 

@@ -187,3 +187,12 @@ def test_a_controller_fault_is_caught_once_while_it_shows():
         c.state(state(t, fault="InvalidCommand: advance_to(9); valid: 0..8"))
     c.state(state(3.0))
     assert invariants(c) == [5] and "advance_to(9)" in c.violations[0].detail and c.violations[0].time_s == 2.0
+
+
+def test_a_run_an_earlier_session_left_on_the_console_is_not_this_sessions():
+    c = Checker()
+    c.runs_before = {13}
+    c.run({"id": 13, "state": "failed", "behavior": "walk_to", "message": "stopped 37.8 cm from the goal"})
+    assert invariants(c) == []
+    c.run({"id": 14, "state": "failed", "behavior": "walk_to", "message": "stopped 37.8 cm from the goal"})
+    assert invariants(c) == [2]

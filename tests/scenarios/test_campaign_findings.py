@@ -5,8 +5,8 @@ import math
 
 import pytest
 
-from app.service.local import LocalRobot
 from app.service.errors import Refused
+from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
 from app.service.verbs import GoVelocity, WalkStop
 
