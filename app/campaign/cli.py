@@ -8,6 +8,7 @@ import itertools
 import json
 import logging
 import queue
+import tempfile
 import threading
 import time
 from collections.abc import Sequence
@@ -60,7 +61,9 @@ def run_campaign(seeds: Sequence[int], seconds: float, workers: int = 1, speed: 
 
     def worker(k: int) -> None:
         try:
-            with Console("--speed", "max" if speed is None else str(speed)) as console:
+            # the recordings in a folder of its own: the console's retention rule would prune the user's sessions
+            with tempfile.TemporaryDirectory(prefix="hrp2-campaign-") as sessions, \
+                    Console("--speed", "max" if speed is None else str(speed), "--sessions-dir", sessions) as console:
                 _, behaviors = console.request("GET", "/api/behaviors")
                 _, defaults = console.request("GET", "/api/params")
                 catalogue = catalogue_of(behaviors)
