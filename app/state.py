@@ -259,6 +259,9 @@ def state_model() -> type[BaseModel]:
             "error_norm is the value now) [m]"))),
         flag_cp_error_m=(opt_float, Field(description="|CP error| of the tick the flag last rose [m]")),
         walking_stop=(bool, Field(description="the AutoBalancer's emergency walking stop is in force")),
+        walk_cut=(str | None, Field(description=(
+            "why the last walk ended before its plan, and when (the capture-point flag); null when it ended as "
+            "planned or a new walk began"))),
         stabilizer_stop=(bool, Field(description="the Stabilizer was stopped by the operator")))
     loop = create_model("LoopState", __base__=_Doc,
                         lateness_p99_ms=(float, Field(description="tick start-lateness p99 over the last ticks [ms]")),

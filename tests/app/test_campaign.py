@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import json
 import threading
+import time
 from pathlib import Path
 
 import pytest
@@ -74,13 +75,21 @@ def test_a_violating_stretch_is_kept_as_mcap_that_replays_bit_for_bit_and_a_clea
         catalogue = catalogue_of(behaviors)
         clean = Session(console.port, CI_SEED, 3.0, catalogue, actions=[], record=True).run()
         assert not clean.violations and not clean.recordings
-        faulty = Session(console.port, CI_SEED, 4.0, catalogue, actions=[], record=True)
-        # the campaign sends no fault: one injected here (the simulation's test door) is invariant 5's violation
-        injected = threading.Timer(1.5, lambda: console.request("POST", "/api/sim/fault", {"kind": "layer",
-                                                                                            "layer": "st"}))
+        faulty = Session(console.port, CI_SEED, 6.0, catalogue, actions=[], record=True)
+
+        def inject() -> None:  # once the session's own reset is done and its warm-up over (not by the wall clock)
+            sim_s = lambda: console.request("GET", "/api/state")[1]["time"]  # noqa: E731
+            while sim_s() > 1.0:
+                time.sleep(0.02)
+            while sim_s() < 4.0:
+                time.sleep(0.02)
+            # the campaign sends no fault: one injected here (the simulation's test door) violates invariant 5
+            console.request("POST", "/api/sim/fault", {"kind": "layer", "layer": "st"})
+
+        injected = threading.Thread(target=inject)
         injected.start()
         result = faulty.run()
-        injected.join()
+        injected.join(timeout=30.0)
     assert [v.invariant for v in result.violations][:1] == [5] and "controller fault" in result.violations[0].detail
     [(name, data)] = result.recordings.items()
     saved = save_findings([{**result.to_dict(), "recordings": result.recordings}], tmp_path / "out")

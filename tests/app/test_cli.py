@@ -81,7 +81,8 @@ def test_bench_walk_scenario_reports_the_walking_part():
     assert report["sim_time_s"] == pytest.approx(2.0)  # the warm-up is not timed
     assert report["real_time_factor"] > 0
     assert set(report) == {"scenario", "scene", "chain", "ticks", "sim_time_s", "wall_time_s", "real_time_factor",
-                           "tick_ms", "physics_ms", "layers", "fallen", "fault"}
+                           "tick_ms", "physics_ms", "layers", "fallen", "fault", "read_to_write_ms", "after_write_ms",
+                           "after_write_layers"}
     assert report["fallen"] is False and report["fault"] is None
     assert list(report["layers"]) == report["chain"].split(" -> ")
 
