@@ -30,6 +30,8 @@ def test_the_operator_and_behaviour_routes_answer_as_documented(case):
     # (the front answers a control request that is not JSON with 415 before it looks at the method)
     headers = {"content-type": "application/json"}
     response = case.call(headers=headers)
-    # a valid request while an earlier call's client holds the operator lock is a documented 423
-    excluded = [schemathesis.checks.positive_data_acceptance] if response.status_code == 423 else []
+    # while an earlier call's client holds the operator lock (its 0.2 s lease outlives a call on a slow machine) any
+    # request, valid or not, is a documented 423: the lock is checked before the body, as access before validation
+    excluded = ([schemathesis.checks.positive_data_acceptance, schemathesis.checks.negative_data_rejection]
+                if response.status_code == 423 else [])
     case.validate_response(response, excluded_checks=excluded, headers=headers)
