@@ -1,595 +1,67 @@
-"""Whole-body IK of the operation layer ([OP] III): hands, gaze, waist and balance on placo, one QP step per tick."""
+"""Whole-body IK of the operation layer ([OP] III): hands, gaze, waist and balance on placo, one QP step per tick.
+
+The solver adds up the tasks of controller.kinematics.operation_tasks (one per operated point, and the joint step
+bounds), the feet, BODY and COM tasks of the whole-body mode or the COM guard of the upper-body mode, and a torso
+posture. Targets and results: operation_targets; parameters: operation_params; plane geometry: operation_geometry.
+"""
 
 from __future__ import annotations
 
-import math
-from collections.abc import Mapping
-from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
 import placo
 
-from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, convex_hull_2d, shrink_polygon
+from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
 from controller.core.errors import InvalidCommand
-from controller.core.layer import Params
 from controller.core.types import read_only
-from controller.kinematics.rotations import (
-    quat_xyzw_to_rows,
-    quat_xyzw_to_rpy,
-    rows_angle_between,
-    rows_exp3,
-    rows_log3,
-    rows_small_log3,
-    rpy_to_rows,
+from controller.kinematics.operation_geometry import GuardBox, SupportPolygon, sub3
+from controller.kinematics.operation_params import OperationIKParams
+from controller.kinematics.operation_targets import (
+    JOINT_LIMIT,
+    NO_POINTS,
+    POINTS,
+    REACH,
+    SOLVER,
+    VELOCITY,
+    FeetPoses,
+    GazeTarget,
+    HandTarget,
+    OperationIKResult,
+    OperationTargets,
+    PointResult,
+    WaistTarget,
 )
-from controller.kinematics.rotations import rows_mul as _mul
-from controller.kinematics.rotations import rows_tmul as _tmul
-from controller.kinematics.rotations import rows_tmulv as _tmulv
-from robot.names import END_EFFECTORS, JOINT_GROUPS, JOINT_NAMES, URDF
+from controller.kinematics.operation_tasks import (
+    ARM_JOINTS,
+    BODY_FRAME,
+    CHEST_FRAME,
+    FOOT_FRAMES,
+    HAND_FRAMES,
+    HEAD_FRAME,
+    HEAD_JOINTS,
+    LEG_JOINTS,
+    NECK_FRAME,
+    TORSO_JOINTS,
+    GazeTask,
+    HandFrameTask,
+    PointTask,
+    StepBounds,
+    WaistTask,
+)
+from controller.kinematics.rotations import quat_xyzw_to_rows, quat_xyzw_to_rpy, rows_tmulv, rpy_to_rows
+from robot.names import JOINT_NAMES, URDF
 
-#: The operational points, in the order they are solved and reported.
-POINTS: tuple[str, ...] = ("rhand", "lhand", "head", "waist")
+#: Importable from here as before the split (the layer and the tests import some of them from this module).
+__all__ = ["BODY_FRAME", "CHEST_FRAME", "FOOT_FRAMES", "HAND_FRAMES", "HEAD_FRAME", "JOINT_LIMIT", "NECK_FRAME",
+           "POINTS", "REACH", "SOLVER", "VELOCITY", "FeetPoses", "GazeTarget", "HandTarget", "OperationIK",
+           "OperationIKParams", "OperationIKResult", "OperationTargets", "PointResult", "WaistTarget"]
 
-#: Why a point did less than it was asked this tick (PointResult.limited).
-REACH = "reach"  # out of the workspace, at a singularity, or held back by balance, the torso or another point
-JOINT_LIMIT = "joint_limit"  # a joint of its own limb brakes against (or sits at) its position limit
-VELOCITY = "velocity"  # a joint of its chain runs at the joint velocity limit
-SOLVER = "solver"  # the QP failed; the previous posture is kept
-
-#: Frames in the URDF (robot/hrp2/hrp2.urdf).
-HAND_FRAMES = {"rhand": END_EFFECTORS["rarm"], "lhand": END_EFFECTORS["larm"]}
-FOOT_FRAMES = (END_EFFECTORS["rleg"], END_EFFECTORS["lleg"])
-BODY_FRAME = "BODY"
-CHEST_FRAME = "CHEST_LINK1"  # the gaze angles are relative to this link
-HEAD_FRAME = "HEAD_LINK1"  # gaze axis: its x axis (the URDF has no camera frames)
-NECK_FRAME = "HEAD_LINK0"  # its origin is on both head axes: where the gaze ray starts
-
-_GRIPPERS = (JOINT_NAMES.index("RARM_JOINT6"), JOINT_NAMES.index("LARM_JOINT6"))  # never move a hand frame
-_ARM = {"rhand": tuple(i for i in JOINT_GROUPS["rarm"] if i not in _GRIPPERS),
-        "lhand": tuple(i for i in JOINT_GROUPS["larm"] if i not in _GRIPPERS)}
-_TORSO = JOINT_GROUPS["torso"]
-_HEAD = JOINT_GROUPS["head"]
-_LEGS = JOINT_GROUPS["rleg"] + JOINT_GROUPS["lleg"]
-#: The control joints of each point ([OP] Eq. 1, theta_cl): any at the velocity limit explains a slowdown.
-CHAINS: dict[str, tuple[int, ...]] = {"rhand": _TORSO + _ARM["rhand"], "lhand": _TORSO + _ARM["lhand"],
-                                      "head": _HEAD, "waist": _LEGS}
-#: The point's own limb: one of these braking at its position limit explains a slowdown as "joint_limit";
-#: the torso's limits (which extend the hands' workspace) count as the edge of the reach.
-LIMBS: dict[str, tuple[int, ...]] = {"rhand": _ARM["rhand"], "lhand": _ARM["lhand"], "head": _HEAD,
-                                     "waist": _LEGS}
 _COM_TARGET_INSET_M = 0.005  # the COM target stays this much deeper inside than the margin [m]
-_TORSO_NAMES = tuple(JOINT_NAMES[i] for i in _TORSO)
-_TORSO_SLICE = slice(_TORSO[0], _TORSO[-1] + 1)
-assert tuple(range(len(JOINT_NAMES))[_TORSO_SLICE]) == _TORSO
-
-
-# ---------------------------------------------------------------------------------------------- params
-
-
-@dataclass(frozen=True)
-class OperationIKParams(Params):
-    """Weights are placo soft-task weights: a task costs weight * |error|^2, hence [1/m^2] or [1/rad^2]."""
-
-    dt_s: float = field(default=0.005, metadata={"unit": "s", "min": 1e-4, "max": 0.1})
-    iterations: int = field(default=1, metadata={"unit": "-", "min": 1, "max": 10})
-    # below the SoftErrorLimiter's 3.5 rad/s, which must never have to clip this
-    joint_velocity_limit_rad_s: float = field(default=2.0, metadata={"unit": "rad/s", "min": 0.01, "max": 3.5})
-    # a step toward a position limit covers at most dt / braking_time of the distance left: a joint slows
-    # down within joint_velocity_limit * braking_time (0.05 rad by default) of its limit, never hits it
-    joint_limit_braking_time_s: float = field(default=0.025, metadata={"unit": "s", "min": 0.001, "max": 1.0})
-    # how fast each point's servo target may move toward its target: the largest step asked of the QP
-    hand_speed_m_s: float = field(default=0.5, metadata={"unit": "m/s", "min": 0.001, "max": 5.0})
-    hand_angular_speed_rad_s: float = field(default=1.5, metadata={"unit": "rad/s", "min": 0.001, "max": 20.0})
-    head_angular_speed_rad_s: float = field(default=1.5, metadata={"unit": "rad/s", "min": 0.001, "max": 20.0})
-    waist_speed_m_s: float = field(default=0.2, metadata={"unit": "m/s", "min": 0.001, "max": 5.0})
-    waist_angular_speed_rad_s: float = field(default=0.5, metadata={"unit": "rad/s", "min": 0.001, "max": 20.0})
-    # points >> balance >> posture: a reachable point ends with no steady-state error
-    hand_position_weight: float = field(default=100.0, metadata={"unit": "1/m^2", "min": 0.0, "max": 1e6})
-    hand_orientation_weight: float = field(default=10.0, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e6})
-    head_weight: float = field(default=10.0, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e6})
-    waist_height_weight: float = field(default=100.0, metadata={"unit": "1/m^2", "min": 0.0, "max": 1e6})
-    waist_orientation_weight: float = field(default=10.0, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e6})
-    # without a waist target, BODY height and orientation are held at the reference's with these
-    hold_height_weight: float = field(default=10.0, metadata={"unit": "1/m^2", "min": 0.0, "max": 1e6})
-    hold_orientation_weight: float = field(default=10.0, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e6})
-    foot_position_weight: float = field(default=1e5, metadata={"unit": "1/m^2", "min": 1.0, "max": 1e8})
-    foot_orientation_weight: float = field(default=1e4, metadata={"unit": "1/rad^2", "min": 1.0, "max": 1e8})
-    # balance autonomy ([OP] Eq. 4): COM x-y held where it was when the points became active (moved to
-    # the nearest point inside the margin when the support changes), and kept inside the support polygon
-    # with a margin by placo's CoM polygon constraint: hard while the COM is inside the margin, soft with
-    # this slack weight while it is outside (e.g. after a change of support), so the QP stays feasible
-    com_weight: float = field(default=1.0, metadata={"unit": "1/m^2", "min": 0.0, "max": 1e6})
-    # ... and toward a COM target the caller gives (e.g. the gait's COG while stepping): followed, not preferred
-    com_track_weight: float = field(default=100.0, metadata={"unit": "1/m^2", "min": 0.0, "max": 1e6})
-    com_margin_m: float = field(default=0.035, metadata={"unit": "m", "min": 0.0, "max": 0.1})
-    com_polygon_weight: float = field(default=1e3, metadata={"unit": "1/m^2", "min": 1.0, "max": 1e8})
-    # upper-body mode: the COM may move at most this far (x and y) from where it was at activation, in the
-    # BODY frame, so the AutoBalancer's BODY correction for what the arms and torso did stays this small
-    com_guard_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.005, "max": 0.2})
-    # ... and approaches it as a capture point would: the guard holds c + dc/dt * T (placo's DCM mode, omega =
-    # 1/T), so the COM's speed toward an edge is at most (distance left) / T and it comes to rest at the edge
-    # smoothly. A plain position bound stopped it within a tick: the torso reversed at ~20 deg/s, the COM
-    # estimate moved 9 mm in 50 ms and the capture-point flag stopped the motion (rhand forward, then up)
-    com_guard_braking_time_s: float = field(default=0.25, metadata={"unit": "s", "min": 0.01, "max": 5.0})
-    # the torso (the redundancy left once points, feet, BODY and COM are set) pulled to the reference
-    posture_weight: float = field(default=1e-3, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e3})
-    # ... in the upper-body mode, where no COM task holds the torso back: the arms reach first, the torso
-    # helps when they cannot. Measured: 1e-3 folds the chest 52 deg to move the left hand sideways; 3e-3
-    # keeps rhand 0.20 m forward exact (chest 14 deg) and the left hand at 4 deg; 1.0 keeps the chest still
-    # but the right hand reaches only 0.19 m forward
-    upper_body_posture_weight: float = field(default=3e-3, metadata={"unit": "1/rad^2", "min": 0.0, "max": 1e3})
-    # damping of every joint step (placo's QP regularisation): no chattering at singularities (straight arm)
-    damping_weight: float = field(default=1e-2, metadata={"unit": "1/rad^2", "min": 1e-9, "max": 1.0})
-    # below this fraction of the requested step a point is reported limited
-    limited_scale: float = field(default=0.9, metadata={"unit": "-", "min": 0.0, "max": 1.0})
-    # a requested step shorter than this is "nothing asked" (scale 1): residuals of competing soft tasks
-    scale_deadband_m: float = field(default=2e-4, metadata={"unit": "m", "min": 0.0, "max": 1e-2})
-    # rotation counts as (angle x this length) beside translation in the scale ratio
-    scale_length_m: float = field(default=0.1, metadata={"unit": "m/rad", "min": 0.001, "max": 10.0})
-
-
-# ---------------------------------------------------------------------------------------------- targets
-
-
-def _vector(value, n: int, what: str) -> np.ndarray:
-    a = np.array(value, dtype=float)
-    if a.shape != (n,) or not np.isfinite(a).all():
-        raise InvalidCommand(f"{what} must be {n} finite numbers, got {value!r}")
-    return read_only(a)
-
-
-def _rotation(value, what: str) -> np.ndarray:
-    R = np.array(value, dtype=float)
-    if R.shape != (3, 3) or not np.isfinite(R).all():
-        raise InvalidCommand(f"{what} must be a (3, 3) rotation matrix, got shape {R.shape}")
-    if np.abs(R @ R.T - np.eye(3)).max() > 1e-6 or np.linalg.det(R) < 0.0:
-        raise InvalidCommand(f"{what} is not a rotation (R R^T != I or det < 0); e.g. rpy_to_matrix(rpy)")
-    return read_only(R)
-
-
-@dataclass(frozen=True)
-class HandTarget:
-    """Pose of a hand frame (rarm_end / larm_end, between the gripper jaws) in the world."""
-
-    p_world: np.ndarray  # (3,) [m]
-    R_world: np.ndarray  # (3, 3)
-
-    def __post_init__(self) -> None:
-        p, R = _vector(self.p_world, 3, "HandTarget.p_world"), _rotation(self.R_world, "HandTarget.R_world")
-        object.__setattr__(self, "p_world", p)
-        object.__setattr__(self, "R_world", R)
-        object.__setattr__(self, "_floats", (tuple(p.tolist()), tuple(map(tuple, R.tolist()))))
-
-    @classmethod
-    def from_rows(cls, p_world: tuple[float, float, float], R_world: tuple) -> HandTarget:
-        """trusted() from floats: a position 3-tuple and the rotation's 3 row tuples (kept as `_floats`)."""
-        t = object.__new__(cls)
-        object.__setattr__(t, "p_world", read_only(np.array(p_world)))
-        object.__setattr__(t, "R_world", read_only(np.array(R_world)))
-        object.__setattr__(t, "_floats", (p_world, R_world))
-        return t
-
-    @classmethod
-    def trusted(cls, p_world: np.ndarray, R_world: np.ndarray) -> HandTarget:
-        """A target from a pose the caller built as a rotation (e.g. one integrated every tick), unchecked:
-        the checks of __init__ cost more than the rest of a tick's bookkeeping."""
-        t = object.__new__(cls)
-        object.__setattr__(t, "p_world", p_world)
-        object.__setattr__(t, "R_world", R_world)
-        object.__setattr__(t, "_floats", (tuple(p_world.tolist()), tuple(map(tuple, R_world.tolist()))))
-        return t
-
-
-@dataclass(frozen=True)
-class GazeTarget:
-    """Where the head looks: yaw/pitch of HEAD_LINK1 relative to CHEST_LINK1, or a point in the world.
-
-    yaw > 0 turns left (about the chest z axis), pitch > 0 looks down (about y, HEAD_JOINT1's sign). With
-    `look_at_world`, the gaze axis (HEAD_LINK1 x) points from the neck (HEAD_LINK0 origin) to that point.
-    """
-
-    yaw_rad: float = 0.0
-    pitch_rad: float = 0.0
-    look_at_world: np.ndarray | None = None  # (3,) [m]
-
-    def __post_init__(self) -> None:
-        if not (math.isfinite(self.yaw_rad) and math.isfinite(self.pitch_rad)):
-            raise InvalidCommand(f"GazeTarget yaw/pitch must be finite [rad], got {self.yaw_rad}, {self.pitch_rad}")
-        if self.look_at_world is not None:
-            object.__setattr__(self, "look_at_world", _vector(self.look_at_world, 3, "GazeTarget.look_at_world"))
-
-    @classmethod
-    def trusted_look_at(cls, look_at_world: np.ndarray) -> GazeTarget:
-        """A look-at target the caller computed from finite data (a (3,) float64 array it hands over),
-        unchecked: the checks of __init__ are most of its cost, every tick."""
-        t = object.__new__(cls)
-        object.__setattr__(t, "yaw_rad", 0.0)
-        object.__setattr__(t, "pitch_rad", 0.0)
-        object.__setattr__(t, "look_at_world", read_only(look_at_world))
-        return t
-
-
-@dataclass(frozen=True)
-class WaistTarget:
-    """BODY height (its origin's z in the world) and orientation (roll, pitch, yaw in the world)."""
-
-    height_m: float
-    rpy_rad: np.ndarray  # (3,)
-
-    def __post_init__(self) -> None:
-        if not math.isfinite(self.height_m):
-            raise InvalidCommand(f"WaistTarget.height_m must be finite [m], got {self.height_m}")
-        rpy = _vector(self.rpy_rad, 3, "WaistTarget.rpy_rad")
-        object.__setattr__(self, "rpy_rad", rpy)
-        object.__setattr__(self, "_R", rpy_to_rows(*rpy.tolist()))
-
-
-@dataclass(frozen=True)
-class OperationTargets:
-    """The operated points; None: not operated (its chain follows the reference posture)."""
-
-    rhand: HandTarget | None = None
-    lhand: HandTarget | None = None
-    head: GazeTarget | None = None
-    waist: WaistTarget | None = None
-
-    @property
-    def active(self) -> bool:
-        return not (self.rhand is None and self.lhand is None and self.head is None and self.waist is None)
-
-
-@dataclass(frozen=True)
-class FeetPoses:
-    """Sole poses (rleg_end / lleg_end) in the world, and which soles carry the robot (support polygon)."""
-
-    p_rsole_world: np.ndarray  # (3,) [m]
-    R_rsole_world: np.ndarray  # (3, 3)
-    p_lsole_world: np.ndarray  # (3,) [m]
-    R_lsole_world: np.ndarray  # (3, 3)
-    contact: tuple[bool, bool] = (True, True)  # (right, left)
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "p_rsole_world", _vector(self.p_rsole_world, 3, "FeetPoses.p_rsole_world"))
-        object.__setattr__(self, "p_lsole_world", _vector(self.p_lsole_world, 3, "FeetPoses.p_lsole_world"))
-        object.__setattr__(self, "R_rsole_world", _rotation(self.R_rsole_world, "FeetPoses.R_rsole_world"))
-        object.__setattr__(self, "R_lsole_world", _rotation(self.R_lsole_world, "FeetPoses.R_lsole_world"))
-        contact = tuple(bool(c) for c in self.contact)
-        if len(contact) != 2 or not any(contact):
-            raise InvalidCommand(f"FeetPoses.contact must be (right, left) with at least one True, got {self.contact}")
-        object.__setattr__(self, "contact", contact)
-        soles = ((self.p_rsole_world, self.R_rsole_world), (self.p_lsole_world, self.R_lsole_world))
-        planar = tuple((float(p[0]), float(p[1]), math.atan2(R[1, 0], R[0, 0])) for p, R in soles)
-        object.__setattr__(self, "_planar", planar)  # (x [m], y [m], yaw [rad]) of each sole
-        object.__setattr__(self, "_keys", tuple((*p.tolist(), *R.ravel().tolist()) for p, R in soles))
-
-
-# ---------------------------------------------------------------------------------------------- results
-
-
-class PointResult(NamedTuple):
-    """What an operational point achieved this tick (a NamedTuple: several are built every tick).
-
-    `scale` in [0, 1]: the part of this tick's requested step (servo target minus the pose before the
-    solve; rotation weighted by scale_length_m) the point achieved along the requested direction; 1 when
-    the request is under the deadband. A caller integrating velocity commands multiplies them by it (the
-    point slows down and keeps its direction) and, whenever `limited` is set, clamps its target to the
-    achieved pose `T_world`, so its target never runs away from the robot.
-    """
-
-    T_world: np.ndarray  # (4, 4) achieved frame pose (hands: rarm_end/larm_end, head: HEAD_LINK1, waist: BODY)
-    error_m: float  # |target - achieved| position [m] (head: 0; waist: height)
-    error_rad: float  # rotation angle from achieved to target [rad] (head: between the gaze axes)
-    scale: float  # [0, 1]
-    limited: str | None  # None, REACH, JOINT_LIMIT, VELOCITY or SOLVER
-
-    @property
-    def p_world(self) -> np.ndarray:
-        return self.T_world[:3, 3]
-
-    @property
-    def R_world(self) -> np.ndarray:
-        return self.T_world[:3, :3]
-
-
-@dataclass(frozen=True, slots=True)
-class OperationIKResult:
-    q_rad: np.ndarray  # (30,) JOINT_NAMES order [rad]
-    base_pos_world: np.ndarray  # (3,) BODY [m]
-    base_rpy_rad: np.ndarray  # (3,) BODY roll, pitch, yaw [rad]
-    points: Mapping[str, PointResult]  # the active points
-    active: bool  # False: nothing operated; the inputs are returned as they are
-    ok: bool = True  # False: the QP failed and the previous posture was kept
-    com_world: np.ndarray | None = None  # (3,) [m]
-    com_margin_m: float | None = None  # COM x-y to the nearest support-polygon edge [m], < 0 outside
-
-
-_NO_POINTS: Mapping[str, PointResult] = MappingProxyType({})
-
-
-# ---------------------------------------------------------------------------------------- 3-vectors on floats
-# Vectors as 3-tuples (rotations as 3 row tuples, in controller.kinematics.rotations): on 3x3 data plain floats
-# are several times faster than numpy's per-call overhead, and this runs a few times per point per 5 ms tick.
-
-
-def _sub(a, b):
-    return a[0] - b[0], a[1] - b[1], a[2] - b[2]
-
-
-def _dot(a, b) -> float:
-    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-
-
-def _clip(v, limit: float):
-    """The 3-vector v shortened to at most `limit` (same direction)."""
-    return _clip2(v, limit)[0]
-
-
-def _clip2(v, limit: float):
-    """(v shortened to at most `limit`, whether it was longer)."""
-    x, y, z = v
-    n2 = x * x + y * y + z * z
-    if n2 <= limit * limit:
-        return (x, y, z), False
-    k = limit / math.sqrt(n2)
-    return (x * k, y * k, z * k), True
-
-
-def _split(T_rows):
-    """(position, rotation rows) of a 4x4 pose given as nested lists."""
-    r0, r1, r2 = T_rows[0], T_rows[1], T_rows[2]
-    return (r0[3], r1[3], r2[3]), ((r0[0], r0[1], r0[2]), (r1[0], r1[1], r1[2]), (r2[0], r2[1], r2[2]))
-
-
-class _Polygon:
-    """The support polygon of the soles in contact: placo's clockwise vertex list, the inward edge lines
-    (for the margin), and the polygon shrunk by `inset_m` (where the COM target must be). Plain floats:
-    it is rebuilt at every change of support."""
-
-    def __init__(self, soles, inset_m: float) -> None:
-        """soles: ((x [m], y [m], yaw [rad]), FootRectangle) of each sole in contact."""
-        corners = []
-        for (x, y, yaw), rect in soles:
-            c, s = math.cos(yaw), math.sin(yaw)
-            for fx, fy in ((-rect.rear_m, -rect.right_m), (rect.front_m, -rect.right_m),
-                           (rect.front_m, rect.left_m), (-rect.rear_m, rect.left_m)):
-                corners.append((x + c * fx - s * fy, y + s * fx + c * fy))
-        ccw = [tuple(v) for v in convex_hull_2d(corners).tolist()]  # counter-clockwise
-        self.ccw = ccw
-        self.clockwise = [np.array(v) for v in ccw[::-1]]
-        self.edges = _edges(ccw)  # (inward normal x, y, offset): inside where n . p >= offset
-        # every edge moved in by the margin: the new vertices are where consecutive moved edges meet; valid
-        # while no edge vanishes (each keeps its direction), else the general clipping does it
-        moved = [(nx, ny, off + inset_m) for nx, ny, off in self.edges]
-        safe = []
-        for (ax, ay, ad), (bx, by, bd) in zip(moved[-1:] + moved[:-1], moved, strict=True):
-            det = ax * by - ay * bx
-            safe.append(((ad * by - bd * ay) / det, (ax * bd - bx * ad) / det))
-        n = len(safe)
-        keeps_direction = all(
-            (safe[(i + 1) % n][0] - safe[i][0]) * (ccw[(i + 1) % n][0] - ccw[i][0])
-            + (safe[(i + 1) % n][1] - safe[i][1]) * (ccw[(i + 1) % n][1] - ccw[i][1]) > 0.0 for i in range(n))
-        if not keeps_direction:
-            clipped = shrink_polygon(np.array(ccw), inset_m)
-            safe = [tuple(v) for v in clipped.tolist()] or [
-                (sum(v[0] for v in ccw) / len(ccw), sum(v[1] for v in ccw) / len(ccw))]
-        self.safe = safe
-        self.safe_edges = _edges(safe) if len(safe) >= 3 else []
-
-    def margin(self, x: float, y: float) -> float:
-        """Smallest distance to an edge line [m]: the distance to the boundary inside, < 0 outside."""
-        return min(nx * x + ny * y - off for nx, ny, off in self.edges)
-
-    def nearest_safe(self, x: float, y: float) -> tuple[float, float]:
-        """(x, y) if it is inside the margin, else the nearest point of the shrunk polygon."""
-        if not self.safe_edges:
-            return self.safe[0]
-        if min(nx * x + ny * y - off for nx, ny, off in self.safe_edges) >= 0.0:
-            return x, y
-        best, best_d2 = self.safe[0], math.inf
-        v = self.safe
-        for (ax, ay), (bx, by) in zip(v, v[1:] + v[:1], strict=True):
-            dx, dy = bx - ax, by - ay
-            t = max(0.0, min(1.0, ((x - ax) * dx + (y - ay) * dy) / (dx * dx + dy * dy)))
-            px, py = ax + t * dx, ay + t * dy
-            d2 = (px - x) ** 2 + (py - y) ** 2
-            if d2 < best_d2:
-                best, best_d2 = (px, py), d2
-        return best
-
-
-class _GuardBox:
-    """The upper-body mode's COM guard: a square of half-side `half_m` around (x, y), as placo's clockwise
-    vertex list, with the margin to its edges."""
-
-    def __init__(self, x: float, y: float, half_m: float) -> None:
-        ccw = [(x - half_m, y - half_m), (x + half_m, y - half_m), (x + half_m, y + half_m), (x - half_m, y + half_m)]
-        self.clockwise = [np.array(v) for v in ccw[::-1]]
-        self.edges = _edges(ccw)
-        self._box = (x - half_m, x + half_m, y - half_m, y + half_m)
-
-    def margin(self, x: float, y: float) -> float:
-        """min over the edges of n . p - offset, which for this axis-aligned box is exactly the distances to
-        its four sides (asked twice a tick: no generator)."""
-        x0, x1, y0, y1 = self._box
-        return min(y - y0, x1 - x, y1 - y, x - x0)
-
-
-def _edges(ccw) -> list[tuple[float, float, float]]:
-    out = []
-    for (ax, ay), (bx, by) in zip(ccw, ccw[1:] + ccw[:1], strict=True):
-        length = math.hypot(bx - ax, by - ay)
-        nx, ny = -(by - ay) / length, (bx - ax) / length
-        out.append((nx, ny, nx * ax + ny * ay))
-    return out
-
-
-# ---------------------------------------------------------------------------------------------- points
-
-
-class _Point:
-    """One operational point: its placo tasks, its servo step toward its target, what it achieved."""
-
-    name = ""
-
-    def __init__(self) -> None:
-        self.tasks: tuple = ()
-        self.requested: tuple = ()
-        self.chain_list = CHAINS[self.name]
-        self.limb_set = frozenset(LIMBS[self.name])
-        self.bound_rows: tuple | None = None  # the chain's joint limits, as OperationIK._limit_reason reads them
-
-    def add(self, solver) -> None:  # noqa: B027 - the waist has no task of its own
-        """Create the placo tasks (the point became active)."""
-
-    def remove(self, solver) -> None:
-        for task in self.tasks:
-            solver.remove_task(task)
-        self.tasks = ()
-
-    def configure(self, p: OperationIKParams) -> None:  # noqa: B027
-        """Task weights from the parameters."""
-
-    @staticmethod
-    def scale(dz_ach: float, dz_req: float, dp_ach, dp_req, w_ach, w_req, p: OperationIKParams) -> float:
-        """The achieved step projected on the requested one, as a fraction of it, in [0, 1]: translation
-        (a height dz and/or a 3-vector dp [m]) and rotation (w [rad], counted as angle x scale_length_m);
-        a request under the deadband is nothing asked (1)."""
-        L2 = p.scale_length_m * p.scale_length_m
-        rr = dz_req * dz_req + L2 * _dot(w_req, w_req)
-        ar = dz_ach * dz_req + L2 * _dot(w_ach, w_req)
-        if dp_req is not None:
-            rr += _dot(dp_req, dp_req)
-            ar += _dot(dp_ach, dp_req)
-        if rr <= p.scale_deadband_m * p.scale_deadband_m:
-            return 1.0
-        return min(1.0, max(0.0, ar / rr))
-
-
-class _Hand(_Point):
-    def __init__(self, name: str) -> None:
-        self.name = name
-        super().__init__()
-        self.frame = HAND_FRAMES[name]
-        self.T: np.ndarray | None = None  # pose after the last solve, and as nested lists
-        self.T_rows: list | None = None
-        self.T_fk = -1  # the forward-kinematics pass it was read in
-        self.servo_key: tuple = (None, None)  # the target the position / orientation tasks hold, if unclipped
-
-    def add(self, solver) -> None:
-        frame = solver.add_frame_task(self.frame, np.eye(4))
-        self.tasks = (frame.position(), frame.orientation())
-        self.servo_key = (None, None)
-
-    def configure(self, p: OperationIKParams) -> None:
-        self.tasks[0].configure(f"{self.name}_position", "soft", p.hand_position_weight)
-        self.tasks[1].configure(f"{self.name}_orientation", "soft", p.hand_orientation_weight)
-
-    def servo(self, ik: OperationIK, target: HandTarget) -> None:
-        p, dt = ik.params, ik.params.dt_s
-        rows = self.T_rows if self.T_fk == ik.fk_count else ik.robot.get_T_world_frame(self.frame).tolist()
-        p0, R0 = _split(rows)
-        pt, Rt = target._floats
-        dp, clipped_p = _clip2(_sub(pt, p0), p.hand_speed_m_s * dt)
-        w, clipped_w = _clip2(rows_log3(_tmul(R0, Rt)), p.hand_angular_speed_rad_s * dt)
-        # the target itself when it is within one step (no conversion), else one step toward it
-        if clipped_p:
-            self.tasks[0].target_world = np.array((p0[0] + dp[0], p0[1] + dp[1], p0[2] + dp[2]))
-        elif self.servo_key[0] is not target:
-            self.tasks[0].target_world = target.p_world
-        if clipped_w:
-            self.tasks[1].R_world_frame = np.array(_mul(R0, rows_exp3(w)))
-        elif self.servo_key[1] is not target:
-            self.tasks[1].R_world_frame = target.R_world
-        self.servo_key = (None if clipped_p else target, None if clipped_w else target)
-        self.requested = (p0, R0, dp, w)
-
-    def result(self, ik: OperationIK, target: HandTarget) -> tuple:
-        T = self.T = ik.robot.get_T_world_frame(self.frame)
-        rows = self.T_rows = T.tolist()
-        self.T_fk = ik.fk_count
-        p1, R1 = _split(rows)
-        p0, R0, dp, w = self.requested
-        pt, Rt = target._floats
-        scale = self.scale(0.0, 0.0, _sub(p1, p0), dp, rows_small_log3(_tmul(R0, R1)), w, ik.params)
-        error_m = math.dist(pt, p1)
-        return T, error_m, rows_angle_between(R1, Rt), scale
-
-
-class _Head(_Point):
-    """Gaze. HEAD_LINK1 is exactly Rz(HEAD_JOINT0) Ry(HEAD_JOINT1) in CHEST_LINK1 (no origin rotations in the
-    URDF), so the chest-relative gaze angles are the two head joint targets: a two-joint task is the exact
-    gaze task, and cheaper than an orientation task."""
-
-    name = "head"
-    _JOINTS = tuple(JOINT_NAMES[i] for i in _HEAD)
-
-    def add(self, solver) -> None:
-        self.tasks = (solver.add_joints_task(),)
-        self.goal: tuple[float, float] | None = None
-
-    def configure(self, p: OperationIKParams) -> None:
-        self.tasks[0].configure("head", "soft", p.head_weight)
-
-    def servo(self, ik: OperationIK, target: GazeTarget) -> None:
-        q_yaw, q_pitch = ik.head_angles()
-        if target.look_at_world is not None:
-            # the point in the chest frame: R_world_neck = R_world_chest Rz(q_yaw), from the neck's origin
-            p_neck, R_neck = _split(ik.robot.get_T_world_frame(NECK_FRAME).tolist())
-            d = _tmulv(R_neck, _sub(target.look_at_world.tolist(), p_neck))
-            c, s = math.cos(q_yaw), math.sin(q_yaw)
-            dx, dy, dz = c * d[0] - s * d[1], s * d[0] + c * d[1], d[2]
-            yaw, pitch = math.atan2(dy, dx), math.atan2(-dz, math.hypot(dx, dy))
-        else:
-            yaw, pitch = target.yaw_rad, target.pitch_rad
-        (d_yaw, d_pitch, _), _ = _clip2((yaw - q_yaw, pitch - q_pitch, 0.0),
-                                        ik.params.head_angular_speed_rad_s * ik.params.dt_s)
-        goal = (q_yaw + d_yaw, q_pitch + d_pitch)
-        if goal != self.goal:
-            task = self.tasks[0]
-            for joint, value, last in zip(self._JOINTS, goal, self.goal or (None, None), strict=True):
-                if value != last:  # one joint at a time: no dict to convert
-                    task.set_joint(joint, value)
-            self.goal = goal
-        self.requested = (q_yaw, q_pitch, d_yaw, d_pitch, yaw, pitch)
-
-    def result(self, ik: OperationIK, target: GazeTarget) -> tuple:
-        yaw1, pitch1 = ik.head_angles()
-        q_yaw, q_pitch, d_yaw, d_pitch, yaw, pitch = self.requested
-        scale = self.scale(0.0, 0.0, None, None, (yaw1 - q_yaw, pitch1 - q_pitch, 0.0), (d_yaw, d_pitch, 0.0),
-                           ik.params)
-        # the angle between the achieved and the wanted gaze axes
-        c = (math.cos(yaw1 - yaw) * math.cos(pitch1) * math.cos(pitch) + math.sin(pitch1) * math.sin(pitch))
-        return ik.robot.get_T_world_frame(HEAD_FRAME), 0.0, math.acos(max(-1.0, min(1.0, c))), scale
-
-
-class _Waist(_Point):
-    """BODY height and orientation. Its tasks always exist: they hold the reference when it is not operated."""
-
-    name = "waist"
-
-    def servo(self, ik: OperationIK, target: WaistTarget) -> None:
-        p, dt = ik.params, ik.params.dt_s
-        z0, R0 = ik.base_pose()
-        step = p.waist_speed_m_s * dt
-        dz = max(-step, min(step, target.height_m - z0))
-        w = _clip(rows_log3(_tmul(R0, target._R)), p.waist_angular_speed_rad_s * dt)
-        ik.body_z_task.target_world = np.array((0.0, 0.0, z0 + dz))
-        ik.body_R_task.R_world_frame = np.array(_mul(R0, rows_exp3(w)))
-        self.requested = (z0, R0, dz, w)
-
-    def result(self, ik: OperationIK, target: WaistTarget) -> tuple:
-        z1, R1 = ik.base_pose()
-        z0, R0, dz, w = self.requested
-        scale = self.scale(z1 - z0, dz, None, None, rows_small_log3(_tmul(R0, R1)), w, ik.params)
-        x, y, _ = ik.q[:3].tolist()
-        T = np.array((R1[0] + (x,), R1[1] + (y,), R1[2] + (z1,), (0.0, 0.0, 0.0, 1.0)))
-        return T, abs(target.height_m - z1), rows_angle_between(R1, target._R), scale
-
-
-# ---------------------------------------------------------------------------------------------- solver
+_TORSO_NAMES = tuple(JOINT_NAMES[i] for i in TORSO_JOINTS)
+_TORSO_SLICE = slice(TORSO_JOINTS[0], TORSO_JOINTS[-1] + 1)
+assert tuple(range(len(JOINT_NAMES))[_TORSO_SLICE]) == TORSO_JOINTS
 
 
 class OperationIK:
@@ -622,8 +94,7 @@ class OperationIK:
         self.q_lower = robot.model.lowerPositionLimit[self.idx_q].copy()
         self.q_upper = robot.model.upperPositionLimit[self.idx_q].copy()
         self._lower, self._upper = self.q_lower.tolist(), self.q_upper.tolist()
-        self._idx_q_list = self.idx_q.tolist()
-        self._head_q = tuple(int(self.idx_q[i]) for i in _HEAD)
+        self._head_q = tuple(int(self.idx_q[i]) for i in HEAD_JOINTS)
         self.solver = placo.KinematicsSolver(robot)
         solver = self.solver
         solver.enable_joint_limits(False)  # replaced by the step bounds (velocity limit and braking)
@@ -649,14 +120,14 @@ class OperationIK:
         self._guard_base: tuple | None = None  # upper-body mode: the base pose the guard's world box is for
         self._com_tracking = False  # the caller gives the COM target (com_track_weight)
         self._com_polygon_hard = True
-        self._polygon: _Polygon | None = None
+        self._polygon: SupportPolygon | None = None
         self._polygon_key: tuple | None = None
-        self._bounds = None  # step bounds on the free joints, rebuilt with them
+        self._step_bounds = StepBounds(self.idx_q, self.q_lower, self.q_upper)  # rebuilt with the free joints
         self._posture = None
         self._posture_ref: list[float] | None = None
         self._hold: tuple | None = None  # the reference BODY height and rpy last written to the hold tasks
-        self._points: dict[str, _Point] = {"rhand": _Hand("rhand"), "lhand": _Hand("lhand"),
-                                           "head": _Head(), "waist": _Waist()}
+        self._points: dict[str, PointTask] = {"rhand": HandFrameTask("rhand"), "lhand": HandFrameTask("lhand"),
+                                           "head": GazeTask(), "waist": WaistTask()}
         self._active: tuple[str, ...] = ()
         self._inactive = (True, True, True, True)  # per point of POINTS: not operated
         self._masked: list[tuple[int, int]] = []  # (JOINT_NAMES index, placo index) out of the QP
@@ -724,34 +195,18 @@ class OperationIK:
         self._active = active
         self._inactive = tuple(n not in active for n in POINTS)
         hands = [n for n in ("rhand", "lhand") if n in active]
-        free = (set() if self.upper_body else set(_LEGS)) | (set(_TORSO) if hands else set())
-        free |= set(_HEAD) if "head" in active else set()
+        free = (set() if self.upper_body else set(LEG_JOINTS)) | (set(TORSO_JOINTS) if hands else set())
+        free |= set(HEAD_JOINTS) if "head" in active else set()
         for name in hands:
-            free |= set(_ARM[name])
+            free |= set(ARM_JOINTS[name])
         for i, _ in self._masked:
             solver.unmask_dof(JOINT_NAMES[i])
         self._masked = [(i, int(self.idx_q[i])) for i in range(len(JOINT_NAMES)) if i not in free]
         for i, _ in self._masked:
             solver.mask_dof(JOINT_NAMES[i])
         self._free = np.array(sorted(free), dtype=int)
-        # step bounds as A q <= b on the free joints, rows [upper bounds; lower bounds], in the form
-        # b = min((1 - k) Q + K, Q + step) with Q = [q; -q], K = k [upper; -lower], k = dt / braking time
-        free_q = self.idx_q[self._free]
-        n = len(free_q)
-        self._bound_q = np.concatenate((free_q, free_q))
-        self._bound_sign = np.concatenate((np.ones(n), -np.ones(n)))
-        k = min(1.0, self.params.dt_s / self.params.joint_limit_braking_time_s)  # k <= 1: never past a limit
-        self._bound_k = k
-        self._bound_K = k * np.concatenate((self.q_upper[self._free], -self.q_lower[self._free]))
-        if self._bounds is not None:
-            solver.remove_constraint(self._bounds)
-        self._bound_sign_k = (1.0 - k) * self._bound_sign
-        self._bound_step = (None, None)
+        self._step_bounds.rebuild(solver, self._free, self.nq, self.params)  # velocity limit, braking
         self._masked_settled = None
-        A = np.zeros((2 * n, self.nq))
-        A[np.arange(2 * n), self._bound_q] = self._bound_sign
-        self._bounds = solver.add_joint_space_half_spaces_constraint(A, np.zeros(2 * n))
-        self._bounds.configure("step_bounds", "hard", 1.0)
         # posture on the torso: the redundancy left once hands, feet, BODY and COM are set
         if not rebuild:
             if self._posture is not None:
@@ -828,7 +283,7 @@ class OperationIK:
         if not targets.active:  # idle: a pass-through; the next active tick seeds afresh
             self._seeded = False
             return OperationIKResult(q_rad=q_rad, base_pos_world=base_pos_world, base_rpy_rad=base_rpy_rad,
-                                     points=_NO_POINTS, active=False)
+                                     points=NO_POINTS, active=False)
         p = self.params
         robot = self.robot
         q_ref = np.asarray(q_rad, dtype=float).tolist()
@@ -892,7 +347,7 @@ class OperationIK:
             torso = q_ref[_TORSO_SLICE]
             if torso != self._posture_ref:
                 self._posture.set_joints({n: min(upper[i], max(lower[i], q_ref[i]))
-                                          for n, i in zip(_TORSO_NAMES, _TORSO, strict=True)})
+                                          for n, i in zip(_TORSO_NAMES, TORSO_JOINTS, strict=True)})
                 self._posture_ref = torso
         for name in active:
             self._points[name].servo(self, getattr(targets, name))
@@ -906,7 +361,7 @@ class OperationIK:
             self._hold = None
         self._update_com_polygon()
         # step bounds on the free joints: velocity limit, and braking toward the position limits
-        self._update_bounds(q, step)
+        self._step_bounds.update(q, step)
         ok = True
         try:
             for it in range(p.iterations):
@@ -934,7 +389,7 @@ class OperationIK:
         self._base_key = self._base_key_of(base_pos_world, base_rpy_rad)
         if seeding:  # the guard around the COM as it is at activation, in the BODY frame
             x, y, _ = self._com_in_base()
-            self._polygon = _GuardBox(x, y, p.com_guard_m)
+            self._polygon = GuardBox(x, y, p.com_guard_m)
             if self._com_polygon is not None:
                 self.solver.remove_constraint(self._com_polygon)
                 self._com_polygon = None
@@ -943,7 +398,7 @@ class OperationIK:
             torso = q_ref[_TORSO_SLICE]
             if torso != self._posture_ref:
                 self._posture.set_joints({n: min(upper[i], max(lower[i], q_ref[i]))
-                                          for n, i in zip(_TORSO_NAMES, _TORSO, strict=True)})
+                                          for n, i in zip(_TORSO_NAMES, TORSO_JOINTS, strict=True)})
                 self._posture_ref = torso
         for name in self._active:
             self._points[name].servo(self, getattr(targets, name))
@@ -963,7 +418,7 @@ class OperationIK:
             else:
                 self._com_polygon.polygon = world
             self._guard_base = base
-        self._update_bounds(q, step)
+        self._step_bounds.update(q, step)
         ok = True
         try:
             for it in range(p.iterations):
@@ -999,40 +454,27 @@ class OperationIK:
         self._base_arg = (base_pos_world, base_rpy_rad, key) if frozen else (None, None, None)
         return key
 
-    def _update_bounds(self, q: np.ndarray, step: float) -> None:
-        """The step bounds' b for this tick: b = min((1 - k) Q + K, Q + step), Q = [q; -q] on the free joints
-        ((1 - k) and step as arrays: a float scalar costs a numpy operation as much as the operation)."""
-        if self._bound_step[0] != step:
-            self._bound_step = (step, np.full(len(self._bound_q), step))
-        qi = q[self._bound_q]
-        b = qi * self._bound_sign_k  # (1 - k) Q
-        b += self._bound_K
-        Q = qi * self._bound_sign
-        Q += self._bound_step[1]
-        np.minimum(b, Q, out=b)
-        self._bounds.b = b
-
     def _com_in_base(self) -> tuple[float, float, float]:
         """The COM in the BODY frame [m] (upper-body mode: the frame of the COM guard)."""
         base = self._base_key
         if self._base_rows[0] != base:
             self._base_rows = (base, rpy_to_rows(*base[3:]))
-        return _tmulv(self._base_rows[1], _sub(self._com_now(), base[:3]))
+        return rows_tmulv(self._base_rows[1], sub3(self._com_now(), base[:3]))
 
     def _set_feet(self, feet: FeetPoses) -> None:
-        last = self._feet_poses._keys if self._feet_poses is not None else (None, None)
+        last = self._feet_poses.sole_keys if self._feet_poses is not None else (None, None)
         for (pos_task, ori_task), pos, R, key, key_last in zip(
                 self._foot_tasks, (feet.p_rsole_world, feet.p_lsole_world), (feet.R_rsole_world, feet.R_lsole_world),
-                feet._keys, last, strict=True):
+                feet.sole_keys, last, strict=True):
             if key != key_last:  # only a sole that moved
                 pos_task.target_world = pos
                 ori_task.R_world_frame = R
-        soles = tuple((pose, rect) for c, pose, rect in zip(feet.contact, feet._planar,
+        soles = tuple((pose, rect) for c, pose, rect in zip(feet.contact, feet.planar_soles,
                                                             (HRP2_RIGHT_SOLE, HRP2_LEFT_SOLE), strict=True) if c)
         key = tuple(pose for pose, _ in soles), feet.contact
         if key != self._polygon_key:
             # the COM target 5 mm deeper than the margin: the constraint guards, it is not active all along
-            self._polygon = _Polygon(soles, self.params.com_margin_m + _COM_TARGET_INSET_M)
+            self._polygon = SupportPolygon(soles, self.params.com_margin_m + _COM_TARGET_INSET_M)
             self._polygon_key = key
             self._set_com_target()
             if self._com_polygon is not None:
@@ -1074,40 +516,7 @@ class OperationIK:
                 scale, limited = 0.0, SOLVER
             elif scale < p.limited_scale:
                 lists = lists or (q_prev.tolist(), self.q.tolist())
-                limited = self._limit_reason(point, *lists, step)
+                limited = self._step_bounds.limit_reason(point, *lists, step)
             out[name] = PointResult(T_world=read_only(T), error_m=error_m, error_rad=error_rad, scale=scale,
                                     limited=limited)
         return out
-
-    def _limit_reason(self, point: _Point, q_prev: list, q_new: list, step: float) -> str:
-        """JOINT_LIMIT if a joint of the point's own limb is braking at (or sits at) its position limit,
-        VELOCITY if a joint of its chain runs at the velocity limit, else REACH. A joint is at a bound when
-        its step came within 2 % (1e-7 rad at least) of it; which term of the bound was the smaller says
-        which limit it is."""
-        k = self._bound_k
-        rows = point.bound_rows
-        if rows is None:  # (placo index, upper, lower, in the limb) per chain joint, once
-            rows = point.bound_rows = tuple((self._idx_q_list[i], self._upper[i], self._lower[i], i in point.limb_set)
-                                            for i in point.chain_list)
-        velocity = False
-        for j, hi, lo, in_limb in rows:  # (conditionals, not min/max calls: this runs per joint)
-            q0 = q_prev[j]
-            dq = q_new[j] - q0
-            up, down = k * (hi - q0), k * (q0 - lo)  # allowed steps
-            if up > step:
-                up = step
-            if down > step:
-                down = step
-            tol = 0.02 * (up if up >= 0.0 else -up)
-            if dq >= up - (tol if tol > 1e-7 else 1e-7):
-                braking = up < step
-            else:
-                tol = 0.02 * (down if down >= 0.0 else -down)
-                if -dq >= down - (tol if tol > 1e-7 else 1e-7):
-                    braking = down < step
-                else:
-                    continue
-            if braking and in_limb:
-                return JOINT_LIMIT
-            velocity = velocity or not braking
-        return VELOCITY if velocity else REACH

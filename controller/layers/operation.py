@@ -17,7 +17,8 @@ from controller.core.types import Reference, TickContext, frozen_array, read_onl
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, legs_within_limits
 from controller.kinematics.model import RobotKinematics
-from controller.kinematics.operation_ik import GazeTarget, HandTarget, OperationIK, OperationTargets
+from controller.kinematics.operation_ik import OperationIK
+from controller.kinematics.operation_targets import GazeTarget, HandTarget, OperationTargets
 from controller.kinematics.rotations import (
     matrix_to_rpy,
     matrix_to_rpy_floats,
