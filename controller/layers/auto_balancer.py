@@ -79,6 +79,11 @@ EMERGENCY_STEPS_IN_A_ROW = 3
 EMERGENCY_STEPS_KEPT = 10
 #: [s] the BODY lowering of an emergency step comes in over this time, and goes back over 4 times it once standing
 BASE_LOWERING_TIME_S = 0.2
+#: [m/s] a waist raised above the walking height comes down to it at this rate once a walk starts (within the first
+#: step's initial double support), and goes back up at it once standing
+WALK_HEIGHT_RATE_M_S = 0.2
+#: [m] BODY may stand this much above the walking height while walking (no lowering for rounding)
+WALK_HEIGHT_SLACK_M = 0.001
 #: [m/s], [rad/s] the walking point's velocity bounds (the goVelocity verb's); the stride limits clamp the steps
 WALK_VELOCITY_LIMIT_M_S = 0.5
 WALK_VELOCITY_LIMIT_RAD_S = math.radians(45.0)
@@ -247,6 +252,10 @@ class AutoBalancerStatus(Status):
     walk_cut: str | None = field(default=None, metadata=described(
         "why the last walk ended before its plan, and when (the capture-point flag, or a capture-point error with "
         "both feet down); None when it ended as planned or a new walk began"))
+    walk_height_lowering_m: float = field(default=0.0, metadata=described(
+        "how far BODY is held below the operated waist height because a walk is on: walking plans at the "
+        "half-sitting height (a raised waist stretches the swing leg straight when the COM shifts over the "
+        "stance foot)", "m"))
 
 
 @dataclass(frozen=True, slots=True)
@@ -334,6 +343,8 @@ class AutoBalancer(Layer):
         self._was_walking = False
         self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
         self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
+        self._walk_base_z_m = float(initial.base_pos_world[2])  # [m] the height walks plan at (the preview's)
+        self._walk_lowering_m = 0.0  # [m] BODY below a raised waist while walking
         self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
         self._prepared: PreparedReplan | None = None  # after_write's re-plan, for the next tick only
         if active:
@@ -638,6 +649,8 @@ class AutoBalancer(Layer):
         R_body = np.array(rpy_to_rows(roll, pitch, yaw_in + yaw))
         rsole, lsole = (g.p_rfoot_world, g.R_rfoot_world), (g.p_lfoot_world, g.R_lfoot_world)
         base_z = float(ref.base_pos_world[2])
+        if g.walking or self._walk_lowering_m:  # campaign seed 2013: a raised waist straightened the swing knee
+            base_z -= self._lower_to_walking_height(base_z, g.walking, ctx.dt_s)
         if self._base_lowering_m or self._estep is not None:
             base_z -= self._lower_base(ctx.dt_s)
         res = self.ik.solve(ref.q_rad, base_z, R_body, cog_abc_xy, rsole, lsole)
@@ -912,6 +925,15 @@ class AutoBalancer(Layer):
         i_sw, i_st = (FEET[0], FEET[1]) if plan.swing.leg == "rleg" else (FEET[1], FEET[0])
         return (plan.stance.x + pos[i_sw][0] - pos[i_st][0], plan.stance.y + pos[i_sw][1] - pos[i_st][1])
 
+    def _lower_to_walking_height(self, base_z_m: float, walking: bool, dt_s: float) -> float:
+        """BODY's lowering [m] this tick: while walking, toward how far the operated waist is above the walking
+        height; standing, back to zero (rate-limited both ways)."""
+        target = max(0.0, base_z_m - self._walk_base_z_m - WALK_HEIGHT_SLACK_M) if walking else 0.0
+        step = WALK_HEIGHT_RATE_M_S * dt_s
+        low = self._walk_lowering_m
+        self._walk_lowering_m = low = min(low + step, target) if target > low else max(low - step, target)
+        return low
+
     def _lower_base(self, dt_s: float) -> float:
         """BODY's lowering [m] this tick: toward emergency_step_base_lowering_m while an emergency step is taken,
         back to zero once the robot stands (rate-limited, both ways)."""
@@ -1001,7 +1023,7 @@ class AutoBalancer(Layer):
                                   walk_point=self._walk_point,
                                   preview_gains="current" if self._pending_preview is None else "pending",
                                   emergency_step=self._estep is not None, emergency_steps=self._estep_records,
-                                  walk_cut=self._walk_cut)
+                                  walk_cut=self._walk_cut, walk_height_lowering_m=round(self._walk_lowering_m, 4))
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes

@@ -8,7 +8,8 @@ import pytest
 from app.service.errors import Refused
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
-from app.service.verbs import GoVelocity, WalkStop
+from app.service.verbs import GoPos, GoVelocity, WalkStop
+from robot.names import JOINT_NAMES
 
 STICK_PERIOD_TICKS = 8  # the page streams a held stick every 40 ms
 
@@ -85,3 +86,48 @@ def test_seeds_1017_1018_the_waist_rolls_until_the_hip_has_range_left_and_a_walk
         robot.submit(GoVelocity(0.16, 0.096, math.radians(27.3))).result()
     obs = robot.run_for(3.0)
     assert not obs.fallen and not obs.layers["abc"].walking
+
+
+KNEES = (JOINT_NAMES.index("RLEG_JOINT3"), JOINT_NAMES.index("LLEG_JOINT3"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("rise_m, side", [(0.03, -1.0), (0.03, 1.0), (0.045, -1.0)])
+def test_seed_2013_a_walk_from_a_raised_waist_keeps_the_swing_knee_bent_and_the_waist_comes_back(rise_m, side):
+    # the waist raised 3 cm on a 0.24 m stance, then a sideways goPos: the COM shifting over the stance foot at the
+    # raised height stretched the swing knee straight (its limit), the swing foot could not follow, and with a
+    # walking emergency stop the robot fell. Walks now plan at the half-sitting height: BODY comes down while walking
+    robot = LocalRobot("default")
+    robot.run_for(2.0)
+    wide = Setpoint("walk", (0.0, -0.05 * side, 0.0), (0.0, 0.0, 0.0), max_stride_m=0.2, foot_distance_m=0.24)
+    zero = Setpoint("walk", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0))
+    for k in range(int(round(6.5 / 0.005))):
+        if k % STICK_PERIOD_TICKS == 0:
+            robot.put_setpoint(wide if k * 0.005 < 2.5 else zero)
+        robot.step()
+    z0 = robot.step().reference.base_pos_world[2]
+    up = Setpoint("waist", (0.0, 0.0, 0.05), (0.0, 0.0, 0.0))
+    k = 0
+    while (obs := robot.step()).reference.base_pos_world[2] < z0 + rise_m:
+        if k % STICK_PERIOD_TICKS == 0:
+            robot.put_setpoint(up)
+        k += 1
+        assert k < 2000, "the waist did not rise"
+    robot.put_setpoint(Setpoint("waist", (0.0, 0.0, 0.0), (0.0, 0.0, 0.0)))
+    robot.run_for(1.0)
+    stood = min(robot.step().q_cmd_rad[i] for i in KNEES)  # [rad] from straight (their limit, 0)
+    robot.submit(GoPos(-0.1, 0.37 * side, math.radians(-3.5))).result()
+    bent, lowered = math.inf, 0.0
+    for _ in range(int(round(16.0 / 0.005))):
+        obs = robot.step()
+        bent = min(bent, *(obs.q_cmd_rad[i] for i in KNEES))
+        lowered = max(lowered, obs.layers["abc"].walk_height_lowering_m)
+        assert not obs.fallen
+        if not obs.layers["abc"].walking and lowered:
+            break
+    # never straighter than the raised waist stood them (measured: 0.55 rad walking from 0.37 at 3 cm, 0.315 from
+    # 0.315 at 4.5 cm); before the fix the swing knee reached 0.0
+    assert bent >= stood - 0.005, f"a knee commanded {bent:.3f} rad from straight, {stood:.3f} standing"
+    assert lowered == pytest.approx(rise_m - 0.001, abs=0.004)  # down to the walking height (1 mm slack)
+    obs = robot.run_for(1.0)  # standing: back up to the operated height at 0.2 m/s
+    assert obs.layers["abc"].walk_height_lowering_m == 0.0 and not obs.fallen
