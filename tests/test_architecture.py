@@ -373,7 +373,6 @@ def test_no_module_imports_one_that_imports_it_back():
     assert import_circles(import_graph()) == []
 
 
-@pytest.mark.xfail(strict=True, reason="system, types and loop are moved off the layers in the commits that follow")
 def test_the_controller_core_imports_nothing_of_the_controller_above_it():
     """controller.core (the loop, the chain, the layer base, the data that flows) is what the layers, the
     estimators and the kinematics stand on; it imports nothing of them (robot, numpy and the stdlib are fine)."""
