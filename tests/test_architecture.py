@@ -367,7 +367,6 @@ def test_the_import_graph_sees_absolute_relative_and_hidden_imports():
     assert import_circles(graph) == [["a", "b", "c"], ["e", "f"]]
 
 
-@pytest.mark.xfail(strict=True, reason="the circles of issue 28 are broken in the commits that follow")
 def test_no_module_imports_one_that_imports_it_back():
     """No import circle anywhere (however long, wherever the import sits): each module rests on the ones below."""
     assert import_circles(import_graph()) == []
