@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from app.bench import SCENARIOS
+from app.bench_scenarios import SCENARIOS
 from app.service.local import LocalRobot
 
 WARMUP_S = 2.5  # [s] standing while the AutoBalancer and the Stabilizer blend in (not timed)

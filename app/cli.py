@@ -5,7 +5,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import math
 import signal
 import socket
 import sys
@@ -13,6 +12,7 @@ import threading
 import time
 from collections.abc import Sequence
 
+from app.cli_args import positive_float, positive_int, positive_seconds, speed_or_max
 from app.session.files import KEEP_BYTES, KEEP_COUNT, retention_rule
 from robot.plant import available_scenes
 
@@ -21,48 +21,7 @@ log = logging.getLogger("hrp2-console")
 CONSOLE_SWITCH_INTERVAL_S = 0.0005  # [s] Python's GIL switch interval in the console process
 
 
-# ---- argument types: each error names what would have been accepted ------------------------------
-def _speed(text: str) -> float | None:
-    if text.strip().lower() == "max":
-        return None
-    try:
-        value = float(text)
-    except ValueError:
-        value = float("nan")
-    if not (math.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(
-            f"invalid value {text!r}: expected a positive real-time factor (e.g. 1.0, 0.5, 4) or 'max'")
-    return value
-
-
-def _positive(expected: str):
-    """An argparse type: a finite number > 0, or an error saying `expected`."""
-    def parse(text: str) -> float:
-        try:
-            value = float(text)
-        except ValueError:
-            value = float("nan")
-        if not (math.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected {expected}")
-        return value
-
-    return parse
-
-
-_positive_seconds = _positive("a number of seconds > 0")
-_positive_float = _positive("a number > 0")
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"invalid value {text!r}: expected a whole number >= 1")
-    return value
-
-
+# ---- argument types (the ones the campaign shares are in app.cli_args) ------------------------------------
 def _port(text: str) -> int:
     try:
         value = int(text)
@@ -131,10 +90,10 @@ def run_parser() -> argparse.ArgumentParser:
         epilog="Subcommands: `hrp2-console bench --help` times the controller chain; `hrp2-console replay --help` "
                "replays a recorded session; `hrp2-console campaign --help` runs random-operator sessions.")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
-    p.add_argument("--speed", type=_speed, default=1.0,
+    p.add_argument("--speed", type=speed_or_max, default=1.0,
                    help="real-time factor (1.0 = real time) or 'max' (as fast as possible)")
     p.add_argument("--headless", action="store_true", help="no 3D viewer")
-    p.add_argument("--duration", type=_positive_seconds, default=None,
+    p.add_argument("--duration", type=positive_seconds, default=None,
                    help="run this many seconds of simulated time, print a summary and exit")
     p.add_argument("--host", default="127.0.0.1",
                    help="address of the HTTP API and the viewer (default 127.0.0.1, this machine only; any other "
@@ -160,18 +119,19 @@ def run_parser() -> argparse.ArgumentParser:
                    help=f"where POST /api/sessions/start records and GET /api/sessions lists (default {SESSIONS_DIR}); "
                         "it keeps " + retention_rule(KEEP_COUNT, KEEP_BYTES)
                         + " (--sessions-keep, --sessions-max-mb)")
-    p.add_argument("--sessions-keep", type=_positive_int, default=KEEP_COUNT, metavar="N",
+    p.add_argument("--sessions-keep", type=positive_int, default=KEEP_COUNT, metavar="N",
                    help=f"session files --sessions-dir keeps at most (default {KEEP_COUNT})")
-    p.add_argument("--sessions-max-mb", type=_positive_float, default=KEEP_BYTES / 1024**2, metavar="MB",
+    p.add_argument("--sessions-max-mb", type=positive_float, default=KEEP_BYTES / 1024**2, metavar="MB",
                    help=f"their size together at most [MB] (default {KEEP_BYTES / 1024**2:g})")
     p.add_argument("--log-level", default="warning", choices=("debug", "info", "warning", "error"))
     return p
 
 
 def bench_parser() -> argparse.ArgumentParser:
-    from app.bench import CHAINS, CONSOLE_SCENARIOS, SCENARIOS
+    from app.bench import CHAINS, CONSOLE_SCENARIOS
     from app.bench_cameras import CAMERA_SCENARIOS
     from app.bench_recording import RECORDING_SCENARIOS
+    from app.bench_scenarios import SCENARIOS
 
     p = argparse.ArgumentParser(prog="hrp2-console bench",
                                 description="Run the chain synchronously as fast as possible (no servers) "
@@ -180,7 +140,7 @@ def bench_parser() -> argparse.ArgumentParser:
     p.add_argument("--scenario", choices=(*SCENARIOS, *others), default="stand",
                    help="; ".join([f"{k}: {v.description}" for k, v in SCENARIOS.items()]
                                   + [f"{k}: {v}" for k, v in others.items()]))
-    p.add_argument("--duration", type=_positive_seconds, default=5.0, help="simulated seconds (default 5)")
+    p.add_argument("--duration", type=positive_seconds, default=5.0, help="simulated seconds (default 5)")
     p.add_argument("--scene", type=_scene, default="default", help=f"scene: {', '.join(available_scenes())}")
     which = p.add_mutually_exclusive_group()
     which.add_argument("--layers", type=_layers, default=None,
@@ -408,8 +368,9 @@ def replay(argv: Sequence[str]) -> int:
     p.add_argument("--view", action="store_true", help="play it in the browser (viser) instead of re-running it")
     p.add_argument("--host", default="127.0.0.1", help="--view: address of the viewer (default this machine only)")
     p.add_argument("--port", type=_port, default=8080, help="--view: viewer port (0: a free one)")
-    p.add_argument("--speed", type=_speed, default=1.0, help="--view: the playback speed it starts with (1.0 = real "
-                                                               "time); the replay itself always runs at max")
+    p.add_argument("--speed", type=speed_or_max, default=1.0,
+                   help="--view: the playback speed it starts with (1.0 = real time); the replay itself always runs "
+                        "at max")
     args = p.parse_args(argv)
     try:
         session = read_session(args.session)

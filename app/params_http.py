@@ -105,7 +105,7 @@ def es_document(params: dict) -> dict[str, Any]:
 def es_changes_schema() -> dict[str, Any]:
     """The JSON schema of some EmergencyStopper parameters in the presented names (the PUT's body, and an
     experiment's `params`), from the owning layers' declarations."""
-    from controller.core.system import layer_params_classes
+    from controller.system import layer_params_classes
 
     classes = layer_params_classes()
     schema = changes_json_schema({name: (classes[layer], field) for name, (layer, field) in ES_PARAMS.items()},

@@ -205,7 +205,7 @@ def layer_model(cls: type[Status]) -> type[BaseModel]:
 
 def _layer_status_classes() -> dict[str, type[Status]]:
     """Layer name -> its Status class, from the layers' own `status` annotations."""
-    from controller.core.system import layer_classes
+    from controller.system import layer_classes
 
     out = {}
     for name, cls in layer_classes().items():

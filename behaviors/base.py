@@ -21,10 +21,10 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from controller.balance.leg_odometry import OdometryEstimate
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.layer import Params
-from controller.operation.points import OperationView, Twist, WalkCommand
+from controller.core.types import OdometryEstimate, WalkCommand
+from controller.operation.points import OperationView, Twist
 
 OVERRUN_FACTOR = 1.5  # a behaviour (a run, a plan's step) fails when it has taken this many times its nominal duration
 

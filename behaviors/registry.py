@@ -5,36 +5,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from behaviors.approach_table import ApproachTable
-from behaviors.base import Behavior, params_from
-from behaviors.grasp import Grasp
-from behaviors.locate_can import LocateCan
-from behaviors.locate_trash_box import LocateTrashBox
-from behaviors.look_at import LookAt
-from behaviors.reach import Reach
-from behaviors.recognise import Recognise
-from behaviors.release import Release
+from behaviors.base import Behavior
 from behaviors.sequence import Sequence
-from behaviors.squat import Squat
-from behaviors.stand import Stand
-from behaviors.take_can import TakeCan
-from behaviors.throw_can import ThrowCan
-from behaviors.walk_to import WalkTo
-from controller.core.errors import UnknownName
+from behaviors.steps import STEPS, make_from
 
-BEHAVIORS: dict[str, type[Behavior]] = {cls.name: cls for cls in (
-    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Sequence, Recognise, LocateCan, LocateTrashBox,
-    ApproachTable, TakeCan, ThrowCan)}
-
-
-def behavior_class(name: str) -> type[Behavior]:
-    try:
-        return BEHAVIORS[name]
-    except KeyError:
-        raise UnknownName(f"unknown behaviour {name!r}; valid: {sorted(BEHAVIORS)}") from None
+#: every behaviour: the ones a sequence may hold, and the sequence
+BEHAVIORS: dict[str, type[Behavior]] = {**STEPS, Sequence.name: Sequence}
 
 
 def make(name: str, params: Mapping[str, Any] | None = None, prefix: str = "params.") -> Behavior:
     """The behaviour `name` with `params` checked against its Params class (InvalidCommand names the field)."""
-    cls = behavior_class(name)
-    return cls(params_from(cls.Params, dict(params or {}), prefix))
+    return make_from(BEHAVIORS, name, params, prefix)

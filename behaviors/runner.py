@@ -12,7 +12,8 @@ from typing import Any, Protocol
 
 from behaviors.base import OVERRUN_FACTOR, Behavior, Commands, Context, Output
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
-from controller.operation.points import OperationView, Twist, WalkCommand, check_twist, sum_per_point
+from controller.core.types import WalkCommand
+from controller.operation.points import OperationView, Twist, check_twist, sum_per_point
 
 log = logging.getLogger(__name__)
 

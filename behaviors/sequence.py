@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from behaviors.base import NOTHING, OVERRUN_FACTOR, Behavior, BehaviorParams, Context, Output
+from behaviors.steps import STEPS, make_from
 from controller.core.errors import InvalidCommand
 
 MAX_STEPS = 20
@@ -25,8 +26,6 @@ class SequenceParams(BehaviorParams):
         self.children()  # every step must build
 
     def children(self) -> list[Behavior]:
-        from behaviors.registry import make
-
         out = []
         for i, step in enumerate(self.steps):
             if not isinstance(step, Mapping) or "behavior" not in step:
@@ -40,7 +39,7 @@ class SequenceParams(BehaviorParams):
             params = step.get("params") or {}
             if not isinstance(params, Mapping):
                 raise InvalidCommand(f"steps.{i}.params: must be an object")
-            out.append(make(name, params, prefix=f"steps.{i}.params."))
+            out.append(make_from(STEPS, name, params, prefix=f"steps.{i}.params."))
         return out
 
 

@@ -171,9 +171,10 @@ def test_no_private_name_crosses_modules_of_the_controller():
 def test_the_controller_tree_shows_its_architecture():
     packages = sorted(p.name for p in (ROOT / "controller").iterdir() if p.is_dir() and (p / "__init__.py").exists())
     assert packages == ["balance", "core", "interpolation", "kinematics", "layers", "operation", "walking"]
-    assert not [p.name for p in (ROOT / "controller").glob("*.py") if p.name != "__init__.py"]
+    # beside the packages only the assembly of every layer (on top of them all, so not in core)
+    assert sorted(p.name for p in (ROOT / "controller").glob("*.py")) == ["__init__.py", "system.py"]
     from controller.core.chain import CHAIN_ORDER
-    from controller.core.system import layer_classes
+    from controller.system import layer_classes
 
     assert tuple(layer_classes()) == CHAIN_ORDER  # one layer per file of controller/layers, in chain order
     layer_files = {p.stem for p in (ROOT / "controller" / "layers").glob("*.py") if p.name != "__init__.py"}
@@ -268,3 +269,113 @@ def test_nothing_outside_the_service_looks_a_layer_up_in_the_chain():
                 continue
             offenders += [f"{rel}: {where}" for where in chain_lookups(path.read_text(), rel)]
     assert offenders == []
+
+
+# ---- no import circle, and a core that rests on nothing above it ----------------------------------------------
+PACKAGES = ("app", "behaviors", "controller", "robot")
+
+
+def module_name(path: Path) -> str:
+    """The dotted module a source file under ROOT is (a package's __init__.py is the package)."""
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def module_imports(source: str, module: str, is_package: bool, known: set[str]) -> set[str]:
+    """The modules of `known` that `module` imports, wherever the import sits (top level, under `if
+    TYPE_CHECKING:`, inside a function: each ties the two modules). `from a import b` counts as a.b when a.b is a
+    module, else as a; a relative import is resolved against `module`. Parent packages that Python runs on the way
+    are not counted (a package's __init__ would otherwise tie every module to its siblings)."""
+    found = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names if a.name in known}
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = module.split(".") if is_package else module.split(".")[:-1]
+                parts = parts[:len(parts) - (node.level - 1)]
+                base = ".".join(parts + ([node.module] if node.module else []))
+            for a in node.names:
+                if f"{base}.{a.name}" in known:
+                    found.add(f"{base}.{a.name}")
+                elif base in known:
+                    found.add(base)
+    found.discard(module)
+    return found
+
+
+def import_graph(packages=PACKAGES) -> dict[str, set[str]]:
+    """Module -> the modules of the project it imports."""
+    paths = {module_name(p): p for package in packages for p in sorted((ROOT / package).rglob("*.py"))}
+    known = set(paths)
+    return {m: module_imports(p.read_text(), m, p.name == "__init__.py", known) for m, p in paths.items()}
+
+
+def import_circles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of `graph` with more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    circles = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                circles.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    return sorted(circles)
+
+
+def test_the_import_graph_sees_absolute_relative_and_hidden_imports():
+    known = {"pkg", "pkg.a", "pkg.b", "pkg.sub", "pkg.sub.c", "other"}
+    source = ("import other\n"
+              "from pkg import b\n"
+              "from . import a\n"
+              "from .sub.c import thing\n"
+              "from typing import TYPE_CHECKING\n"
+              "if TYPE_CHECKING:\n"
+              "    from pkg.sub import Name\n"
+              "def f():\n"
+              "    import numpy\n"
+              "    from pkg.a import g\n")
+    assert module_imports(source, "pkg.b", False, known) == {"other", "pkg.a", "pkg.sub", "pkg.sub.c"}
+    assert module_imports("from .c import x\nfrom .. import a\n", "pkg.sub", True, known) == {"pkg.sub.c", "pkg.a"}
+    graph = {"a": {"b"}, "b": {"c"}, "c": {"a", "d"}, "d": set(), "e": {"f"}, "f": {"e"}, "g": {"g"}}
+    assert import_circles(graph) == [["a", "b", "c"], ["e", "f"]]
+
+
+def test_no_module_imports_one_that_imports_it_back():
+    """No import circle anywhere (however long, wherever the import sits): each module rests on the ones below."""
+    assert import_circles(import_graph()) == []
+
+
+def test_the_controller_core_imports_nothing_of_the_controller_above_it():
+    """controller.core (the loop, the chain, the layer base, the data that flows) is what the layers, the
+    estimators and the kinematics stand on; it imports nothing of them (robot, numpy and the stdlib are fine)."""
+    core = lambda m: m == "controller.core" or m.startswith("controller.core.")  # noqa: E731
+    offenders = {m: sorted(i for i in imports if not core(i)) for m, imports in import_graph(("controller",)).items()
+                 if core(m)}
+    assert {m: found for m, found in offenders.items() if found} == {}

@@ -56,7 +56,7 @@ def test_the_readme_tree_names_every_module_of_each_controller_package_but_the_l
 def test_the_readme_layer_table_is_in_chain_order_and_names_each_layers_file():
     rows = re.findall(r"^\| (\w+) \| `controller/layers/(\w+)\.py` \|", section("What runs"), flags=re.M)
     assert tuple(name for name, _ in rows) == CHAIN_ORDER
-    from controller.core.system import layer_classes
+    from controller.system import layer_classes
 
     assert {name: cls.__module__.rsplit(".", 1)[-1] for name, cls in layer_classes().items()} == dict(rows)
 

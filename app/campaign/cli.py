@@ -20,6 +20,7 @@ from app.campaign.memory import growth_violations, tree_rss_mb
 from app.campaign.report import render
 from app.campaign.session import Session, SessionResult
 from app.campaign.shrink import ddmin
+from app.cli_args import positive_int, positive_seconds, speed_or_max
 
 log = logging.getLogger("hrp2-console.campaign")
 
@@ -28,16 +29,14 @@ SHRINK_TESTS = 32  # sessions a shrink may run at most
 
 
 def parser() -> argparse.ArgumentParser:
-    from app.cli import _positive_int, _positive_seconds, _speed
-
     p = argparse.ArgumentParser(prog="hrp2-console campaign",
                                 description="Seeded random-operator sessions through the public API, with the "
                                             "invariants of issue 27 checked on every answer and state.")
-    p.add_argument("--sessions", type=_positive_int, default=20, help="how many sessions (default 20)")
-    p.add_argument("--seconds", type=_positive_seconds, default=60.0, help="simulated seconds per session")
+    p.add_argument("--sessions", type=positive_int, default=20, help="how many sessions (default 20)")
+    p.add_argument("--seconds", type=positive_seconds, default=60.0, help="simulated seconds per session")
     p.add_argument("--seed", type=int, default=0, help="the first session's seed; session i has seed + i")
-    p.add_argument("--workers", type=_positive_int, default=1, help="consoles run side by side (default 1)")
-    p.add_argument("--speed", type=_speed, default=None, help="the consoles' speed (default max)")
+    p.add_argument("--workers", type=positive_int, default=1, help="consoles run side by side (default 1)")
+    p.add_argument("--speed", type=speed_or_max, default=None, help="the consoles' speed (default max)")
     p.add_argument("--shrink", action="store_true", help="reduce a failing session's actions (delta debugging)")
     p.add_argument("--no-record", action="store_true",
                    help="do not record the sessions (by default a stretch with a violation is kept as MCAP)")

@@ -19,7 +19,7 @@ LAYERS: dict[str, tuple[str, str]] = {
 }
 
 def _add_routes(router: APIRouter, segment: str, layer: str, label: str) -> None:
-    from controller.core.system import layer_params_classes
+    from controller.system import layer_params_classes
 
     base = f"/{segment}"
     body = params_changes_body(layer_params_classes()[layer])

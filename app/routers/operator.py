@@ -100,7 +100,7 @@ def put_velocity(req: OperatorVelocityRequest, service: ServiceDep, lock: LockDe
 
 
 def _operation_params_class():
-    from controller.core.system import layer_params_classes
+    from controller.system import layer_params_classes
 
     return layer_params_classes().get("op")
 

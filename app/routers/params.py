@@ -29,8 +29,8 @@ def get_all_params(service: ServiceDep) -> dict[str, dict[str, Any]]:
 
 def _all_owners() -> dict[str, type[Params]]:
     """Every parameter owner of the chain this console builds, and its Params class."""
-    from controller.core.system import layer_params_classes
     from controller.layers.impedance_controller import LIMBS, ImpedanceParams
+    from controller.system import layer_params_classes
 
     return {**layer_params_classes(), **{f"ic:{limb}": ImpedanceParams for limb in LIMBS}}
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Mapping
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
@@ -14,6 +14,7 @@ from app.service.errors import InvalidArgument, Refused
 from app.service.verbs import (
     GetFootsteps,
     GoPos,
+    Host,
     ResetOperationTargets,
     SequenceStatus,
     SetSomeJointAngles,
@@ -23,16 +24,13 @@ from app.service.verbs import (
 from behaviors.base import Capture, JointReading
 from robot.names import FORCE_SENSOR_NAMES, joint_index
 
-if TYPE_CHECKING:
-    from app.service.host import RobotHost
-
 
 class HostCommands:
-    """behaviors.base.Commands over a RobotHost (called inside the loop, at a tick boundary). A command the
-    behaviour computed that a verb finds invalid (a goal beyond goPos's 5 m) is refused (409, reason
+    """behaviors.base.Commands over the robot host (a verbs.Host; called inside the loop, at a tick boundary). A
+    command the behaviour computed that a verb finds invalid (a goal beyond goPos's 5 m) is refused (409, reason
     "state"): the request that started the behaviour was valid."""
 
-    def __init__(self, host: RobotHost) -> None:
+    def __init__(self, host: Host) -> None:
         self.host = host
 
     def _apply(self, verb: Verb) -> Any:

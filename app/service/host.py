@@ -30,7 +30,7 @@ from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Un
 from controller.core.layer import Params
 from controller.core.loop import Snapshot
 from controller.core.loop_timing import LoopTiming
-from controller.core.system import ControllerSystem
+from controller.system import ControllerSystem
 from robot.camera import CAMERA_NICE
 from robot.names import JOINT_NAMES
 from robot.plant import MujocoPlant, available_scenes

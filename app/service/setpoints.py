@@ -15,14 +15,8 @@ from dataclasses import dataclass
 from app.service.board import Board
 from app.service.errors import InvalidArgument, PointTaken
 from controller.core.errors import InvalidCommand
-from controller.operation.points import (
-    POINTS,
-    WALK_FOOT_DISTANCE_RANGE_M,
-    WALK_MAX_STRIDE_RANGE_M,
-    Twist,
-    WalkCommand,
-    check_twist,
-)
+from controller.core.types import WalkCommand
+from controller.operation.points import POINTS, WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M, Twist, check_twist
 
 MAX_LINEAR_M_S = 0.5  # [m/s] |component| of a streamed linear velocity (the op layer limits further)
 MAX_ANGULAR_RAD_S = math.radians(90.0)  # [rad/s] |component| of a streamed angular velocity

@@ -4,7 +4,7 @@
 A verb holds plain, picklable values in SI units (m, s, rad, N). `check(info)` validates what depends on
 the robot (joint limits, body names, scenes); construction validates the rest. `run` may raise the
 controller's InvalidState/InvalidCommand; the host turns those into the service's errors. Only this module
-and the host index the chain by layer name.
+and the host index the chain by layer name. A verb sees the host as the `Host` protocol.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, ClassVar
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
@@ -23,7 +23,13 @@ from controller.core.layer import Params
 from controller.walking.footsteps import StepParams
 
 if TYPE_CHECKING:
-    from app.service.host import RobotHost
+    from concurrent.futures import Future
+
+    from app.service.stops import WalkingStopWatch
+    from behaviors.runner import BehaviorRunner
+    from controller.core.loop import ControlLoop
+    from controller.system import ControllerSystem
+    from robot.plant import MujocoPlant
 
 MAX_MOTION_TIME_S = 3600.0  # [s] longest interpolation a verb asks for
 MIN_MOTION_TIME_S = 0.005  # [s] one control period: the shortest interpolation that is not a jump
@@ -39,6 +45,41 @@ MAX_TARGET_POS_M = 5.0  # [m] |pos| components of a setTargetPose target
 MAX_OBJECT_XY_M = 10.0  # [m] |x|, |y| where a scene object may be placed
 MAX_OBJECT_Z_M = 3.0  # [m] highest body origin of a placed object (z >= 0)
 TARGET_LIMBS = ("rarm", "larm", "rleg", "lleg")
+
+
+# ---- what a verb reaches of the robot process ------------------------------------------------------
+class Host(Protocol):
+    """The robot process as a verb's `run` and a behaviour's commands (app.service.commands) see it: the
+    app.service.host.RobotHost that applies them at a tick boundary."""
+
+    scene: str
+    plant: MujocoPlant
+    system: ControllerSystem
+    runner: BehaviorRunner
+    walking_stop_watch: WalkingStopWatch
+    stats: Any  # RunStats: summary() of the run so far
+    recognitions: dict[str, dict]  # object -> its latest recognition (behaviours remember them)
+    captures: int  # captures made since the last reset
+
+    @property
+    def loop(self) -> ControlLoop: ...
+    def apply(self, verb: Verb) -> Any: ...
+    def apply_setpoints(self, table: Mapping[str, Any], time_s: float | None = None) -> list: ...
+    def layer(self, name: str) -> Any: ...
+    def info(self) -> RobotInfo: ...
+    def cached_info(self) -> RobotInfo: ...
+    def release_estop(self, setpoints_before: int = 0) -> None: ...
+    def param_owners(self) -> list[str]: ...
+    def params(self, owner: str) -> Params: ...
+    def set_params(self, owner: str, params: Params) -> None: ...
+    def reset(self, scene: str | None = None) -> None: ...
+    def inject_fault(self, kind: str, layer: str = "st") -> str: ...
+    def stop_loop(self) -> None: ...
+    def start_recording(self, path, reset: bool = False) -> dict: ...
+    def stop_recording(self) -> dict: ...
+    def confirm_recognition(self, object_name: str, position_m=None) -> dict: ...
+    def cameras(self) -> Any: ...
+    def capture_ready(self, number: int, result: Future) -> bool: ...
 
 
 # ---- what the console knows of the robot ------------------------------------------------------------
@@ -100,7 +141,7 @@ class Verb:
     def check(self, info: RobotInfo) -> None:  # noqa: B027 - optional hook
         """Checks that need the robot's model (joint limits, names); raises InvalidArgument."""
 
-    def run(self, host: RobotHost) -> Any:
+    def run(self, host: Host) -> Any:
         raise NotImplementedError
 
 
@@ -110,7 +151,7 @@ class ReleaseEstop(Verb):
     name = "release_estop"
     setpoints_before: int = 0  # the console's newest setpoint number when the release was sent
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.release_estop(self.setpoints_before)
         return "hard e-stop released"
 
@@ -119,7 +160,7 @@ class ReleaseEstop(Verb):
 class StopMotion(Verb):
     name = "stop_motion"
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("es").stop_motion()
         return "planned motion stopped"
 
@@ -128,7 +169,7 @@ class StopMotion(Verb):
 class ReleaseMotion(Verb):
     name = "release_motion"
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("es").release_motion()
         return "motion stop released"
 
@@ -150,7 +191,7 @@ class GoPos(Verb):
         _bounded("y", self.y_m, -MAX_GO_POS_M, MAX_GO_POS_M, "m")
         _bounded("theta_deg", self.theta_rad, -MAX_GO_POS_RAD, MAX_GO_POS_RAD, "deg", _deg)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         abc = host.layer("abc")
         was_walking = abc.gait.walking
         n = abc.go_pos(self.x_m, self.y_m, self.theta_rad)
@@ -176,7 +217,7 @@ class GoVelocity(Verb):
         _bounded("vy", self.vy_m_s, -MAX_VELOCITY_M_S, MAX_VELOCITY_M_S, "m/s")
         _bounded("vtheta_deg", self.vtheta_rad_s, -MAX_VELOCITY_RAD_S, MAX_VELOCITY_RAD_S, "deg/s", _deg)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("abc").go_velocity(self.vx_m_s, self.vy_m_s, self.vtheta_rad_s)
         return (f"walking at ({self.vx_m_s:g} m/s, {self.vy_m_s:g} m/s, "
                 f"{math.degrees(self.vtheta_rad_s):g} deg/s)")
@@ -188,7 +229,7 @@ class WalkStop(Verb):
 
     name = "walk_stop"
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("abc").go_stop()
         return "stopping"
 
@@ -197,7 +238,7 @@ class WalkStop(Verb):
 class WalkEmergencyStop(Verb):
     name = "walk_emergency_stop"
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.walking_stop_watch.asked = True  # what raised the stop, for the refusals it causes
         host.layer("abc").emergency_stop_walking()
         return "walking emergency stop"
@@ -250,7 +291,7 @@ class SetFootsteps(Verb):
             for k, v in enumerate(f.rpy_rad):
                 _bounded(f"footsteps.{i}.rpy_deg.{k}", v, -MAX_GO_POS_RAD, MAX_GO_POS_RAD, "deg", _deg)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         steps = [(f.leg, list(f.pos_m), list(f.rpy_rad)) for f in self.footsteps]
         per_step = None if self.step is None else [None] + [self.step] * (len(steps) - 1)
         n = host.layer("abc").set_footsteps(steps, per_step)
@@ -262,7 +303,7 @@ class GetFootsteps(Verb):
     name = "get_footsteps"
     recorded = False
 
-    def run(self, host: RobotHost) -> tuple[bool, tuple]:
+    def run(self, host: Host) -> tuple[bool, tuple]:
         abc = host.layer("abc")
         return bool(abc.gait.walking), abc.remaining_footsteps()
 
@@ -298,7 +339,7 @@ class SetJointAngles(Verb):
         for i, v in enumerate(self.q_rad):
             _check_joint(info, f"angles_deg.{i}", i, v)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("seq").set_joint_angles(np.array(self.q_rad), self.time_s)
         return f"interpolating over {self.time_s:g} s"
 
@@ -328,7 +369,7 @@ class SetSomeJointAngles(Verb):
         for name, v in self.angles_rad:
             _check_joint(info, f"angles_deg.{name}", info.joint_names.index(name), v)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         seq = host.layer("seq")
         for name, v in self.angles_rad:  # one command at one tick boundary
             seq.set_joint_angle(name, float(v), self.time_s)
@@ -357,7 +398,7 @@ class SetTargetPose(Verb):
             _bounded(f"rpy_deg.{k}", v, -math.pi * 2, math.pi * 2, "deg", _deg)
         _motion_time("time", self.time_s)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         spec = self.limb if not self.frame else f"{self.limb}:{self.frame}"
         host.layer("seq").set_target_pose(spec, np.array(self.pos_m), np.array(self.rpy_rad), self.time_s)
         return f"{spec} moving over {self.time_s:g} s"
@@ -382,7 +423,7 @@ class SetGroupSequence(Verb):
         for t in self.times_s:
             _motion_time("times", t)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("seq").set_joint_angles_sequence_of_group(self.group, np.array(self.goals_rad),
                                                              list(self.times_s))
         return f"{self.group}: {len(self.goals_rad)} goals over {sum(self.times_s):g} s"
@@ -406,7 +447,7 @@ class SetJointAnglesSequence(Verb):
         for t in self.times_s:
             _motion_time("times", t)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("seq").set_joint_angles_sequence(np.array(self.q_seq_rad), list(self.times_s))
         return f"{len(self.q_seq_rad)} postures over {sum(self.times_s):g} s"
 
@@ -415,7 +456,7 @@ class SetJointAnglesSequence(Verb):
 class ClearSequence(Verb):
     name = "clear_sequence"
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("seq").clear()
         return "sequence cleared"
 
@@ -425,7 +466,7 @@ class SequenceStatus(Verb):
     name = "sequence_status"
     recorded = False
 
-    def run(self, host: RobotHost) -> bool:
+    def run(self, host: Host) -> bool:
         return bool(host.layer("seq").is_interpolating())
 
 
@@ -444,7 +485,7 @@ class StartLayer(Verb):
         if self.layer not in STARTABLE:
             raise NotFound(f"no startable layer {self.layer!r}; startable: {', '.join(STARTABLE)}")
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer(self.layer).start()
         return f"{STARTABLE[self.layer]} started"
 
@@ -458,7 +499,7 @@ class StopLayer(Verb):
         if self.layer not in STARTABLE:
             raise NotFound(f"no startable layer {self.layer!r}; startable: {', '.join(STARTABLE)}")
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer(self.layer).stop()
         return f"{STARTABLE[self.layer]} stopped"
 
@@ -472,7 +513,7 @@ class StartImpedance(Verb):
     def check(self, info: RobotInfo) -> None:
         _check_limb(info, self.limb)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("ic").start(self.limb)
         return f"impedance control of {self.limb} started"
 
@@ -485,7 +526,7 @@ class StopImpedance(Verb):
     def check(self, info: RobotInfo) -> None:
         _check_limb(info, self.limb)
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("ic").stop(self.limb)
         return f"impedance control of {self.limb} stopped"
 
@@ -572,7 +613,7 @@ class SetParams(Verb):
             out.append((owner, tuple(typed_changes(info.params[owner], fields, prefix).items())))
         return SetParams(tuple(out))
 
-    def run(self, host: RobotHost) -> dict[str, Params]:
+    def run(self, host: Host) -> dict[str, Params]:
         new = {owner: host.params(owner).replaced(**dict(fields)) for owner, fields in self.changes}
         for owner, params in new.items():
             host.set_params(owner, params)
@@ -585,7 +626,7 @@ class GetParams(Verb):
     recorded = False
     owners: tuple[str, ...] = ()  # empty: all
 
-    def run(self, host: RobotHost) -> dict[str, Params]:
+    def run(self, host: Host) -> dict[str, Params]:
         return {o: host.params(o) for o in (self.owners or host.param_owners())}
 
 
@@ -602,7 +643,7 @@ class EnableLayers(Verb):
         if unknown:
             raise NotFound(f"no layer(s) {unknown}; the chain has {list(info.chain)}")
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         for name, on in self.enabled:
             host.layer(name).enabled = bool(on)
         return ", ".join(f"{n} {'on' if on else 'off'}" for n, on in self.enabled)
@@ -629,7 +670,7 @@ class Push(Verb):
         if self.body not in info.bodies:
             raise NotFound(f"body: unknown body {self.body!r}; valid bodies: {', '.join(info.bodies)}")
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.plant.push(self.body, np.array(self.force_n), self.duration_s)
         return f"pushing {self.body} for {self.duration_s:g} s"
 
@@ -659,7 +700,7 @@ class PlaceObject(Verb):
             valid = ", ".join(info.objects) or f"none in scene {info.scene!r}"
             raise NotFound(f"object: unknown object {self.object_name!r}; valid objects: {valid}")
 
-    def run(self, host: RobotHost) -> tuple[float, float, float]:
+    def run(self, host: Host) -> tuple[float, float, float]:
         placed = host.plant.place_object(self.object_name, self.position_m, self.yaw_rad)
         return tuple(float(v) for v in placed)
 
@@ -675,7 +716,7 @@ class Reset(Verb):
         if self.scene is not None and self.scene not in info.scenes:
             raise InvalidArgument("scene", f"unknown scene {self.scene!r}; available scenes: {', '.join(info.scenes)}")
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.reset(self.scene)
         return f"simulation reset (scene {host.scene!r})"
 
@@ -690,7 +731,7 @@ class InjectFault(Verb):
     layer: str = "st"
     name = "inject_fault"
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         return host.inject_fault(self.kind, self.layer)
 
 
@@ -699,7 +740,7 @@ class GetInfo(Verb):
     name = "get_info"
     recorded = False
 
-    def run(self, host: RobotHost) -> RobotInfo:
+    def run(self, host: Host) -> RobotInfo:
         return host.info()
 
 
@@ -710,7 +751,7 @@ class ChainTiming(Verb):
     name = "chain_timing"
     recorded = False
 
-    def run(self, host: RobotHost) -> dict:
+    def run(self, host: Host) -> dict:
         loop = host.loop
         c = loop.chain
         return {"order": c.order(), "chain": c.describe(), "timing": c.timing(),
@@ -728,7 +769,7 @@ class GetLoopTiming(Verb):
     def __post_init__(self) -> None:
         _bounded("last_s", self.last_s, 0.005, 3600.0, "s")
 
-    def run(self, host: RobotHost):
+    def run(self, host: Host):
         loop = host.loop
         ticks = max(1, int(round(self.last_s / loop.dt_control_s)))
         return loop.lateness.summary(last_ticks=ticks, last_windows=int(self.last_s))
@@ -749,7 +790,7 @@ class StartRecording(Verb):
         if not isinstance(self.path, str) or not self.path.endswith(".mcap"):
             raise InvalidArgument("path", f"must be a path ending in .mcap (got {self.path!r})")
 
-    def run(self, host: RobotHost) -> dict:
+    def run(self, host: Host) -> dict:
         return host.start_recording(self.path, reset=self.reset)
 
 
@@ -760,7 +801,7 @@ class StopRecording(Verb):
     name = "stop_recording"
     recorded = False
 
-    def run(self, host: RobotHost) -> dict:
+    def run(self, host: Host) -> dict:
         return host.stop_recording()
 
 
@@ -771,7 +812,7 @@ class Shutdown(Verb):
     name = "shutdown"
     recorded = False
 
-    def run(self, host: RobotHost) -> dict:
+    def run(self, host: Host) -> dict:
         host.stop_loop()
         return host.stats.summary()
 
@@ -784,7 +825,7 @@ class Call(Verb):
     name = "call"
     fn: Any = field(compare=False)
 
-    def run(self, host: RobotHost) -> Any:
+    def run(self, host: Host) -> Any:
         return self.fn(host)
 
 
@@ -798,7 +839,7 @@ class SetOperatorVelocity(Verb):
     motion = True
     setpoint: Any  # app.service.setpoints.Setpoint, checked where it was made
 
-    def run(self, host: RobotHost):
+    def run(self, host: Host):
         return host.apply_setpoints({self.setpoint.point: self.setpoint})[0]
 
 
@@ -809,7 +850,7 @@ class ResetOperationTargets(Verb):
     name = "reset_operation_targets"
     motion = True
 
-    def run(self, host: RobotHost) -> str:
+    def run(self, host: Host) -> str:
         host.layer("op").reset_targets()
         return "operation targets back on the reference"
 
@@ -842,7 +883,7 @@ class RunBehavior(Verb):
         except InvalidCommand as exc:
             raise _behavior_argument(exc) from None
 
-    def run(self, host: RobotHost) -> int:
+    def run(self, host: Host) -> int:
         return host.runner.run(self.build(), host.loop.plant.time_s)
 
 
@@ -851,7 +892,7 @@ class CancelRun(Verb):
     name = "cancel_run"
     run_id: int
 
-    def run(self, host: RobotHost):
+    def run(self, host: Host):
         return host.runner.cancel(self.run_id)
 
 
@@ -861,7 +902,7 @@ class GetRun(Verb):
     recorded = False
     run_id: int
 
-    def run(self, host: RobotHost):
+    def run(self, host: Host):
         return host.runner.get(self.run_id)
 
 
@@ -870,7 +911,7 @@ class ListRuns(Verb):
     name = "list_runs"
     recorded = False
 
-    def run(self, host: RobotHost):
+    def run(self, host: Host):
         return host.runner.runs()
 
 
@@ -881,7 +922,7 @@ class ListBehaviors(Verb):
     name = "list_behaviors"
     recorded = False
 
-    def run(self, host: RobotHost) -> list[dict]:
+    def run(self, host: Host) -> list[dict]:
         return list_behaviors()
 
 
@@ -911,5 +952,5 @@ class ConfirmRecognition(Verb):
             for axis, v in zip("xyz", self.position_m, strict=True):
                 _bounded(f"position_m.{axis}", v, -MAX_POSITION_M, MAX_POSITION_M, "m")
 
-    def run(self, host: RobotHost) -> dict:
+    def run(self, host: Host) -> dict:
         return host.confirm_recognition(self.object_name, self.position_m)

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from controller.balance.leg_odometry import OdometryEstimate
+from controller.core.types import OdometryEstimate
 from controller.kinematics.model import RobotKinematics
 from robot.generate import CAMERAS
 

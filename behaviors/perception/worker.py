@@ -17,7 +17,7 @@ import numpy as np
 from behaviors.base import Commands
 from behaviors.perception.head_pose import T_world_camera_estimate
 from behaviors.perception.locate import Recognition, locate_can, locate_trash_box
-from controller.balance.leg_odometry import OdometryEstimate
+from controller.core.types import OdometryEstimate
 from controller.kinematics.model import RobotKinematics
 
 #: Simulated time from a capture to its result [s]: the rendering and the fit take 0.1-0.2 s of wall time on

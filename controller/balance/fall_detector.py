@@ -7,6 +7,7 @@ import math
 from dataclasses import dataclass, field
 
 from controller.core.layer import Params
+from controller.core.types import Estimate
 from robot.names import FORCE_SENSOR_NAMES
 
 _FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
@@ -23,9 +24,9 @@ class FallDetectorParams(Params):
 
 
 class FallDetector:
-    """`update(rpy_rad, foot_fz_n, dt_s)` each tick; `reason` is None until a fall is detected, then the
-    first reason ("tilt ..." or "feet unloaded ..."), latched for the life of the detector (the loop builds
-    a new one when it resets)."""
+    """`update(roll_rad, pitch_rad, foot_fz_n, dt_s)` each tick (the loop calls `check(est, dt_s)`); `reason` is
+    None until a fall is detected, then the first reason ("tilt ..." or "feet unloaded ..."), latched for the life
+    of the detector (the loop builds a new one when it resets)."""
 
     def __init__(self, weight_n: float, params: FallDetectorParams | None = None) -> None:
         self.params = params or FallDetectorParams()
@@ -36,6 +37,11 @@ class FallDetector:
     @property
     def fallen(self) -> bool:
         return self.reason is not None
+
+    def check(self, est: Estimate, dt_s: float) -> str | None:
+        """`update` from the loop's estimate of this tick: the attitude and the feet's F/T sensors."""
+        roll, pitch, _ = est.base_rpy_rad.tolist()
+        return self.update(roll, pitch, foot_load_n(est.wrenches_ext), dt_s)
 
     def update(self, roll_rad: float, pitch_rad: float, foot_fz_n: float, dt_s: float) -> str | None:
         """Feed one tick of estimated attitude and the summed vertical force on the feet [N]; returns the

@@ -17,8 +17,8 @@ simulator state is read; only a foot that slips while it carries the robot is mi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 
+from controller.core.types import OdometryEstimate
 from controller.kinematics.rotations import wrap_rad
 
 #: [-] the other foot becomes the stance foot once it carries this share of the feet's vertical load ...
@@ -29,21 +29,6 @@ FLAT_SOLE_TILT_RAD = math.radians(2.0)
 LIFT_LOAD_SHARE = 0.1
 #: [N] below this total the feet are not on the ground (a fall, a lift): the stance foot stays
 MIN_TOTAL_LOAD_N = 40.0
-
-
-@dataclass(frozen=True, slots=True)
-class OdometryEstimate:
-    """One tick of leg odometry, world frame (immutable, plain floats: it travels in snapshots and captures)."""
-
-    stance: int  # the foot carrying the robot: 0 the right sole, 1 the left (the force sensors' order)
-    p_stance_world_m: tuple[float, float, float]  # its sole sensor's origin in the world [m]
-    stance_yaw_rad: float  # its yaw in the world [rad]
-    p_body_world_m: tuple[float, float, float]  # BODY hung from the stance sole by the encoders [m]
-    #: the controller's frame (the gait plan's) placed in the world: (x [m], y [m], z [m], yaw [rad]); a point p
-    #: of the plan is at Rz(yaw) p + (x, y, z) in the world (control_to_world). The yaw is also BODY's heading
-    #: in the world less the KalmanFilter's
-    world_from_control: tuple[float, float, float, float]
-    switches: int  # stance changes since the start (a step is one)
 
 
 def yaw_of(R) -> float:

@@ -15,13 +15,11 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from controller.balance.fall_detector import FallDetector, foot_load_n
-from controller.balance.leg_odometry import OdometryEstimate
 from controller.core.chain import Chain, TickTimer
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Status
 from controller.core.loop_timing import LatenessMeter, LoopTiming
-from controller.core.types import Estimate, Ports, Reference, TickContext, frozen_array
+from controller.core.types import Estimate, OdometryEstimate, Ports, Reference, TickContext, frozen_array
 from robot.sensors import Sensors
 
 log = logging.getLogger(__name__)
@@ -38,6 +36,15 @@ class Plant(Protocol):
     def read(self) -> Sensors: ...
     def write(self, q_ref_rad: np.ndarray) -> None: ...
     def step(self, n: int = 1) -> None: ...
+
+
+class FallCheck(Protocol):
+    """The loop's fall detector (controller.balance.fall_detector.FallDetector, which the system injects): fed the
+    estimate of every tick; `reason` None until it finds a fall, then why, latched."""
+
+    reason: str | None
+
+    def check(self, est: Estimate, dt_s: float) -> str | None: ...
 
 
 @dataclass(frozen=True, slots=True)
@@ -96,7 +103,7 @@ class ControlLoop:
                  dt_control_s: float = 0.005,
                  state_estimator: StateEstimatorFn | None = None,
                  on_snapshot: Callable[[Snapshot], None] | None = None,
-                 fall_detector_factory: Callable[[], FallDetector] | None = None,
+                 fall_detector_factory: Callable[[], FallCheck] | None = None,
                  before_tick: Callable[[float], None] | None = None) -> None:
         if dt_control_s <= 0:
             raise InvalidCommand(f"dt_control_s must be > 0, got {dt_control_s}")
@@ -208,8 +215,7 @@ class ControlLoop:
         self._ports = ctx.ports
         fall = self.fall
         if fall is not None and fall.reason is None:
-            roll, pitch, _ = est.base_rpy_rad.tolist()
-            if fall.update(roll, pitch, foot_load_n(est.wrenches_ext), self.dt_control_s) is not None:
+            if fall.check(est, self.dt_control_s) is not None:
                 log.error("fall detected at t=%.3f s: %s", sensors.time_s, fall.reason)
                 self.safe_stop("fallen", q_cmd)
         self.plant.write(q_cmd)

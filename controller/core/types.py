@@ -3,19 +3,46 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, fields, replace
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from controller.operation.points import WalkCommand
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
-if TYPE_CHECKING:
-    from controller.balance.leg_odometry import OdometryEstimate
+__all__ = ["BalanceEstimate", "Estimate", "GaitState", "OdometryEstimate", "Ports", "Reference", "StepInProgress",
+           "TickContext", "WalkCommand", "frozen_array", "read_only"]
 
-__all__ = ["BalanceEstimate", "Estimate", "GaitState", "Ports", "Reference", "StepInProgress", "TickContext",
-           "frozen_array", "read_only"]
+
+@dataclass(frozen=True, slots=True)
+class WalkCommand:
+    """The walking point this tick, as the AutoBalancer takes it (Ports.walk_command, op -> abc: hrpsys goVelocity
+    plus the step parameters [OP] V-A lets the operator set while walking); velocities in the feet frame F."""
+
+    vx_m_s: float
+    vy_m_s: float
+    vtheta_rad_s: float
+    max_stride_m: float | None = None  # step length limit (None: the gait generator's own)
+    foot_distance_m: float | None = None  # lateral distance between the feet's centres (None: its own)
+
+    @property
+    def is_zero(self) -> bool:
+        return self.vx_m_s == 0.0 and self.vy_m_s == 0.0 and self.vtheta_rad_s == 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class OdometryEstimate:
+    """One tick of leg odometry (controller.balance.leg_odometry), world frame (Estimate.odometry; immutable, plain
+    floats: it travels in snapshots and captures)."""
+
+    stance: int  # the foot carrying the robot: 0 the right sole, 1 the left (the force sensors' order)
+    p_stance_world_m: tuple[float, float, float]  # its sole sensor's origin in the world [m]
+    stance_yaw_rad: float  # its yaw in the world [rad]
+    p_body_world_m: tuple[float, float, float]  # BODY hung from the stance sole by the encoders [m]
+    #: the controller's frame (the gait plan's) placed in the world: (x [m], y [m], z [m], yaw [rad]); a point p
+    #: of the plan is at Rz(yaw) p + (x, y, z) in the world (control_to_world). The yaw is also BODY's heading
+    #: in the world less the KalmanFilter's
+    world_from_control: tuple[float, float, float, float]
+    switches: int  # stance changes since the start (a step is one)
 
 
 @dataclass(frozen=True, slots=True)

@@ -4,7 +4,8 @@ the ImpedanceController's hand, the experiments' grasp planners).
 A target is either a full pose of the end frame (`PoseTarget`) or a point of the end frame at a position
 with one of the frame's axes kept perpendicular to a world direction (`PointAxisTarget`: a knob held across
 its axis, the turn about the closing direction left free). The maths of one step is
-`damped_least_squares_step_rad`; `solve_limb_ik` iterates it on a `RobotKinematics`.
+`damped_least_squares_step_rad`; `solve_limb_ik` iterates it on a `LimbKinematics` (the model's RobotKinematics,
+whose `limb_ik` is setTargetPose on it).
 """
 
 from __future__ import annotations
@@ -12,15 +13,23 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import numpy as np
 import pinocchio as pin
 
 from controller.core.layer import Params
 
-if TYPE_CHECKING:
-    from controller.kinematics.model import RobotKinematics
+
+class LimbKinematics(Protocol):
+    """What the solver needs of a kinematic model (controller.kinematics.model.RobotKinematics)."""
+
+    idx_v: np.ndarray  # (30,) the joints' columns in a Jacobian
+    q_lower: np.ndarray  # (30,) joint limits [rad]
+    q_upper: np.ndarray  # (30,) [rad]
+
+    def frame_jacobian(self, frame_id: int, base_pos_world, base_R_world, q_rad,
+                       reference=pin.LOCAL) -> tuple[pin.SE3, np.ndarray]: ...
 
 
 @dataclass(frozen=True)
@@ -134,7 +143,7 @@ def damped_least_squares_step_rad(jacobian: np.ndarray, error: np.ndarray, dampi
     return dq
 
 
-def solve_limb_ik(kin: RobotKinematics, joints, frame_id: int, target: PoseTarget | PointAxisTarget,
+def solve_limb_ik(kin: LimbKinematics, joints, frame_id: int, target: PoseTarget | PointAxisTarget,
                   q_seed_rad, base_pos_world, base_R_world, params: LimbIkParams = LimbIkParams(),
                   posture_rad: np.ndarray | None = None) -> LimbIkSolution:
     """Move the `joints` (indices into JOINT_NAMES) from the seed (30,) [rad] until the end frame `frame_id`

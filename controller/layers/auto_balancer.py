@@ -26,13 +26,14 @@ from controller.core.types import (
     Reference,
     StepInProgress,
     TickContext,
+    WalkCommand,
     read_only,
 )
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, nearest_leg_limit
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
-from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M, WalkCommand
+from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
 from controller.walking.emergency_step import EmergencyStepParams, EmergencyStepPlan, SupportRegion, swing_leg_for
 from controller.walking.footsteps import Footstep, FootstepParams, StepParams, StrideLimits
 from controller.walking.gait_generator import GaitGenerator, GaitParams, GaitPatch

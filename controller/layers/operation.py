@@ -13,7 +13,7 @@ import numpy as np
 
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Layer, Params, SharedStatus, Status, described, plain
-from controller.core.types import Reference, TickContext, frozen_array, read_only
+from controller.core.types import Reference, TickContext, WalkCommand, frozen_array, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, legs_within_limits
 from controller.kinematics.model import RobotKinematics
@@ -42,16 +42,7 @@ from controller.operation.limits import (
     ramp_twist,
     speed_scale,
 )
-from controller.operation.points import (
-    POINTS,
-    ZERO_TWIST,
-    OperationView,
-    PointPose,
-    Twist,
-    WalkCommand,
-    check_twist,
-    sum_per_point,
-)
+from controller.operation.points import POINTS, ZERO_TWIST, OperationView, PointPose, Twist, check_twist, sum_per_point
 from controller.operation.targets import GazeAngles, HandPose, WaistPose, feet_frame, yaw_rotation
 from robot.names import JOINT_GROUPS, JOINT_NAMES
 

@@ -109,22 +109,6 @@ WALK_FOOT_DISTANCE_RANGE_M = (0.14, 0.30)
 
 
 @dataclass(frozen=True, slots=True)
-class WalkCommand:
-    """The walking point this tick, as the AutoBalancer takes it (hrpsys goVelocity plus the step parameters
-    [OP] V-A lets the operator set while walking); velocities in the feet frame F."""
-
-    vx_m_s: float
-    vy_m_s: float
-    vtheta_rad_s: float
-    max_stride_m: float | None = None  # step length limit (None: the gait generator's own)
-    foot_distance_m: float | None = None  # lateral distance between the feet's centres (None: its own)
-
-    @property
-    def is_zero(self) -> bool:
-        return self.vx_m_s == 0.0 and self.vy_m_s == 0.0 and self.vtheta_rad_s == 0.0
-
-
-@dataclass(frozen=True, slots=True)
 class PointPose:
     """Where an operational point is, as the controller computes it from its own reference (not the simulator):
     position [m] and rotation (world <- point) in the world frame, and the same in the feet frame F."""

@@ -10,7 +10,8 @@ import numpy as np
 
 from behaviors.base import JointReading
 from controller.core.errors import InvalidState
-from controller.operation.points import OperationView, PointPose, Twist, WalkCommand
+from controller.core.types import WalkCommand
+from controller.operation.points import OperationView, PointPose, Twist
 
 
 def _rot_z(yaw: float) -> np.ndarray:

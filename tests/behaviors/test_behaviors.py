@@ -12,6 +12,7 @@ import pytest
 from behaviors.base import describe, params_from
 from behaviors.registry import BEHAVIORS, make
 from behaviors.stand import HALF_SITTING_RAD
+from behaviors.steps import STEPS
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
 from tests.behaviors.fakes import harness
 
@@ -263,6 +264,12 @@ def test_unknown_behaviours_list_the_valid_names():
              r"'release', 'sequence', 'squat', 'stand', 'take_can', 'throw_can', 'walk_to'\]")
     with pytest.raises(UnknownName, match=valid):
         make("dance")
+
+
+def test_a_sequence_may_hold_every_behaviour_but_a_sequence():
+    assert set(STEPS) == set(BEHAVIORS) - {"sequence"}
+    with pytest.raises(InvalidCommand, match=r"steps.0.behavior: a sequence cannot contain a sequence"):
+        make("sequence", {"steps": [{"behavior": "sequence"}]})
 
 
 def test_every_behaviour_describes_its_parameters_with_units_and_ranges():

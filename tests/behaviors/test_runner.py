@@ -11,7 +11,8 @@ import pytest
 from behaviors.base import Behavior, BehaviorParams, Context, Output
 from behaviors.runner import BehaviorRunner, LatchedStop
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
-from controller.operation.points import Twist, WalkCommand
+from controller.core.types import WalkCommand
+from controller.operation.points import Twist
 from tests.behaviors.fakes import harness
 
 

@@ -17,9 +17,9 @@ from controller.balance.capture_point import (
     distance_to_polygon_edge,
     support_polygon,
 )
-from controller.core.system import ControllerSystem
 from controller.kinematics.model import RobotKinematics, frame_from_soles_midpoint
 from controller.operation.points import Twist
+from controller.system import ControllerSystem
 from robot.plant import MujocoPlant
 
 pytestmark = pytest.mark.slow

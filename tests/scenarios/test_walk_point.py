@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.operation.points import WalkCommand
+from controller.core.types import WalkCommand
 from tests.scenarios import walk_point
 from tests.scenarios.test_walking import MAX_TILT_DEG, Walker
 

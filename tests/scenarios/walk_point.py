@@ -7,7 +7,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from controller.operation.points import Twist, WalkCommand
+from controller.core.types import WalkCommand
+from controller.operation.points import Twist
 
 
 class OperatorWalk:

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from controller.balance.fall_detector import FallDetector, FallDetectorParams, foot_load_n
+from controller.core.types import Estimate
 
 WEIGHT_N = 58.0 * 9.81
 DT = 0.005
@@ -45,3 +46,11 @@ def test_the_foot_load_sums_the_feet_vertical_forces_only():
     w = np.zeros((4, 6))
     w[:, 2] = (200.0, 300.0, 50.0, 40.0)  # rfsensor, lfsensor, then the hands
     assert foot_load_n(w) == pytest.approx(500.0)
+
+
+def test_the_loop_check_reads_the_attitude_and_the_feet_of_the_estimate():
+    wrenches = np.zeros((4, 6))
+    wrenches[:2, 2] = 0.5 * WEIGHT_N
+    est = Estimate(base_rpy_rad=np.array([math.radians(40.0), 0.0, 0.0]), wrenches_ext=wrenches)
+    reason = FallDetector(WEIGHT_N).check(est, DT)
+    assert reason is not None and reason.startswith("tilt 40 deg")

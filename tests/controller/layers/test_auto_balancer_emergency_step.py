@@ -6,11 +6,10 @@ import numpy as np
 import pytest
 
 from controller.core.errors import InvalidCommand, InvalidState
-from controller.core.system import initial_reference
-from controller.core.types import BalanceEstimate, Ports
+from controller.core.types import BalanceEstimate, Ports, WalkCommand
 from controller.kinematics.model import RobotKinematics
 from controller.layers.auto_balancer import AutoBalancer, AutoBalancerParams
-from controller.operation.points import WalkCommand
+from controller.system import initial_reference
 from robot.generate import half_sitting_deg
 from robot.names import FORCE_SENSOR_NAMES
 from tests.controller.fakes import make_ctx

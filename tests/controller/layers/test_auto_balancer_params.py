@@ -3,8 +3,8 @@ thread and swapped in at a standstill after PREVIEW_GAINS_DELAY_S, the COG plan 
 
 import numpy as np
 
+from controller.core.types import WalkCommand
 from controller.layers.auto_balancer import PREVIEW_GAINS_DELAY_S
-from controller.operation.points import WalkCommand
 from tests.controller.layers.test_auto_balancer_walk_point import DT, Ticker
 
 

@@ -7,11 +7,10 @@ import numpy as np
 import pytest
 
 from controller.core.errors import InvalidCommand, InvalidState
-from controller.core.system import initial_reference
-from controller.core.types import Ports
+from controller.core.types import Ports, WalkCommand
 from controller.kinematics.model import RobotKinematics
 from controller.layers.auto_balancer import AutoBalancer, check_walk_command
-from controller.operation.points import WalkCommand
+from controller.system import initial_reference
 from robot.generate import half_sitting_deg
 from tests.controller.fakes import make_ctx
 

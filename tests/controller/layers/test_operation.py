@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from controller.core.errors import InvalidCommand
-from controller.core.system import initial_reference, layer_params_classes
-from controller.core.types import GaitState, Ports
+from controller.core.types import GaitState, Ports, WalkCommand
 from controller.kinematics.model import RobotKinematics
 from controller.layers.operation import OperationLayer, OperationParams
-from controller.operation.points import Twist, WalkCommand
+from controller.operation.points import Twist
+from controller.system import initial_reference, layer_params_classes
 from robot.generate import half_sitting_deg
 from tests.controller.fakes import make_ctx
 
