@@ -19,10 +19,16 @@ from app.service.verbs import (
     MAX_PUSH_DURATION_S,
     MAX_PUSH_FORCE_N,
     MAX_TARGET_POS_M,
-    MAX_VELOCITY_M_S,
-    MAX_VELOCITY_RAD_S,
     MIN_MOTION_TIME_S,
     TARGET_LIMBS,
+)
+from controller.operation.points import USED_COMPONENTS
+from controller.operation.ranges import (
+    SPEED_BOUNDS,
+    WALK_FOOT_DISTANCE_RANGE_M,
+    WALK_MAX_ANGULAR_RAD_S,
+    WALK_MAX_LINEAR_M_S,
+    WALK_MAX_STRIDE_RANGE_M,
 )
 from controller.walking.footsteps import StepParams
 from robot.names import JOINT_NAMES, NUM_JOINTS
@@ -31,7 +37,7 @@ from robot.plant import available_scenes
 LIMBS = TARGET_LIMBS
 MAX_PUSH_COMPONENT_N = math.floor(MAX_PUSH_FORCE_N / math.sqrt(3.0))  # [N] any such vector is within the magnitude
 MAX_GO_POS_DEG = round(math.degrees(MAX_GO_POS_RAD), 6)  # [deg] |theta| of goPos
-MAX_VELOCITY_DEG_S = round(math.degrees(MAX_VELOCITY_RAD_S), 6)  # [deg/s] |vtheta| of goVelocity
+MAX_VELOCITY_DEG_S = round(math.degrees(WALK_MAX_ANGULAR_RAD_S), 6)  # [deg/s] |vtheta| of goVelocity
 
 
 class StrictBody(BaseModel):
@@ -114,10 +120,10 @@ class GoPosRequest(StrictBody):
 
 
 class GoVelocityRequest(StrictBody):
-    vx: float = Field(description=f"forward velocity [m/s], |vx| <= {MAX_VELOCITY_M_S:g}",
-                      ge=-MAX_VELOCITY_M_S, le=MAX_VELOCITY_M_S, examples=[0.1])
-    vy: float = Field(description=f"left velocity [m/s], |vy| <= {MAX_VELOCITY_M_S:g}",
-                      ge=-MAX_VELOCITY_M_S, le=MAX_VELOCITY_M_S, examples=[0.0])
+    vx: float = Field(description=f"forward velocity [m/s], |vx| <= {WALK_MAX_LINEAR_M_S:g}",
+                      ge=-WALK_MAX_LINEAR_M_S, le=WALK_MAX_LINEAR_M_S, examples=[0.1])
+    vy: float = Field(description=f"left velocity [m/s], |vy| <= {WALK_MAX_LINEAR_M_S:g}",
+                      ge=-WALK_MAX_LINEAR_M_S, le=WALK_MAX_LINEAR_M_S, examples=[0.0])
     vtheta_deg: float = Field(description=f"turning velocity [deg/s], |vtheta_deg| <= {MAX_VELOCITY_DEG_S:g}",
                               ge=-MAX_VELOCITY_DEG_S, le=MAX_VELOCITY_DEG_S, examples=[0.0])
 
@@ -319,12 +325,9 @@ def _component(used: bool, limit: float, unit: str, what: str) -> Any:
 def _velocity_model(point: str) -> type[BaseModel]:
     from pydantic import create_model
 
-    from app.service.setpoints import FOOT_DISTANCE_RANGE_M, MAX_ANGULAR_RAD_S, MAX_LINEAR_M_S, MAX_STRIDE_RANGE_M
-    from controller.operation.points import USED_COMPONENTS
-
     lin_mask, ang_mask = USED_COMPONENTS[point]
-    lin_limit = MAX_VELOCITY_M_S if point == "walk" else MAX_LINEAR_M_S
-    ang_limit = round(math.degrees(MAX_VELOCITY_RAD_S if point == "walk" else MAX_ANGULAR_RAD_S), 6)
+    lin_limit, ang_limit_rad_s = SPEED_BOUNDS[point]
+    ang_limit = round(math.degrees(ang_limit_rad_s), 6)
     lin = tuple[tuple(_component(u, lin_limit, "m/s", f"{axis} velocity")
                       for u, axis in zip(lin_mask, "xyz", strict=True))]
     ang = tuple[tuple(_component(u, ang_limit, "deg/s", f"rate about {axis}")
@@ -338,10 +341,11 @@ def _velocity_model(point: str) -> type[BaseModel]:
                                description="angular velocity, feet frame F [deg/s]")),
     }
     if point == "walk":
-        fields["max_stride"] = (float | None, Field(default=None, ge=MAX_STRIDE_RANGE_M[0], le=MAX_STRIDE_RANGE_M[1],
-                                                    description="step length limit [m] (null: the gait's own)"))
+        fields["max_stride"] = (float | None, Field(
+            default=None, ge=WALK_MAX_STRIDE_RANGE_M[0], le=WALK_MAX_STRIDE_RANGE_M[1],
+            description="step length limit [m] (null: the gait's own)"))
         fields["foot_distance"] = (float | None, Field(
-            default=None, ge=FOOT_DISTANCE_RANGE_M[0], le=FOOT_DISTANCE_RANGE_M[1],
+            default=None, ge=WALK_FOOT_DISTANCE_RANGE_M[0], le=WALK_FOOT_DISTANCE_RANGE_M[1],
             description="distance between the feet's centres [m] (null: the gait's own)"))
     docs = {"rhand": "right hand: linear (x, y, z) [m/s], angular (x, y, z) [deg/s]",
             "lhand": "left hand: linear (x, y, z) [m/s], angular (x, y, z) [deg/s]",
