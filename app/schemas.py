@@ -22,13 +22,14 @@ from app.service.verbs import (
     MIN_MOTION_TIME_S,
     TARGET_LIMBS,
 )
-from controller.operation.points import USED_COMPONENTS
+from controller.operation.points import POINTS, USED_COMPONENTS
 from controller.operation.ranges import (
     SPEED_BOUNDS,
     WALK_FOOT_DISTANCE_RANGE_M,
     WALK_MAX_ANGULAR_RAD_S,
     WALK_MAX_LINEAR_M_S,
     WALK_MAX_STRIDE_RANGE_M,
+    component_bounds,
 )
 from controller.walking.footsteps import StepParams
 from robot.names import JOINT_NAMES, NUM_JOINTS
@@ -242,6 +243,29 @@ class ChainInfo(BaseModel):
     physics_ms: dict[str, float | int]
 
 
+class PointRanges(BaseModel):
+    """What an operational point takes (controller.operation.ranges), as PUT /api/operator/velocity checks it."""
+
+    linear: list[float] = Field(description="|v| allowed per component (x, y, z) [m/s]; 0: the point does not use it")
+    angular: list[float] = Field(description="|v| allowed per component (x, y, z) [deg/s]; 0: the point does not use "
+                                             "it")
+    max_stride: list[float] | None = Field(default=None, description="walk only: [min, max] step length limit [m]")
+    foot_distance: list[float] | None = Field(default=None, description="walk only: [min, max] distance between the "
+                                                                        "feet's centres [m]")
+
+
+def point_ranges() -> dict[str, PointRanges]:
+    """Every operational point, in POINTS order, with its ranges."""
+    ranges = {}
+    for point in POINTS:
+        lin, ang = component_bounds(point)
+        walk = point == "walk"
+        ranges[point] = PointRanges(linear=list(lin), angular=[round(math.degrees(v), 6) for v in ang],
+                                    max_stride=list(WALK_MAX_STRIDE_RANGE_M) if walk else None,
+                                    foot_distance=list(WALK_FOOT_DISTANCE_RANGE_M) if walk else None)
+    return ranges
+
+
 class ConsoleConfig(BaseModel):
     viewer_port: int | None
     estop_port: int | None = Field(default=None, description=(
@@ -251,6 +275,8 @@ class ConsoleConfig(BaseModel):
     joint_limits_deg: dict[str, list[float]]
     scenes: list[str]
     limbs: list[str] = list(LIMBS)
+    points: dict[str, PointRanges] = Field(default_factory=point_ranges, description=(
+        "the operational points in the order they are solved, each with what it takes (PUT /api/operator/velocity)"))
 
 
 StateDict = dict[str, Any]
@@ -357,8 +383,6 @@ def _velocity_model(point: str) -> type[BaseModel]:
 
 
 def _velocity_request() -> Any:
-    from controller.operation.points import POINTS
-
     models = tuple(_velocity_model(p) for p in POINTS)
     return Annotated[Union[models], Field(discriminator="point")]  # noqa: UP007 - built at run time
 

@@ -17,6 +17,7 @@ from app.service import InvalidArgument, OperatorService, Refused, Sender, Super
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
 from app.settings import Settings
+from controller.operation.points import POINTS
 
 
 def _status(client, point: str) -> dict:
@@ -92,6 +93,24 @@ def test_a_walk_step_parameter_the_auto_balancer_cannot_honour_is_refused_at_the
         r = client.put("/api/operator/velocity", json={"point": "walk", "linear": [0.1, 0, 0], "max_stride": stride,
                                                        "foot_distance": distance})
         assert r.status_code == 200, r.text
+
+
+def test_the_config_gives_each_points_ranges_and_the_door_refuses_just_beyond_them(client):
+    """The page reads the points and their ranges from GET /api/config (controller.operation.ranges), no copy of its
+    own; what the config says is what the door checks."""
+    points = client.get("/api/config").json()["points"]
+    assert tuple(points) == POINTS
+    assert points["head"] == {"linear": [0.0, 0.0, 0.0], "angular": [0.0, 90.0, 90.0], "max_stride": None,
+                              "foot_distance": None}
+    assert points["walk"] == {"linear": [0.5, 0.5, 0.0], "angular": [0.0, 0.0, 45.0], "max_stride": [0.0, 0.3],
+                              "foot_distance": [0.14, 0.3]}
+    for point, ranges in points.items():
+        for part in ("linear", "angular"):
+            for i, bound in enumerate(ranges[part]):
+                body = {"point": point, part: [bound + 0.01 if j == i else 0.0 for j in range(3)]}
+                r = client.put("/api/operator/velocity", json=body)
+                assert r.status_code == 422 and r.json()["field"] == f"{point}.{part}.{i}", r.text
+                assert f"less than or equal to {bound:g}" in r.json()["detail"], r.json()
 
 
 @pytest.mark.parametrize(("setpoint", "field", "words"), [
