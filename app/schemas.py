@@ -19,10 +19,17 @@ from app.service.verbs import (
     MAX_PUSH_DURATION_S,
     MAX_PUSH_FORCE_N,
     MAX_TARGET_POS_M,
-    MAX_VELOCITY_M_S,
-    MAX_VELOCITY_RAD_S,
     MIN_MOTION_TIME_S,
     TARGET_LIMBS,
+)
+from controller.operation.points import POINTS, USED_COMPONENTS
+from controller.operation.ranges import (
+    SPEED_BOUNDS,
+    WALK_FOOT_DISTANCE_RANGE_M,
+    WALK_MAX_ANGULAR_RAD_S,
+    WALK_MAX_LINEAR_M_S,
+    WALK_MAX_STRIDE_RANGE_M,
+    component_bounds,
 )
 from controller.walking.footsteps import StepParams
 from robot.names import JOINT_NAMES, NUM_JOINTS
@@ -31,7 +38,7 @@ from robot.plant import available_scenes
 LIMBS = TARGET_LIMBS
 MAX_PUSH_COMPONENT_N = math.floor(MAX_PUSH_FORCE_N / math.sqrt(3.0))  # [N] any such vector is within the magnitude
 MAX_GO_POS_DEG = round(math.degrees(MAX_GO_POS_RAD), 6)  # [deg] |theta| of goPos
-MAX_VELOCITY_DEG_S = round(math.degrees(MAX_VELOCITY_RAD_S), 6)  # [deg/s] |vtheta| of goVelocity
+MAX_VELOCITY_DEG_S = round(math.degrees(WALK_MAX_ANGULAR_RAD_S), 6)  # [deg/s] |vtheta| of goVelocity
 
 
 class StrictBody(BaseModel):
@@ -114,10 +121,10 @@ class GoPosRequest(StrictBody):
 
 
 class GoVelocityRequest(StrictBody):
-    vx: float = Field(description=f"forward velocity [m/s], |vx| <= {MAX_VELOCITY_M_S:g}",
-                      ge=-MAX_VELOCITY_M_S, le=MAX_VELOCITY_M_S, examples=[0.1])
-    vy: float = Field(description=f"left velocity [m/s], |vy| <= {MAX_VELOCITY_M_S:g}",
-                      ge=-MAX_VELOCITY_M_S, le=MAX_VELOCITY_M_S, examples=[0.0])
+    vx: float = Field(description=f"forward velocity [m/s], |vx| <= {WALK_MAX_LINEAR_M_S:g}",
+                      ge=-WALK_MAX_LINEAR_M_S, le=WALK_MAX_LINEAR_M_S, examples=[0.1])
+    vy: float = Field(description=f"left velocity [m/s], |vy| <= {WALK_MAX_LINEAR_M_S:g}",
+                      ge=-WALK_MAX_LINEAR_M_S, le=WALK_MAX_LINEAR_M_S, examples=[0.0])
     vtheta_deg: float = Field(description=f"turning velocity [deg/s], |vtheta_deg| <= {MAX_VELOCITY_DEG_S:g}",
                               ge=-MAX_VELOCITY_DEG_S, le=MAX_VELOCITY_DEG_S, examples=[0.0])
 
@@ -236,6 +243,29 @@ class ChainInfo(BaseModel):
     physics_ms: dict[str, float | int]
 
 
+class PointRanges(BaseModel):
+    """What an operational point takes (controller.operation.ranges), as PUT /api/operator/velocity checks it."""
+
+    linear: list[float] = Field(description="|v| allowed per component (x, y, z) [m/s]; 0: the point does not use it")
+    angular: list[float] = Field(description="|v| allowed per component (x, y, z) [deg/s]; 0: the point does not use "
+                                             "it")
+    max_stride: list[float] | None = Field(default=None, description="walk only: [min, max] step length limit [m]")
+    foot_distance: list[float] | None = Field(default=None, description="walk only: [min, max] distance between the "
+                                                                        "feet's centres [m]")
+
+
+def point_ranges() -> dict[str, PointRanges]:
+    """Every operational point, in POINTS order, with its ranges."""
+    ranges = {}
+    for point in POINTS:
+        lin, ang = component_bounds(point)
+        walk = point == "walk"
+        ranges[point] = PointRanges(linear=list(lin), angular=[round(math.degrees(v), 6) for v in ang],
+                                    max_stride=list(WALK_MAX_STRIDE_RANGE_M) if walk else None,
+                                    foot_distance=list(WALK_FOOT_DISTANCE_RANGE_M) if walk else None)
+    return ranges
+
+
 class ConsoleConfig(BaseModel):
     viewer_port: int | None
     estop_port: int | None = Field(default=None, description=(
@@ -245,6 +275,8 @@ class ConsoleConfig(BaseModel):
     joint_limits_deg: dict[str, list[float]]
     scenes: list[str]
     limbs: list[str] = list(LIMBS)
+    points: dict[str, PointRanges] = Field(default_factory=point_ranges, description=(
+        "the operational points in the order they are solved, each with what it takes (PUT /api/operator/velocity)"))
 
 
 StateDict = dict[str, Any]
@@ -319,12 +351,9 @@ def _component(used: bool, limit: float, unit: str, what: str) -> Any:
 def _velocity_model(point: str) -> type[BaseModel]:
     from pydantic import create_model
 
-    from app.service.setpoints import FOOT_DISTANCE_RANGE_M, MAX_ANGULAR_RAD_S, MAX_LINEAR_M_S, MAX_STRIDE_RANGE_M
-    from controller.operation.points import USED_COMPONENTS
-
     lin_mask, ang_mask = USED_COMPONENTS[point]
-    lin_limit = MAX_VELOCITY_M_S if point == "walk" else MAX_LINEAR_M_S
-    ang_limit = round(math.degrees(MAX_VELOCITY_RAD_S if point == "walk" else MAX_ANGULAR_RAD_S), 6)
+    lin_limit, ang_limit_rad_s = SPEED_BOUNDS[point]
+    ang_limit = round(math.degrees(ang_limit_rad_s), 6)
     lin = tuple[tuple(_component(u, lin_limit, "m/s", f"{axis} velocity")
                       for u, axis in zip(lin_mask, "xyz", strict=True))]
     ang = tuple[tuple(_component(u, ang_limit, "deg/s", f"rate about {axis}")
@@ -338,10 +367,11 @@ def _velocity_model(point: str) -> type[BaseModel]:
                                description="angular velocity, feet frame F [deg/s]")),
     }
     if point == "walk":
-        fields["max_stride"] = (float | None, Field(default=None, ge=MAX_STRIDE_RANGE_M[0], le=MAX_STRIDE_RANGE_M[1],
-                                                    description="step length limit [m] (null: the gait's own)"))
+        fields["max_stride"] = (float | None, Field(
+            default=None, ge=WALK_MAX_STRIDE_RANGE_M[0], le=WALK_MAX_STRIDE_RANGE_M[1],
+            description="step length limit [m] (null: the gait's own)"))
         fields["foot_distance"] = (float | None, Field(
-            default=None, ge=FOOT_DISTANCE_RANGE_M[0], le=FOOT_DISTANCE_RANGE_M[1],
+            default=None, ge=WALK_FOOT_DISTANCE_RANGE_M[0], le=WALK_FOOT_DISTANCE_RANGE_M[1],
             description="distance between the feet's centres [m] (null: the gait's own)"))
     docs = {"rhand": "right hand: linear (x, y, z) [m/s], angular (x, y, z) [deg/s]",
             "lhand": "left hand: linear (x, y, z) [m/s], angular (x, y, z) [deg/s]",
@@ -353,8 +383,6 @@ def _velocity_model(point: str) -> type[BaseModel]:
 
 
 def _velocity_request() -> Any:
-    from controller.operation.points import POINTS
-
     models = tuple(_velocity_model(p) for p in POINTS)
     return Annotated[Union[models], Field(discriminator="point")]  # noqa: UP007 - built at run time
 

@@ -551,11 +551,9 @@ $("command-form").addEventListener("submit", async (e) => {
 });
 
 // ---- teleoperation: the selected point's twist from two 3-DOF sticks, the gamepad and the keys -------------
-const POINTS = ["rhand", "lhand", "head", "waist", "walk"];
-const USED = {  // (linear xyz, angular xyz) the point uses (controller.operation.points.USED_COMPONENTS)
-  rhand: [[1, 1, 1], [1, 1, 1]], lhand: [[1, 1, 1], [1, 1, 1]], head: [[0, 0, 0], [0, 1, 1]],
-  waist: [[0, 0, 1], [1, 1, 1]], walk: [[1, 1, 0], [0, 0, 1]],
-};
+// the points in the order they are solved and what each takes: /api/config's `points` (controller.operation.ranges)
+let POINTS = [];
+let RANGES = {};  // point -> {linear: [3] m/s, angular: [3] deg/s}: |v| allowed per component, 0 where it is unused
 const FULL = {  // full deflection: linear [m/s], angular [deg/s]
   rhand: [0.1, 30], lhand: [0.1, 30], head: [0, 30], waist: [0.05, 15], walk: [0.2, 20],
 };
@@ -573,11 +571,14 @@ function selectPoint(p) {
   for (const b of $("points").children) b.setAttribute("aria-checked", String(b.dataset.point === p));
   setText($("sel-point"), p);
 }
-for (const [k, p] of POINTS.entries()) {
-  $("points").append(el("button", {type: "button", role: "radio", "data-point": p, "aria-checked": "false",
-                                   title: `key ${k + 1}`, text: p, onclick: () => selectPoint(p)}));
+function setPoints(ranges) {
+  RANGES = ranges;
+  POINTS = Object.keys(ranges);
+  $("points").replaceChildren(...POINTS.map((p, k) => el("button", {
+    type: "button", role: "radio", "data-point": p, "aria-checked": "false", title: `key ${k + 1}`, text: p,
+    onclick: () => selectPoint(p)})));
+  if (POINTS.length) selectPoint(POINTS.includes(selected) ? selected : POINTS[0]);
 }
-selectPoint(selected);
 
 const clamp1 = (v) => Math.max(-1, Math.min(1, v));
 function deadZone(v, dz) { const a = Math.abs(v); return a <= dz ? 0 : Math.sign(v) * (a - dz) / (1 - dz); }
@@ -598,9 +599,9 @@ function twistOf(point, a) {
   else if (point === "head") { lin = [0, 0, 0]; ang = [0, clamp1(rf + lf), clamp1(rl + ll)]; }
   else if (point === "waist") { lin = [0, 0, clamp1(lf + lt)]; ang = [rt, rf, rl]; }
   else { lin = [lf, ll, lt]; ang = [rt, rf, rl]; }
-  const [um, am] = USED[point];
-  const r = (v) => Math.round(v * 1e4) / 1e4;
-  return {linear: lin.map((v, i) => r(um[i] ? v * vlin : 0)), angular: ang.map((v, i) => r(am[i] ? v * vang : 0))};
+  const {linear: lb, angular: ab} = RANGES[point];  // within the point's bounds; 0 on a component it does not use
+  const r = (v, b) => Math.round(Math.max(-b, Math.min(b, v)) * 1e4) / 1e4 || 0;
+  return {linear: lin.map((v, i) => r(v * vlin, lb[i])), angular: ang.map((v, i) => r(v * vang, ab[i]))};
 }
 const isZero = (t) => t.linear.every((v) => v === 0) && t.angular.every((v) => v === 0);
 
@@ -735,7 +736,7 @@ function readGamepad() {
     const btn = (i) => { const b = gp.buttons[i]; return b ? (typeof b === "object" ? b.value || (b.pressed ? 1 : 0) : b) : 0; };
     const pressed = gp.buttons.map((b, i) => btn(i) > 0.5);
     if (pressed[GP.estop] && !gpPrev[GP.estop]) estop("gamepad");
-    if (pressed[GP.nextPoint] && !gpPrev[GP.nextPoint]) selectPoint(POINTS[(POINTS.indexOf(selected) + 1) % POINTS.length]);
+    if (pressed[GP.nextPoint] && !gpPrev[GP.nextPoint] && POINTS.length) selectPoint(POINTS[(POINTS.indexOf(selected) + 1) % POINTS.length]);
     gpPrev = pressed;
     gamepadDeadman = GP.deadman.some((i) => pressed[i]);
     gamepadAxes = [-ax(1), -ax(0), btn(GP.lt) - btn(GP.rt), -ax(3), -ax(2), btn(GP.dpadLeft) - btn(GP.dpadRight)];
@@ -1137,6 +1138,7 @@ async function start() {
   const cfg = await api("GET", "/api/config") || {};
   doorPort = cfg.estop_port || null;
   connectDoor();
+  setPoints(cfg.points || {});
   limits = cfg.joint_limits_deg || {};
   for (const name of cfg.joints || []) $("joint").append(el("option", {value: name, text: name}));
   if (cfg.joints && cfg.joints.includes("RARM_JOINT0")) { $("joint").value = "RARM_JOINT0"; $("joint").dispatchEvent(new Event("change")); }

@@ -16,12 +16,9 @@ from app.service.board import Board
 from app.service.errors import InvalidArgument, PointTaken
 from controller.core.errors import InvalidCommand
 from controller.core.types import WalkCommand
-from controller.operation.points import POINTS, WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M, Twist, check_twist
+from controller.operation.points import POINTS, Twist, check_twist
+from controller.operation.ranges import SPEED_BOUNDS, WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
 
-MAX_LINEAR_M_S = 0.5  # [m/s] |component| of a streamed linear velocity (the op layer limits further)
-MAX_ANGULAR_RAD_S = math.radians(90.0)  # [rad/s] |component| of a streamed angular velocity
-MAX_STRIDE_RANGE_M = WALK_MAX_STRIDE_RANGE_M  # [m] the walking point's step length limit, as the AutoBalancer's
-FOOT_DISTANCE_RANGE_M = WALK_FOOT_DISTANCE_RANGE_M  # [m] its distance between the feet's centres
 BOARD_BYTES = 1 << 14
 STREAM_STALE_S = 0.3  # [s] of control time: a point's stream has stopped this long after its last setpoint (the
 #                       dead-man's 0.2 s and its 0.1 s ramp, OperationParams' defaults: by then the point is at zero)
@@ -30,7 +27,8 @@ REMEMBERED_SEQS = 512  # per point: whose the newest setpoints were (10 s of two
 
 @dataclass(frozen=True, slots=True)
 class Setpoint:
-    """The operator's velocity for one point, in the feet frame F (controller.operation.points)."""
+    """The operator's velocity for one point, in the feet frame F (controller.operation.points), within the
+    point's ranges (controller.operation.ranges)."""
 
     point: str
     linear_m_s: tuple[float, float, float]
@@ -42,9 +40,10 @@ class Setpoint:
     def __post_init__(self) -> None:
         if self.point not in POINTS:
             raise InvalidArgument("point", f"unknown operational point {self.point!r}; valid: {list(POINTS)}")
+        max_linear_m_s, max_angular_rad_s = SPEED_BOUNDS[self.point]
         for part, values, limit, unit, shown in (
-                ("linear", self.linear_m_s, MAX_LINEAR_M_S, "m/s", float),
-                ("angular", self.angular_rad_s, MAX_ANGULAR_RAD_S, "deg/s", math.degrees)):
+                ("linear", self.linear_m_s, max_linear_m_s, "m/s", float),
+                ("angular", self.angular_rad_s, max_angular_rad_s, "deg/s", math.degrees)):
             if len(values) != 3:
                 raise InvalidArgument(part, f"give 3 components (got {len(values)})")
             for axis, v in zip("xyz", values, strict=True):
@@ -58,8 +57,8 @@ class Setpoint:
         except InvalidCommand as exc:
             field, _, message = str(exc).partition(": ")
             raise InvalidArgument(field.split(".", 1)[-1] if "." in field else field, message) from None
-        for name, value, (lo, hi) in (("max_stride", self.max_stride_m, MAX_STRIDE_RANGE_M),
-                                      ("foot_distance", self.foot_distance_m, FOOT_DISTANCE_RANGE_M)):
+        for name, value, (lo, hi) in (("max_stride", self.max_stride_m, WALK_MAX_STRIDE_RANGE_M),
+                                      ("foot_distance", self.foot_distance_m, WALK_FOOT_DISTANCE_RANGE_M)):
             if value is None:
                 continue
             if self.point != "walk":

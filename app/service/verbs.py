@@ -20,6 +20,7 @@ import numpy as np
 from app.service.errors import InvalidArgument, NotFound
 from controller.core.errors import InvalidCommand
 from controller.core.layer import Params
+from controller.operation.ranges import WALK_MAX_ANGULAR_RAD_S, WALK_MAX_LINEAR_M_S
 from controller.walking.footsteps import StepParams
 
 if TYPE_CHECKING:
@@ -37,8 +38,6 @@ MAX_PUSH_FORCE_N = 2000.0  # [N]
 MAX_PUSH_DURATION_S = 5.0  # [s]
 MAX_GO_POS_M = 5.0  # [m] |x|, |y| of goPos
 MAX_GO_POS_RAD = math.radians(360.0)  # |theta| of goPos
-MAX_VELOCITY_M_S = 0.5  # [m/s] |vx|, |vy| of goVelocity (the planner clamps to its stride limits anyway)
-MAX_VELOCITY_RAD_S = math.radians(45.0)  # |vtheta| of goVelocity
 MAX_FOOTSTEPS = 50
 MAX_FOOTSTEP_POS_M = 10.0  # [m] |pos| components of a setFootSteps entry
 MAX_TARGET_POS_M = 5.0  # [m] |pos| components of a setTargetPose target
@@ -213,9 +212,10 @@ class GoVelocity(Verb):
     vtheta_rad_s: float
 
     def __post_init__(self) -> None:
-        _bounded("vx", self.vx_m_s, -MAX_VELOCITY_M_S, MAX_VELOCITY_M_S, "m/s")
-        _bounded("vy", self.vy_m_s, -MAX_VELOCITY_M_S, MAX_VELOCITY_M_S, "m/s")
-        _bounded("vtheta_deg", self.vtheta_rad_s, -MAX_VELOCITY_RAD_S, MAX_VELOCITY_RAD_S, "deg/s", _deg)
+        # the walking point's bounds (controller.operation.ranges): goVelocity walks the same way
+        _bounded("vx", self.vx_m_s, -WALK_MAX_LINEAR_M_S, WALK_MAX_LINEAR_M_S, "m/s")
+        _bounded("vy", self.vy_m_s, -WALK_MAX_LINEAR_M_S, WALK_MAX_LINEAR_M_S, "m/s")
+        _bounded("vtheta_deg", self.vtheta_rad_s, -WALK_MAX_ANGULAR_RAD_S, WALK_MAX_ANGULAR_RAD_S, "deg/s", _deg)
 
     def run(self, host: Host) -> str:
         host.layer("abc").go_velocity(self.vx_m_s, self.vy_m_s, self.vtheta_rad_s)

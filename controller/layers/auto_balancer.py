@@ -33,7 +33,12 @@ from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, nearest_leg_limit
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
-from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
+from controller.operation.ranges import (
+    WALK_FOOT_DISTANCE_RANGE_M,
+    WALK_MAX_ANGULAR_RAD_S,
+    WALK_MAX_LINEAR_M_S,
+    WALK_MAX_STRIDE_RANGE_M,
+)
 from controller.walking.emergency_step import EmergencyStepParams, EmergencyStepPlan, SupportRegion, swing_leg_for
 from controller.walking.footsteps import Footstep, FootstepParams, StepParams, StrideLimits
 from controller.walking.gait_generator import GaitGenerator, GaitParams, GaitPatch
@@ -61,8 +66,6 @@ TIPPED_LEVELLING_RATE_RAD_S = 0.03
 TIPPED_MIN_TILT_RAD = math.radians(1.0)
 #: [-] peak over mean rate of a minimum-jerk path (15/8)
 MIN_JERK_PEAK_RATIO = 1.875
-MAX_STRIDE_RANGE_M = WALK_MAX_STRIDE_RANGE_M  # [m] the walking point's (controller.operation.points)
-FOOT_DISTANCE_RANGE_M = WALK_FOOT_DISTANCE_RANGE_M  # [m]
 #: [-] share of the robot's weight the feet must carry for an emergency step (a robot held in the air does not step)
 EMERGENCY_STEP_MIN_LOAD_RATIO = 0.5
 #: [-] an emergency step's foot touches down early when it carries this share of the weight after this share of its
@@ -85,21 +88,18 @@ BASE_LOWERING_TIME_S = 0.2
 WALK_HEIGHT_RATE_M_S = 0.2
 #: [m] BODY may stand this much above the walking height while walking (no lowering for rounding)
 WALK_HEIGHT_SLACK_M = 0.001
-#: [m/s], [rad/s] the walking point's velocity bounds (the goVelocity verb's); the stride limits clamp the steps
-WALK_VELOCITY_LIMIT_M_S = 0.5
-WALK_VELOCITY_LIMIT_RAD_S = math.radians(45.0)
 
 
 def check_walk_command(cmd: WalkCommand) -> None:
     """Raise InvalidCommand naming the field and the allowed range when the walking point's command is not
     one the AutoBalancer takes (what the operation layer and the verbs check before it reaches the loop)."""
-    for name, value, limit, unit in (("vx_m_s", cmd.vx_m_s, WALK_VELOCITY_LIMIT_M_S, "m/s"),
-                                     ("vy_m_s", cmd.vy_m_s, WALK_VELOCITY_LIMIT_M_S, "m/s"),
-                                     ("vtheta_rad_s", cmd.vtheta_rad_s, WALK_VELOCITY_LIMIT_RAD_S, "rad/s")):
+    for name, value, limit, unit in (("vx_m_s", cmd.vx_m_s, WALK_MAX_LINEAR_M_S, "m/s"),
+                                     ("vy_m_s", cmd.vy_m_s, WALK_MAX_LINEAR_M_S, "m/s"),
+                                     ("vtheta_rad_s", cmd.vtheta_rad_s, WALK_MAX_ANGULAR_RAD_S, "rad/s")):
         if not (math.isfinite(value) and abs(value) <= limit):
             raise InvalidCommand(f"walk.{name}={value!r} [{unit}]; allowed: [{-limit:g}, {limit:g}]")
-    for name, value, (lo, hi) in (("max_stride_m", cmd.max_stride_m, MAX_STRIDE_RANGE_M),
-                                  ("foot_distance_m", cmd.foot_distance_m, FOOT_DISTANCE_RANGE_M)):
+    for name, value, (lo, hi) in (("max_stride_m", cmd.max_stride_m, WALK_MAX_STRIDE_RANGE_M),
+                                  ("foot_distance_m", cmd.foot_distance_m, WALK_FOOT_DISTANCE_RANGE_M)):
         if value is not None and not (math.isfinite(value) and lo <= value <= hi):
             raise InvalidCommand(f"walk.{name}={value!r} [m]; allowed: [{lo:g}, {hi:g}] or null (the gait's own)")
 
@@ -140,8 +140,8 @@ class AutoBalancerParams(Params):
     stride_outside_th_rad: float = field(default=math.radians(10.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
     stride_inside_th_rad: float = field(default=math.radians(5.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
     # distance between the feet's centres when walking (hrpsys leg_default_translate_pos, both legs)
-    foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": FOOT_DISTANCE_RANGE_M[0],
-                                                           "max": FOOT_DISTANCE_RANGE_M[1]})
+    foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": WALK_FOOT_DISTANCE_RANGE_M[0],
+                                                           "max": WALK_FOOT_DISTANCE_RANGE_M[1]})
     # the Stabilizer's capture-point flag rising while walking (Ports.cp_flag, its estop_while_walking) calls the
     # emergency walking stop: the steps end in place while the EmergencyStopper holds the motion
     walking_stop_on_cp_flag: bool = field(default=True, metadata={"unit": "-"})

@@ -100,14 +100,6 @@ def points_in(names: Iterable[str]) -> tuple[str, ...]:
     return tuple(p for p in POINTS if p in names)
 
 
-#: [m] the walking point's step length limit ([OP] V-A): 0 (step in place) up to this; the stride limits cap it.
-#: Defined once: the AutoBalancer honours it, the console refuses anything else at the door
-WALK_MAX_STRIDE_RANGE_M = (0.0, 0.3)
-#: [m] the walking point's distance between the feet's centres: HRP-2's soles (0.118 m across their inner
-#: edges at 0.19 m) keep >= 2 cm apart at the low end
-WALK_FOOT_DISTANCE_RANGE_M = (0.14, 0.30)
-
-
 @dataclass(frozen=True, slots=True)
 class PointPose:
     """Where an operational point is, as the controller computes it from its own reference (not the simulator):

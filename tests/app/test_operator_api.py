@@ -13,10 +13,11 @@ from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
 from app.main import create_app
-from app.service import OperatorService, Refused, Sender, Superseded
+from app.service import InvalidArgument, OperatorService, Refused, Sender, Superseded
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
 from app.settings import Settings
+from controller.operation.points import POINTS
 
 
 def _status(client, point: str) -> dict:
@@ -77,14 +78,14 @@ def test_invalid_setpoints_are_422_naming_the_field(client, body, field, words):
     ("foot_distance", 0.13, "greater than or equal to 0.14"), ("foot_distance", 0.31, "less than or equal to 0.3")])
 def test_a_walk_step_parameter_the_auto_balancer_cannot_honour_is_refused_at_the_door(client, runtime, field, value,
                                                                                       words):
-    """The walking point's ranges are the AutoBalancer's own (controller.operation.points): a max_stride of 0.4 m was
+    """The walking point's ranges are the AutoBalancer's own (controller.operation.ranges): a max_stride of 0.4 m was
     acknowledged ok and then ignored by the AutoBalancer."""
     runtime.run_for(0.05)
     r = client.put("/api/operator/velocity", json={"point": "walk", "linear": [0.1, 0, 0], field: value})
     assert r.status_code == 422 and r.json()["field"] == f"walk.{field}" and words in r.json()["detail"], r.json()
     from controller.core.types import WalkCommand
     from controller.layers.auto_balancer import check_walk_command
-    from controller.operation.points import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
+    from controller.operation.ranges import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
 
     for stride, distance in ((WALK_MAX_STRIDE_RANGE_M[1], WALK_FOOT_DISTANCE_RANGE_M[0]),
                              (WALK_MAX_STRIDE_RANGE_M[0], WALK_FOOT_DISTANCE_RANGE_M[1])):
@@ -92,6 +93,37 @@ def test_a_walk_step_parameter_the_auto_balancer_cannot_honour_is_refused_at_the
         r = client.put("/api/operator/velocity", json={"point": "walk", "linear": [0.1, 0, 0], "max_stride": stride,
                                                        "foot_distance": distance})
         assert r.status_code == 200, r.text
+
+
+def test_the_config_gives_each_points_ranges_and_the_door_refuses_just_beyond_them(client):
+    """The page reads the points and their ranges from GET /api/config (controller.operation.ranges), no copy of its
+    own; what the config says is what the door checks."""
+    points = client.get("/api/config").json()["points"]
+    assert tuple(points) == POINTS
+    assert points["head"] == {"linear": [0.0, 0.0, 0.0], "angular": [0.0, 90.0, 90.0], "max_stride": None,
+                              "foot_distance": None}
+    assert points["walk"] == {"linear": [0.5, 0.5, 0.0], "angular": [0.0, 0.0, 45.0], "max_stride": [0.0, 0.3],
+                              "foot_distance": [0.14, 0.3]}
+    for point, ranges in points.items():
+        for part in ("linear", "angular"):
+            for i, bound in enumerate(ranges[part]):
+                body = {"point": point, part: [bound + 0.01 if j == i else 0.0 for j in range(3)]}
+                r = client.put("/api/operator/velocity", json=body)
+                assert r.status_code == 422 and r.json()["field"] == f"{point}.{part}.{i}", r.text
+                assert f"less than or equal to {bound:g}" in r.json()["detail"], r.json()
+
+
+@pytest.mark.parametrize(("setpoint", "field", "words"), [
+    ({"linear_m_s": (0.1, 0.0, 0.0), "angular_rad_s": (0.0, 0.0, math.radians(60.0))}, "angular.z", "[-45, 45] deg/s"),
+    ({"linear_m_s": (0.1, 0.0, 0.0), "angular_rad_s": (0.0,) * 3, "max_stride_m": 0.4}, "max_stride", "[0, 0.3] m"),
+    ({"linear_m_s": (0.1, 0.0, 0.0), "angular_rad_s": (0.0,) * 3, "foot_distance_m": 0.4}, "foot_distance",
+     "[0.14, 0.3] m")])
+def test_a_walk_setpoint_made_without_the_schemas_is_held_to_the_same_ranges(setpoint, field, words):
+    """The console's own scripts make Setpoints directly: the walking point's bounds are the AutoBalancer's there
+    too (a vtheta of 60 deg/s passed the 90 deg/s of the other points and was then ignored)."""
+    with pytest.raises(InvalidArgument) as exc:
+        Setpoint("walk", **setpoint)
+    assert exc.value.field == field and words in exc.value.message, exc.value
 
 
 def test_setpoints_are_refused_under_the_hard_estop(client, runtime):

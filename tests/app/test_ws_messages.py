@@ -95,6 +95,7 @@ def test_a_put_during_the_estop_is_409_naming_the_stop(client, runtime):
     ('{"point": "rhand", "linear": [0.9, 0, 0]}', "rhand.linear.0", "less than or equal to 0.5"),
     ('{"point": "rhand", "speed": 1}', "rhand.speed", "Extra inputs"),
     ('{"point": "head", "linear": [0.1, 0, 0]}', "head.linear.0", "less than or equal to 0"),
+    ('{"point": "walk", "linear": [0.1, 0, 0], "max_stride": 0.4}', "walk.max_stride", "less than or equal to 0.3"),
     ("[1, 2]", "body", ""),
     (b"\x00\x01", "body", "JSON text message"),
     ("x" * 5000, "body", "the limit is 4096"),
