@@ -397,6 +397,10 @@ class GaitGenerator:
         k = self._overwritable_index()
         if k > len(self._footsteps):
             return  # already in the final double support
+        if k == len(self._footsteps):
+            # the step in progress is the plan's last: the walk ends on its landing anyway, and steps in place
+            # after it would swing the CP back across the feet (campaign seed 2006: a turning goPos fell)
+            return
         if self._stepper is not None:
             self._stepper.advance_to(k - 1)
             self.replan(self._stepper.emergency_stop(), k)

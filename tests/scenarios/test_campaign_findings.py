@@ -8,7 +8,7 @@ import pytest
 from app.service.errors import Refused
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
-from app.service.verbs import GoPos, GoVelocity, WalkStop
+from app.service.verbs import GoPos, GoVelocity, WalkEmergencyStop, WalkStop
 from robot.names import JOINT_NAMES
 
 STICK_PERIOD_TICKS = 8  # the page streams a held stick every 40 ms
@@ -131,3 +131,26 @@ def test_seed_2013_a_walk_from_a_raised_waist_keeps_the_swing_knee_bent_and_the_
     assert lowered == pytest.approx(rise_m - 0.001, abs=0.004)  # down to the walking height (1 mm slack)
     obs = robot.run_for(1.0)  # standing: back up to the operated height at 0.2 m/s
     assert obs.layers["abc"].walk_height_lowering_m == 0.0 and not obs.fallen
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("stop_s", [9.05, 9.25, 9.5, 9.65, 9.75, 9.8, 9.9])
+def test_seed_2006_a_walking_emergency_stop_in_a_walks_last_step_ends_it_standing_without_the_flag(stop_s):
+    # a turning goPos's last step (9.0-10.0 s) stopped: steps in place were appended after the landing that
+    # ended the walk anyway, the CP reference swung back across the feet, the flag rose and the robot fell (at
+    # 9.75-9.83 s; 32 mm at 9.5 s). Now the walk just ends on that landing: worst CP error 20 mm (measured)
+    robot = LocalRobot("default")
+    robot.run_for(2.5)
+    robot.submit(GoPos(0.7965, 0.398, math.radians(59.62))).result()
+    t0 = robot.step().time_s
+    worst_m, stopped = 0.0, False
+    for _ in range(int(round(14.0 / 0.005))):
+        obs = robot.step()
+        if not stopped and obs.time_s - t0 >= stop_s:
+            assert len(robot.chain["abc"].gait.remaining_footsteps()) == 1  # the last step, in progress
+            robot.submit(WalkEmergencyStop()).result()
+            stopped = True
+        worst_m = max(worst_m, obs.layers["st"].cp_error_norm)
+        assert not obs.layers["st"].emergency and not obs.fallen, f"{obs.time_s - t0:.3f} s"
+    assert stopped and not obs.layers["abc"].walking
+    assert worst_m < 0.026  # measured 20 mm
