@@ -16,7 +16,7 @@ import viser
 
 from app.service.log_row import column
 from app.session.reader import Session
-from app.viewer import add_model
+from app.viewer_meshes import add_model
 from robot.names import BASE_LINK, JOINT_NAMES
 from robot.plant import scene_path
 

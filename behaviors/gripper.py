@@ -1,6 +1,6 @@
 """The JRL-hand as the behaviours see it: its joint, which way closes, and the fingertip force the controller
 can sense from its own signals (the servo's position error and the encoder's rate), within the hand's 14 N
-fingertip limit (the gripper actuator's torque is capped at 14 N x the pad depth, see robot/generate.py)."""
+fingertip limit (the gripper actuator's torque is capped at 14 N x the pad depth, see robot/robot_model.py)."""
 
 from __future__ import annotations
 

@@ -19,7 +19,7 @@ import numpy as np
 from robot.images import CameraImage, CameraIntrinsics, Frames
 from robot.plant import scene_path
 
-#: The head cameras [OP sec. V] (robot/generate.py CAMERAS): narrow stereo pair and the wide teleoperation camera.
+#: The head cameras [OP sec. V] (robot/robot_model.py CAMERAS): narrow stereo pair and the wide teleoperation camera.
 HEAD_CAMERAS: tuple[str, ...] = ("narrow_left", "narrow_right", "wide")
 #: Depth comes with the left narrow camera only: a simulated stereo sensor (narrow pair, 0.144 m baseline)
 #: whose depth map is registered to the left image. The wide camera has no stereo partner.

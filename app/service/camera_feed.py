@@ -28,7 +28,7 @@ from robot.images import CameraIntrinsics
 
 log = logging.getLogger(__name__)
 
-VIEW_CAMERA = "wide"  # 93.6 x 70.8 deg (robot/generate.py CAMERAS)
+VIEW_CAMERA = "wide"  # 93.6 x 70.8 deg (robot/robot_model.py CAMERAS)
 VIEW_SIZE_PX = (320, 240)  # small: one rendering and encoding costs a few ms of the machine's time
 VIEW_RATE_HZ = 15.0  # [Hz] of wall time, at most, while watched
 DEFAULT_RATE_HZ = 10.0  # [Hz] unless a watcher asks for more

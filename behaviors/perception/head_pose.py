@@ -4,7 +4,7 @@
 # place and heading in the world come from leg odometry (controller.balance.leg_odometry: the stance sole, placed
 # in the world step by step through the encoders), with BODY placed from that sole by the encoders. The head
 # link follows from the encoders (forward kinematics of the controller's model), the camera from its mounting on
-# the head (the robot's calibration, robot.generate.CAMERAS). Errors of any of these pass straight into
+# the head (the robot's calibration, robot.robot_model.CAMERAS). Errors of any of these pass straight into
 # T_world_camera and so into perception. The controller's own frame (the gait plan's, which a walk's landing
 # errors move off the world: 19 mm after 1.0 m) is not used: a behaviour that acts on a location takes it into
 # the plan's frame through the odometry's world_from_control.
@@ -20,7 +20,7 @@ from robot.generate import CAMERAS
 #: The link the head cameras are mounted on.
 HEAD_LINK = "HEAD_LINK1"
 #: Optical axes (x right, y down, z forward) in HEAD_LINK1: the cameras look along the head's +x, with the
-#: image's right along -y and its down along -z (robot.generate.mjcf_cameras: xyaxes "0 -1 0 0 0 1").
+#: image's right along -y and its down along -z (robot.robot_model.mjcf_cameras: xyaxes "0 -1 0 0 0 1").
 R_HEAD_OPTICAL = np.array([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]])
 
 

@@ -285,7 +285,7 @@ class FootRectangle(Params):
 
 
 # HRP-2 soles in the sole frame (directly below the ankle):
-# the model's sole box (robot/generate.py): 0.2172 x 0.138 m centred at (0.015, -+0.01) m from the
+# the model's sole box (robot/robot_model.py): 0.2172 x 0.138 m centred at (0.015, -+0.01) m from the
 # ankle's vertical, so the right sole spans x -0.0936..0.1236, y -0.079..0.059 (outside is -y);
 # the left sole is mirrored.
 HRP2_RIGHT_SOLE = FootRectangle(front_m=0.1236, rear_m=0.0936, left_m=0.059, right_m=0.079)

@@ -21,16 +21,15 @@ from controller.kinematics.operation_ik import OperationIK
 from controller.kinematics.operation_targets import GazeTarget, HandTarget, OperationTargets
 from controller.kinematics.rotations import (
     matrix_to_rpy,
-    matrix_to_rpy_floats,
     rows_mul,
     rows_mulv,
     rows_tmul,
     rows_tmulv,
     rpy_to_matrix,
-    rpy_to_rows,
-    wrap_rad,
 )
-from controller.operation.deadman import deadman_factor
+from controller.operation.deadman import live_twists
+from controller.operation.frame import PlanarFrame, sole_from_sole, sub3
+from controller.operation.integration import PointLimits, integrate_point
 from controller.operation.limits import (
     HAND_STEP_LENGTH_M,
     JOINT_LIMIT,
@@ -38,12 +37,10 @@ from controller.operation.limits import (
     REACH,
     VELOCITY,
     clamp_to_achieved,
-    limit_twist,
-    ramp_twist,
     speed_scale,
 )
 from controller.operation.points import POINTS, ZERO_TWIST, OperationView, PointPose, Twist, check_twist, sum_per_point
-from controller.operation.targets import GazeAngles, HandPose, WaistPose, feet_frame, yaw_rotation
+from controller.operation.targets import GazeAngles, HandPose, WaistPose, feet_frame, status_layout
 from robot.names import JOINT_GROUPS, JOINT_NAMES
 
 _HANDS = ("rhand", "lhand")
@@ -121,41 +118,6 @@ def _six(t: Twist) -> tuple[float, ...]:
 _ZERO_SIX = _six(ZERO_TWIST)
 
 
-class _Frame:
-    """A planar frame (origin, yaw) with the world <-> frame maps for points and rotations."""
-
-    __slots__ = ("p", "yaw", "_R", "_cs")
-
-    def __init__(self, p: np.ndarray, yaw: float) -> None:
-        self.p, self.yaw, self._R = np.asarray(p, dtype=float), float(yaw), None
-        self._cs = (math.cos(self.yaw), math.sin(self.yaw))
-
-    @property
-    def R(self) -> np.ndarray:
-        """Rz(yaw) (3, 3), built on first use (most ticks need only to_local_rpy)."""
-        if self._R is None:
-            self._R = yaw_rotation(self.yaw)
-        return self._R
-
-    def to_local_rpy(self, p_world: np.ndarray, rpy_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """to_local(p_world, rpy_to_matrix(rpy_world)) on floats (Rz^T: a planar turn), once per tick."""
-        c, s = self._cs
-        x, y, z = (np.asarray(p_world, dtype=float) - self.p).tolist()
-        r0, r1, r2 = rpy_to_rows(*np.asarray(rpy_world, dtype=float).tolist())
-        return (np.array((c * x + s * y, c * y - s * x, z)),
-                np.array(((c * r0[0] + s * r1[0], c * r0[1] + s * r1[1], c * r0[2] + s * r1[2]),
-                          (c * r1[0] - s * r0[0], c * r1[1] - s * r0[1], c * r1[2] - s * r0[2]),
-                          r2)))
-
-    def to_local(self, p_world, R_world=None):
-        p = self.R.T @ (np.asarray(p_world, dtype=float) - self.p)
-        return p if R_world is None else (p, self.R.T @ R_world)
-
-    def to_world(self, p_local, R_local=None):
-        p = self.p + self.R @ np.asarray(p_local, dtype=float)
-        return p if R_local is None else (p, self.R @ R_local)
-
-
 class OperationLayer(Layer):
     """Each tick: motion twist (dead-man) + behaviour twist -> per-point sum (Eq. 5) -> speed limits ->
     integrate the targets in F -> whole-body IK -> the reference's upper body (arms, head, torso) and waist
@@ -201,9 +163,9 @@ class OperationLayer(Layer):
         self._reset_blend: tuple[Transition, np.ndarray] | None = None
         self._last_out: Reference | None = None
         self._last_in: Reference | None = None
-        self._feet_world: _Frame | None = None
+        self._feet_world: PlanarFrame | None = None
         self._ref_kin = RobotKinematics()  # the upstream reference's own soles (F without a gait)
-        self._ref_frame: _Frame | None = None
+        self._ref_frame: PlanarFrame | None = None
         self._ref_frame_key: tuple | None = None
         self._waist_checked = None  # the waist target last found reachable by the AutoBalancer's legs
         self._anchored_walking = False  # the hand targets are held relative to BODY (walking), else to F
@@ -212,8 +174,7 @@ class OperationLayer(Layer):
         self._time_s = 0.0
         self._version = 0
         self._status = SharedStatus()
-        self._limits_of: tuple = (None, None)  # (params, speed limits per IK point)
-        self._accel_of: tuple = (None, None)  # ((params, dt), twist change per tick per IK point)
+        self._limits = PointLimits()  # speed limits and acceleration steps per IK point, from the params
         self._rates: dict[str, Twist] = {}  # the twist each IK point integrated last tick (none: at rest)
         self._view_kin = RobotKinematics()  # view(): the output reference's FK (joints only, 4 frames)
         self._view_frames = {point: self._view_kin.model.getFrameId(frame) for point, frame in _FRAMES.items()}
@@ -309,18 +270,7 @@ class OperationLayer(Layer):
         return self._operate(ctx, ref, total, stopped or ctx.last_ports.hold)
 
     def _motion_twists(self, t: float) -> dict[str, Twist]:
-        p = self.params
-        out = {}
-        for point, (twist, t0) in list(self._motion.items()):
-            if t - t0 <= p.deadman_timeout_s and p.deadman_timeout_s >= 0.0 and p.deadman_ramp_s >= 0.0:  # fresh
-                out[point] = twist
-                continue
-            k = deadman_factor(t - t0, p.deadman_timeout_s, p.deadman_ramp_s)
-            if k <= 0.0:
-                del self._motion[point]
-                continue
-            out[point] = twist if k == 1.0 else twist.scaled(k)
-        return out
+        return live_twists(self._motion, t, self.params.deadman_timeout_s, self.params.deadman_ramp_s)
 
     def _publish_walk(self, ctx: TickContext, twist: Twist | None) -> None:
         if twist is None or twist.is_zero:
@@ -376,23 +326,22 @@ class OperationLayer(Layer):
                         self.kin.update(p_body, R_body, q_seed)
                         seeded = True
                     self._targets[point] = self._seed(point, anchor, float(F.p[2]) - self._ground_z(gait, F))
-                limited = limit_twist(twist, *self._speed_limits(point))
-                lin_step, ang_step = self._accel_steps(point, dt)
-                ramped = ramp_twist(previous or ZERO_TWIST, limited.twist, lin_step, ang_step)
-                if ramped.is_zero:
+                step = integrate_point(self._targets[point], twist, previous, self._limits.speed(p, point),
+                                       self._limits.accel_steps(p, point, dt), dt)
+                if step.rate.is_zero:
                     rates.pop(point, None)
                 else:
-                    rates[point] = ramped
+                    rates[point] = step.rate
                 if point in _HANDS:
                     stepped_from[point] = self._targets[point]
-                self._targets[point] = self._targets[point].integrated(ramped, dt)
-                self._limited[point] = VELOCITY if limited.scale < 1.0 else None
+                self._targets[point] = step.target
+                self._limited[point] = VELOCITY if step.velocity_limited else None
             if self._reset_blend is not None:  # a new motion during a reset: from where the blend is
                 self._reset_blend = None
         q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
         if "waist" in self._targets:
             base_out, rpy_out = self._waist(ref, gait, F, stopped)
-        p_rel, R_rows = _sub(p_body.tolist(), anchor.tolist()), R_body.tolist()  # BODY in F, from the anchor
+        p_rel, R_rows = sub3(p_body.tolist(), anchor.tolist()), R_body.tolist()  # BODY in F, from the anchor
         ik_targets = self._ik_targets(p_rel, R_rows)
         if ik_targets.active:
             res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, ik_targets)
@@ -428,27 +377,6 @@ class OperationLayer(Layer):
         self._last_out = out
         return out
 
-    def _speed_limits(self, point: str) -> tuple[float, float]:
-        """(linear [m/s], angular [rad/s]) speed limit of an IK point, from the parameters (kept per params)."""
-        p = self.params
-        if self._limits_of[0] is not p:
-            self._limits_of = (p, {"rhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
-                                   "lhand": (p.hand_speed_m_s, p.hand_angular_speed_rad_s),
-                                   "head": (1.0, p.head_angular_speed_rad_s),
-                                   "waist": (p.waist_speed_m_s, p.waist_angular_speed_rad_s)})
-        return self._limits_of[1][point]
-
-    def _accel_steps(self, point: str, dt_s: float) -> tuple[float, float]:
-        """(linear [m/s], angular [rad/s]) change of an IK point's twist allowed in one tick of dt_s."""
-        p = self.params
-        key = (p, dt_s)
-        if self._accel_of[0] != key:
-            self._accel_of = (key, {"rhand": (p.hand_accel_m_s2 * dt_s, p.hand_angular_accel_rad_s2 * dt_s),
-                                    "lhand": (p.hand_accel_m_s2 * dt_s, p.hand_angular_accel_rad_s2 * dt_s),
-                                    "head": (1.0, p.head_angular_accel_rad_s2 * dt_s),  # (no linear part)
-                                    "waist": (p.waist_accel_m_s2 * dt_s, p.waist_angular_accel_rad_s2 * dt_s)})
-        return self._accel_of[1][point]
-
     def _re_anchor(self, shift: np.ndarray) -> None:
         """Walking started (shift = BODY in F) or stopped (shift = -BODY in F): the hand targets and the
         neck re-expressed relative to the new anchor, the same place in the world at this tick. Standing
@@ -463,29 +391,29 @@ class OperationLayer(Layer):
             self._neck_feet = self._neck_feet - shift
         self._history.clear()  # its targets are in the old anchor: a release restarts from the present
 
-    def _body_in_feet(self, ref: Reference, gait) -> tuple[_Frame, np.ndarray, np.ndarray]:
+    def _body_in_feet(self, ref: Reference, gait) -> tuple[PlanarFrame, np.ndarray, np.ndarray]:
         """F in the world and BODY in F as the AutoBalancer put it last tick (its gait port: BODY x-y where
         the COG balances, legs on the soles); without a gait, F and BODY of the reference itself."""
         if gait is not None and gait.base_pos_world is not None:
-            F = _Frame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
+            F = PlanarFrame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
             p_body, R_body = F.to_local_rpy(gait.base_pos_world, gait.base_rpy_rad)
             return F, p_body, R_body
         F = self._reference_frame(ref)
         p_body, R_body = F.to_local_rpy(ref.base_pos_world, ref.base_rpy_rad)
         return F, p_body, R_body
 
-    def _reference_frame(self, ref: Reference) -> _Frame:
+    def _reference_frame(self, ref: Reference) -> PlanarFrame:
         """F of the upstream reference (its own soles); cached while its base and legs do not move."""
         key = (*ref.base_pos_world.tolist(), *ref.base_rpy_rad.tolist(), *ref.q_rad[_LEGS].tolist())
         if key != self._ref_frame_key:
             kin = self._ref_kin
             kin.update_rpy(ref.base_pos_world, ref.base_rpy_rad, ref.q_rad)
             (pr, Rr), (pl, Rl) = kin.frame_pose("rleg_end"), kin.frame_pose("lleg_end")
-            self._ref_frame = _Frame(*feet_frame(pr, Rr, pl, Rl))
+            self._ref_frame = PlanarFrame(*feet_frame(pr, Rr, pl, Rl))
             self._ref_frame_key = key
         return self._ref_frame
 
-    def _waist(self, ref: Reference, gait, F: _Frame, stopped: bool) -> tuple[np.ndarray, np.ndarray]:
+    def _waist(self, ref: Reference, gait, F: PlanarFrame, stopped: bool) -> tuple[np.ndarray, np.ndarray]:
         """BODY height and orientation of the waist target, as the reference's base pose: the AutoBalancer
         keeps them and balances on the legs. A height or tilt its legs cannot reach is clamped to the last
         reachable one (reason "reach")."""
@@ -515,7 +443,7 @@ class OperationLayer(Layer):
         return base, rpy
 
     @staticmethod
-    def _ground_z(gait, F: _Frame) -> float:
+    def _ground_z(gait, F: PlanarFrame) -> float:
         """The height the waist's is counted from: F's, or while one sole swings the other's (F would bob)."""
         if gait is None or all(gait.contact):
             return float(F.p[2])
@@ -542,13 +470,13 @@ class OperationLayer(Layer):
         for point in ("rhand", "lhand"):
             if point in t:
                 pose = t[point]
-                kw[point] = HandTarget.from_rows(rows_tmulv(R_body, _sub(pose.p_feet_m.tolist(), p_body)),
+                kw[point] = HandTarget.from_rows(rows_tmulv(R_body, sub3(pose.p_feet_m.tolist(), p_body)),
                                                  rows_tmul(R_body, pose.R_feet_hand.tolist()))
         if "head" in t:
             nx, ny, nz = self._neck_feet.tolist() if self._neck_feet is not None else (0.0, 0.0, 0.0)
             dx, dy, dz = t["head"].direction_feet().tolist()
             look = (nx + _LOOK_AT_DISTANCE_M * dx, ny + _LOOK_AT_DISTANCE_M * dy, nz + _LOOK_AT_DISTANCE_M * dz)
-            kw["head"] = GazeTarget.trusted_look_at(np.array(rows_tmulv(R_body, _sub(look, p_body))))
+            kw["head"] = GazeTarget.trusted_look_at(np.array(rows_tmulv(R_body, sub3(look, p_body))))
         return OperationTargets(**kw)
 
     @staticmethod
@@ -609,17 +537,12 @@ class OperationLayer(Layer):
         kin = self._view_kin
         kin.update_joints(p_body, R_body, ref.q_rad)  # in F, BODY where the AutoBalancer has it
         points = {}
-        c, s = F_world._cs
-        fx, fy, fz = F_world.p.tolist()
         for point, fid in self._view_frames.items():
             (a0, a1, a2, x), (a3, a4, a5, y), (a6, a7, a8, z), _ = kin.frame_homogeneous(fid).tolist()
-            # to the world on floats: p_w = F.p + Rz p, R_w = Rz R
-            p_w = (fx + c * x - s * y, fy + s * x + c * y, fz + z)
-            R_w = ((c * a0 - s * a3, c * a1 - s * a4, c * a2 - s * a5),
-                   (s * a0 + c * a3, s * a1 + c * a4, s * a2 + c * a5), (a6, a7, a8))
+            R_feet = ((a0, a1, a2), (a3, a4, a5), (a6, a7, a8))
+            p_w, R_w = F_world.to_world_rows((x, y, z), R_feet)
             points[point] = PointPose(p_world_m=frozen_array(p_w), R_world_point=frozen_array(R_w),
-                                      p_feet_m=frozen_array((x, y, z)),
-                                      R_feet_point=frozen_array(((a0, a1, a2), (a3, a4, a5), (a6, a7, a8))))
+                                      p_feet_m=frozen_array((x, y, z)), R_feet_point=frozen_array(R_feet))
         gaze = GazeAngles.of_direction(points["head"].R_feet_point[:, 0])
         view = OperationView(time_s=self._time_s, feet_p_world_m=frozen_array(F_world.p), feet_yaw_rad=F_world.yaw,
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
@@ -633,12 +556,7 @@ class OperationLayer(Layer):
         g = self._gait
         if g is None:
             return OperationView.__dataclass_fields__["lsole_from_rsole"].default
-        (r00, _, _), (r10, _, _), _ = g.R_rsole_world.tolist()
-        (l00, _, _), (l10, _, _), _ = g.R_lsole_world.tolist()
-        yaw_r = math.atan2(r10, r00)
-        dx, dy = (float(g.p_lsole_world[i] - g.p_rsole_world[i]) for i in (0, 1))
-        c, s = math.cos(yaw_r), math.sin(yaw_r)
-        return (c * dx + s * dy, -s * dx + c * dy, wrap_rad(math.atan2(l10, l00) - yaw_r))
+        return sole_from_sole(g.p_rsole_world, g.R_rsole_world, g.p_lsole_world, g.R_lsole_world)
 
     def status(self) -> OperationStatus:
         return self._status.get((self._version, self.enabled), self._build_status)
@@ -653,8 +571,8 @@ class OperationLayer(Layer):
                 target = None if w is None else (w.vx_m_s, w.vy_m_s, w.vtheta_rad_s)
                 achieved, limited = None, None
             else:
-                target = _layout(self._targets.get(point), self._anchor)
-                achieved = _layout(self._achieved.get(point), self._anchor)
+                target = status_layout(self._targets.get(point), self._anchor)
+                achieved = status_layout(self._achieved.get(point), self._anchor)
                 limited = self._limited.get(point) if point in self._targets else None
             pts[point] = PointStatus(target=target, achieved=achieved, limited=limited,
                                      motion=_ZERO_SIX if motion is ZERO_TWIST else _six(motion),
@@ -662,17 +580,3 @@ class OperationLayer(Layer):
         return OperationStatus(enabled=self.enabled, active=bool(self._targets), motion_stopped=self._stopped,
                                points=pts)
 
-
-def _layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
-    """A pose as the status gives it, in F (a hand held relative to BODY while walking: plus BODY in F)."""
-    if pose is None:
-        return None
-    if isinstance(pose, HandPose):
-        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy_floats(pose.R_feet_hand))
-    if isinstance(pose, GazeAngles):
-        return (pose.pitch_rad, pose.yaw_rad)
-    return (pose.height_m, *pose.rpy_rad)
-
-
-def _sub(a, b) -> tuple[float, float, float]:
-    return a[0] - b[0], a[1] - b[1], a[2] - b[2]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from controller.core.errors import InvalidCommand
+from controller.operation.points import Twist
 
 DEADMAN_TIMEOUT_S = 0.2  # a setpoint older than this [s] of control time no longer counts in full
 DEADMAN_RAMP_S = 0.1  # ... and fades to zero over this [s] after the timeout, instead of snapping
@@ -19,3 +20,20 @@ def deadman_factor(age_s: float, timeout_s: float = DEADMAN_TIMEOUT_S, ramp_s: f
     if over >= ramp_s - 1e-12:  # (0.3 - 0.2 is a hair under 0.1 in floats)
         return 0.0
     return 1.0 - over / ramp_s
+
+
+def live_twists(setpoints: dict[str, tuple[Twist, float]], time_s: float, timeout_s: float = DEADMAN_TIMEOUT_S,
+                ramp_s: float = DEADMAN_RAMP_S) -> dict[str, Twist]:
+    """The streamed setpoints {point: (twist, control time it arrived [s])} as they count at `time_s` [s]: each
+    twist weighted by deadman_factor of its age; a setpoint whose weight reached 0 is removed from `setpoints`."""
+    out = {}
+    for point, (twist, t0) in list(setpoints.items()):
+        if time_s - t0 <= timeout_s and timeout_s >= 0.0 and ramp_s >= 0.0:  # fresh
+            out[point] = twist
+            continue
+        k = deadman_factor(time_s - t0, timeout_s, ramp_s)
+        if k <= 0.0:
+            del setpoints[point]
+            continue
+        out[point] = twist if k == 1.0 else twist.scaled(k)
+    return out

@@ -9,6 +9,7 @@ import numpy as np
 import pinocchio as pin
 
 from controller.core.types import read_only
+from controller.kinematics.rotations import matrix_to_rpy_floats
 from controller.operation.limits import share_along
 from controller.operation.points import Twist
 from robot.sensors import frozen_array
@@ -137,3 +138,16 @@ class WaistPose:
         wr, wp, wy = twist.angular_rad_s.tolist()
         return WaistPose(self.height_m + float(twist.linear_m_s[2]) * dt_s,
                          (r + wr * dt_s, p + wp * dt_s, y + wy * dt_s))
+
+
+def status_layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
+    """A target as the status gives it, in F: a hand (x, y, z [m], roll, pitch, yaw [rad]) held relative to
+    `anchor` (BODY in F while walking, else 0) plus the anchor; a gaze (pitch, yaw [rad]); a waist (height [m],
+    roll, pitch, yaw [rad]); None for no target."""
+    if pose is None:
+        return None
+    if isinstance(pose, HandPose):
+        return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy_floats(pose.R_feet_hand))
+    if isinstance(pose, GazeAngles):
+        return (pose.pitch_rad, pose.yaw_rad)
+    return (pose.height_m, *pose.rpy_rad)

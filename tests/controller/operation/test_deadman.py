@@ -29,3 +29,15 @@ def test_zero_ramp_snaps_and_negative_times_are_refused():
     assert deadman_factor(0.2001, ramp_s=0.0) == 0.0
     with pytest.raises(InvalidCommand, match="ramp_s"):
         deadman_factor(0.1, ramp_s=-1.0)
+
+
+def test_live_twists_weigh_each_setpoint_by_its_age_and_forget_the_expired():
+    from controller.operation.deadman import live_twists
+    from controller.operation.points import Twist
+
+    fresh, fading, gone = Twist.of((0.1, 0.0, 0.0)), Twist.of((0.2, 0.0, 0.0)), Twist.of((0.3, 0.0, 0.0))
+    setpoints = {"rhand": (fresh, 1.0), "lhand": (fading, 0.75), "waist": (gone, 0.5)}
+    out = live_twists(setpoints, 1.0)
+    assert out["rhand"] is fresh  # under the timeout: the same object, not a copy
+    assert out["lhand"].linear_m_s[0] == pytest.approx(0.1)  # 0.25 s old: half way down the ramp
+    assert "waist" not in out and set(setpoints) == {"rhand", "lhand"}

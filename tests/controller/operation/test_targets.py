@@ -60,3 +60,14 @@ def test_advanced_along_is_the_share_of_the_step_made_along_it(rotated):
     np.testing.assert_allclose(out.R_feet_hand, expected.R_feet_hand, atol=1e-12)
     assert 0.0 < share < 1.0
     assert start.advanced_along(target, start, 0.1) is start and start.advanced_along(target, target, 0.1) is target
+
+
+def test_the_status_layout_of_each_target_kind():
+    from controller.operation.targets import status_layout
+
+    anchor = np.array((0.01, 0.0, 0.5))
+    hand = status_layout(HandPose.of((0.3, -0.2, 0.3), yaw_rotation(0.2)), anchor)
+    assert hand == pytest.approx((0.31, -0.2, 0.8, 0.0, 0.0, 0.2))
+    assert status_layout(GazeAngles(0.1, 0.5), anchor) == (0.1, 0.5)
+    assert status_layout(WaistPose(0.6, (0.0, 0.1, 0.0)), anchor) == (0.6, 0.0, 0.1, 0.0)
+    assert status_layout(None, anchor) is None

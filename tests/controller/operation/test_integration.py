@@ -1,0 +1,45 @@
+"""One tick of an operated point: speed limit, acceleration ramp from the last tick's twist, integration (unit)."""
+
+import numpy as np
+import pytest
+
+from controller.layers.operation import OperationParams
+from controller.operation.integration import PointLimits, integrate_point
+from controller.operation.points import Twist
+from controller.operation.targets import HandPose, WaistPose
+
+DT = 0.005
+
+
+def test_a_twist_within_its_limits_moves_the_target_by_twist_times_dt():
+    h = HandPose.of((0.3, -0.2, 0.8), np.eye(3))
+    twist = Twist.of((0.1, 0.0, 0.0))
+    step = integrate_point(h, twist, twist, (0.3, 1.0), (1.0, 1.0), DT)
+    assert step.rate is twist and not step.velocity_limited
+    assert np.allclose(step.target.p_feet_m, (0.3 + 0.1 * DT, -0.2, 0.8))
+
+
+def test_a_too_fast_twist_is_scaled_down_and_flagged():
+    w = WaistPose(0.6, (0.0, 0.0, 0.0))
+    step = integrate_point(w, Twist.of((0.0, 0.0, -0.4)), Twist.of((0.0, 0.0, -0.1)), (0.1, 0.5), (1.0, 1.0), DT)
+    assert step.velocity_limited
+    assert step.rate.linear_m_s[2] == pytest.approx(-0.1)
+    assert step.target.height_m == pytest.approx(0.6 - 0.1 * DT)
+
+
+def test_from_rest_the_twist_ramps_up_by_the_acceleration_step():
+    h = HandPose.of((0.3, -0.2, 0.8), np.eye(3))
+    step = integrate_point(h, Twist.of((0.2, 0.0, 0.0)), None, (0.3, 1.0), (0.5 * DT, 4.0 * DT), DT)
+    assert step.rate.linear_m_s[0] == pytest.approx(0.5 * DT)  # 0.5 m/s^2 for one tick
+    assert not step.velocity_limited
+    assert step.target.p_feet_m[0] == pytest.approx(0.3 + 0.5 * DT * DT)
+
+
+def test_the_limit_tables_follow_the_parameters_and_the_tick():
+    limits, p = PointLimits(), OperationParams()
+    assert limits.speed(p, "rhand") == (p.hand_speed_m_s, p.hand_angular_speed_rad_s)
+    assert limits.speed(p, "head") == (1.0, p.head_angular_speed_rad_s)
+    assert limits.accel_steps(p, "waist", DT) == (p.waist_accel_m_s2 * DT, p.waist_angular_accel_rad_s2 * DT)
+    faster = OperationParams(hand_speed_m_s=0.5)
+    assert limits.speed(faster, "lhand")[0] == 0.5
+    assert limits.accel_steps(faster, "lhand", 2 * DT)[0] == faster.hand_accel_m_s2 * 2 * DT
