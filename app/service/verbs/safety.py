@@ -1,0 +1,36 @@
+"""Verbs of the stops: the hard e-stop's release and the EmergencyStopper's motion stop (hrpsys
+EmergencyStopperService)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from app.service.verbs.base import Host, Verb
+
+
+@dataclass(frozen=True)
+class ReleaseEstop(Verb):
+    name = "release_estop"
+    setpoints_before: int = 0  # the console's newest setpoint number when the release was sent
+
+    def run(self, host: Host) -> str:
+        host.release_estop(self.setpoints_before)
+        return "hard e-stop released"
+
+
+@dataclass(frozen=True)
+class StopMotion(Verb):
+    name = "stop_motion"
+
+    def run(self, host: Host) -> str:
+        host.layer("es").stop_motion()
+        return "planned motion stopped"
+
+
+@dataclass(frozen=True)
+class ReleaseMotion(Verb):
+    name = "release_motion"
+
+    def run(self, host: Host) -> str:
+        host.layer("es").release_motion()
+        return "motion stop released"
