@@ -88,6 +88,16 @@ BASE_LOWERING_TIME_S = 0.2
 WALK_HEIGHT_RATE_M_S = 0.2
 #: [m] BODY may stand this much above the walking height while walking (no lowering for rounding)
 WALK_HEIGHT_SLACK_M = 0.001
+#: [m] the widest stance (the soles' centres across, in their mean heading) a walk starts from: measured from 0.32 m
+#: with the swing knee 7 deg from straight, from 0.36 m it straightens and raises the flag (a wide catching step)
+WALK_STANCE_MAX_WIDTH_M = 0.34
+
+
+def stance_width_m(T_world_rfoot: np.ndarray, T_world_lfoot: np.ndarray) -> float:
+    """How far apart the soles' centres are across [m]: in the frame of their mean heading."""
+    yaw = math.atan2(T_world_rfoot[1, 0] + T_world_lfoot[1, 0], T_world_rfoot[0, 0] + T_world_lfoot[0, 0])
+    dx, dy = (T_world_lfoot[:2, 3] - T_world_rfoot[:2, 3]).tolist()
+    return abs(-math.sin(yaw) * dx + math.cos(yaw) * dy)
 
 
 def check_walk_command(cmd: WalkCommand) -> None:
@@ -477,9 +487,14 @@ class AutoBalancer(Layer):
 
     def _legs_near_limit(self) -> str | None:
         """Why a walk cannot start from the legs' pose (the waist tilted until a leg joint has too little range
-        left to walk; campaign seeds 1017, 1018), or None."""
+        left to walk; campaign seeds 1017, 1018; the feet too far apart, seed 1004), or None."""
         if self.gait.walking or self._last_out is None:
             return None
+        width = stance_width_m(self.gait.T_world_rfoot, self.gait.T_world_lfoot)
+        if width > WALK_STANCE_MAX_WIDTH_M:
+            return (f"the feet stand {width:.3f} m apart across (a catching step's landing), wider than a walk can "
+                    f"start from ({WALK_STANCE_MAX_WIDTH_M:g} m): the COM over one foot stretches the other leg "
+                    "straight")
         i, margin = nearest_leg_limit(self._last_out.q_rad, self._q_lower_rad, self._q_upper_rad)
         if margin >= WALK_LEG_LIMIT_MARGIN_RAD:
             return None

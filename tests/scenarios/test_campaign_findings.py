@@ -9,6 +9,9 @@ from app.service.errors import Refused
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
 from app.service.verbs import GoPos, GoVelocity, WalkEmergencyStop, WalkStop
+from app.service.verbs.walking import Footstep as SetFootstep
+from app.service.verbs.walking import SetFootsteps
+from controller.layers.auto_balancer import stance_width_m
 from robot.names import JOINT_NAMES
 
 STICK_PERIOD_TICKS = 8  # the page streams a held stick every 40 ms
@@ -154,3 +157,39 @@ def test_seed_2006_a_walking_emergency_stop_in_a_walks_last_step_ends_it_standin
         assert not obs.layers["st"].emergency and not obs.fallen, f"{obs.time_s - t0:.3f} s"
     assert stopped and not obs.layers["abc"].walking
     assert worst_m < 0.026  # measured 20 mm
+
+
+def widened(width_m: float) -> LocalRobot:
+    """The robot standing, then the left foot stepped out in three setFootSteps steps to `width_m` across."""
+    robot = LocalRobot("default")
+    robot.run_for(3.5)
+    steps = [SetFootstep("rleg", (0.0, 0.0, 0.0))]
+    for i in (1, 2, 3):
+        steps += [SetFootstep("lleg", (0.0, 0.19 + (width_m - 0.19) * i / 3, 0.0)), SetFootstep("rleg", (0.0, 0.0, 0.0))]
+    robot.submit(SetFootsteps(tuple(steps[:-1]))).result()
+    robot.run_until(lambda obs: not obs.layers["abc"].walking, 15.0)
+    obs = robot.run_for(1.5)
+    assert not obs.fallen and not obs.layers["st"].emergency
+    return robot
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("width_m, starts", [(0.30, True), (0.36, False), (0.40, False)])
+def test_seed_1004_no_walk_starts_from_a_stance_wider_than_a_step_can_leave(width_m, starts):
+    # a catching step landed the feet 0.41 m apart; stand's aligning walk then shifted the COM over one foot, the
+    # other knee was commanded straight and the robot fell. Measured: from 0.32 m a walk goes (the knee 7 deg from
+    # straight), from 0.36 m the knee straightens and the flag rises: wider than 0.34 m is refused, naming it
+    robot = widened(width_m)
+    stance = stance_width_m(robot.chain["abc"].gait.T_world_rfoot, robot.chain["abc"].gait.T_world_lfoot)
+    assert stance == pytest.approx(width_m, abs=0.005)
+    if not starts:
+        with pytest.raises(Refused, match=rf"feet stand {stance:.3f} m apart across .* \(0.34 m\)"):
+            robot.submit(GoPos(0.2, 0.0, 0.0)).result()
+        return
+    robot.submit(GoPos(0.2, 0.0, 0.0)).result()
+    bent = math.inf
+    for _ in range(int(round(8.0 / 0.005))):
+        obs = robot.step()
+        bent = min(bent, *(obs.q_cmd_rad[i] for i in KNEES))
+        assert not obs.fallen and not obs.layers["st"].emergency
+    assert bent > math.radians(12.0)  # measured 0.48 rad from 0.28 m, 0.13 rad from 0.32 m
