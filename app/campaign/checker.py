@@ -215,13 +215,13 @@ class Checker:
     # ---- the end of a session -------------------------------------------------------------------------------------
     def back_to_half_sitting(self, stand: Mapping[str, Any] | None, joints_deg: Mapping[str, float],
                              half_sitting_deg: Mapping[str, float], fallen: bool) -> None:
-        """Invariant 6: `stand` (its run, None when refused) after the stops were released brought every joint
-        but the grippers within STAND_TOLERANCE_DEG of half-sitting, unless the robot fell."""
+        """Invariant 6: `stand` (its run, or its refusal as {state, message}) after the stops were released brought
+        every joint but the grippers within STAND_TOLERANCE_DEG of half-sitting, unless the robot fell."""
         if fallen:
             return
         if stand is None or stand.get("state") != "succeeded":
-            self.violate(6, f"`stand` after releasing the stops did not succeed: "
-                            f"{None if stand is None else (stand.get('state'), stand.get('message'))}")
+            said = "no answer" if stand is None else f"{stand.get('state')}: {stand.get('message')}"
+            self.violate(6, f"`stand` after releasing the stops did not succeed ({said})")
             return
         off = {name: joints_deg[name] - q for name, q in half_sitting_deg.items()
                if name not in GRIPPERS and name in joints_deg

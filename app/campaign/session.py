@@ -460,6 +460,8 @@ class Session:
             run_id = int(body["id"])
             self.wait_until(lambda s: self._run_over(run_id), 15.0, "stand")
             _, stand = self.request("GET", f"/api/behaviors/runs/{run_id}")
+        else:  # the refusal's own words in the finding
+            stand = {"state": f"refused ({status})", "message": body.get("detail") if isinstance(body, dict) else body}
         self.wait_until(lambda s: False, SETTLE_S, "")
         self.checker.back_to_half_sitting(stand, {n: j["meas_deg"] for n, j in self.state["joints"].items()},
                                           half_sitting, bool(self.state.get("fallen")))

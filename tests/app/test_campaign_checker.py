@@ -169,7 +169,10 @@ def test_stand_that_fails_or_leaves_a_joint_off_half_sitting_is_caught():
     c.back_to_half_sitting(None, HALF, HALF, fallen=False)
     c.back_to_half_sitting({"state": "failed", "message": "x"}, HALF, HALF, fallen=False)
     c.back_to_half_sitting({"state": "succeeded"}, {**HALF, "RLEG_JOINT3": 40.0}, HALF, fallen=False)
-    assert invariants(c) == [6, 6, 6] and "RLEG_JOINT3 -10.0 deg" in c.violations[2].detail
+    c.back_to_half_sitting({"state": "refused (409)", "message": "goPos: the feet stand 0.404 m apart"}, HALF, HALF,
+                           fallen=False)
+    assert invariants(c) == [6, 6, 6, 6] and "RLEG_JOINT3 -10.0 deg" in c.violations[2].detail
+    assert "(failed: x)" in c.violations[1].detail and "refused (409): goPos: the feet" in c.violations[3].detail
 
 
 def test_stand_back_at_half_sitting_the_grippers_aside_or_a_fallen_robot_is_not_flagged():
