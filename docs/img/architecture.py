@@ -56,7 +56,7 @@ def draw() -> str:
                             "-> service.run_behavior(name, values)"])
     arrow(mid_l, b1, mid_l, 180)
     arrow(mid_r, b1, mid_r, 180)
-    l2 = box(LEFT, l1 + 26, COL_W, ["OperatorService.put_setpoint (app/service/__init__.py)",
+    l2 = box(LEFT, l1 + 26, COL_W, ["OperatorService.put_setpoint (app/service/operator.py)",
                                     "PointClaims: one client streams to a point at a time",
                                     "RobotProcess.put_setpoint -> SetpointTable.put (numbered)"])
     r2 = box(RIGHT, l1 + 26, COL_W, ["OperatorService.run(RunBehavior(...))",
