@@ -1,21 +1,40 @@
 # Two entry points for a fresh machine with Python 3.11 (see README):
 #   make console   set up .venv and start the console on the default scene
 #   make test      set up .venv (and Debian's chromium for the browser tests) and run the test suite
+# and, as .ci/run does after `make test`:
+#   make test-py313   set up .venv313 on Python 3.13 and run the unit tests and one walk there
 PYTHON ?= python3.11
 VENV ?= .venv
 PY := $(VENV)/bin/python
+# requires-python says 3.11-3.13: the newest one too, in an environment of its own (PYTHON313=... if it is
+# not on PATH under this name)
+PYTHON313 ?= python3.13
+VENV313 ?= .venv313
+# on 3.13 the unit tests and one short walking scenario (about a minute), not the whole suite
+TESTS313 ?= tests/controller tests/robot tests/behaviors tests/test_architecture.py \
+	'tests/scenarios/test_walking.py::test_go_pos_lands_the_planned_feet_on_the_goal_and_the_simulated_feet_on_the_plan[forward-left-20]'
 ARGS ?=
 # the browser tests' screenshots go here (git-ignored: out/); a CI run keeps the folder as its artifacts
 HRP2_ARTIFACTS ?= out/artifacts
 
-.PHONY: console test setup browser bench
+.PHONY: console test test-py313 setup browser bench
+
+# a virtual environment with the package and its test tools: $(1) the interpreter, $(2) the folder
+define install_venv
+	$(1) -m venv $(2)
+	$(2)/bin/python -m pip install --quiet --upgrade pip
+	$(2)/bin/python -m pip install --quiet -e '.[test]'
+	$(2)/bin/python -c "import mujoco, pinocchio, placo, viser, qpsolvers"
+	touch $(2)/.installed
+endef
 
 $(VENV)/.installed: pyproject.toml
-	$(PYTHON) -m venv $(VENV)
-	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
-	$(PY) -c "import mujoco, pinocchio, placo, viser, qpsolvers"
-	touch $@
+	$(call install_venv,$(PYTHON),$(VENV))
+
+$(VENV313)/.installed: pyproject.toml
+	@$(PYTHON313) -c 'import sys; sys.exit(sys.version_info[:2] != (3, 13))' || { \
+	  echo "$(PYTHON313) is not a Python 3.13 (or is missing): give one with PYTHON313=..." >&2; exit 1; }
+	$(call install_venv,$(PYTHON313),$(VENV313))
 
 setup: $(VENV)/.installed
 
@@ -29,6 +48,11 @@ console: setup
 
 test: setup browser
 	MUJOCO_GL=egl HRP2_ARTIFACTS=$(abspath $(HRP2_ARTIFACTS)) $(PY) -m pytest $(ARGS); rc=$$?; \
+	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
+
+# pytest's exit code 5 (no test collected: a renamed test) fails here too
+test-py313: $(VENV313)/.installed
+	MUJOCO_GL=egl $(VENV313)/bin/python -m pytest -m "not slow and not browser" $(TESTS313) $(ARGS); rc=$$?; \
 	if [ $$rc -eq 5 ]; then echo "pytest collected no tests: failing"; exit 1; fi; exit $$rc
 
 bench: setup
