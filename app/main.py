@@ -3,6 +3,7 @@ operator page. Serves an OperatorService its owner built (the CLI: the robot in 
 
 from __future__ import annotations
 
+import mimetypes
 from pathlib import Path
 
 from fastapi import FastAPI
@@ -37,6 +38,9 @@ from app.service import OperatorService
 from app.settings import Settings
 
 STATIC_DIR = Path(__file__).resolve().parents[1] / "static"
+# the page's scripts are ES modules, which a browser runs only if served as JavaScript (a system's MIME table may
+# say otherwise for .js)
+mimetypes.add_type("text/javascript", ".js")
 
 
 def create_app(settings: Settings | None = None, service: OperatorService | None = None):

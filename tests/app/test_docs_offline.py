@@ -1,9 +1,11 @@
-"""/docs works without the internet: Swagger UI's files come from the pinned swagger-ui-bundle-v2 package,
-served by the console itself; nothing in the page points elsewhere."""
+"""/docs and the operator page work without the internet: Swagger UI's files come from the pinned
+swagger-ui-bundle-v2 package, the page's modules from static/, all served by the console itself; nothing in
+either page points elsewhere."""
 
 from __future__ import annotations
 
 import re
+from urllib.parse import urljoin
 
 
 def test_docs_load_swagger_ui_from_the_console_only(client):
@@ -20,3 +22,30 @@ def test_docs_load_swagger_ui_from_the_console_only(client):
         ("text/javascript", "application/javascript"))
     assert client.get("/openapi.json").json()["openapi"].startswith("3.1")
     assert client.get("/redoc").status_code == 404  # ReDoc would load from a CDN: not offered
+
+
+def imports_of(source: str) -> list[str]:
+    """The modules an ES module imports or re-exports from ("./x.js": relative to it)."""
+    return re.findall(r"""^(?:import|export)\s[^;]*?\sfrom\s+["']([^"']+)["'];""", source, re.M)
+
+
+def test_the_operator_page_loads_its_modules_from_the_console_as_javascript(client):
+    html = client.get("/").text
+    scripts = re.findall(r"""<script\b[^>]*\bsrc\s*=\s*["']([^"']+)["']""", html)
+    assert scripts[:2] == ["/static/js/estop.js", "/static/console.js"], scripts
+    assert all(f'<script type="module" src="{s}"></script>' in html for s in scripts[:2])
+    seen: dict[str, str] = {}
+    todo = list(scripts)
+    while todo:
+        url = todo.pop()
+        if url in seen:
+            continue
+        r = client.get(url)
+        assert r.status_code == 200, url
+        assert r.headers["content-type"].startswith(("text/javascript", "application/javascript")), url
+        seen[url] = r.text
+        todo += [urljoin(url, i) for i in imports_of(r.text)]
+    assert len(seen) >= 8 and all(u.startswith("/static/") for u in seen), sorted(seen)
+    # the E-STOP's module loads first and imports nothing: it works whatever else fails to load
+    assert imports_of(seen["/static/js/estop.js"]) == []
+    assert "/static/js/estop.js" in {urljoin("/static/console.js", i) for i in imports_of(seen["/static/console.js"])}

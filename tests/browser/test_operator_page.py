@@ -328,7 +328,9 @@ def test_every_request_of_the_page_and_its_3d_view_stays_on_this_machine(page, h
     viewer_ws = parse_qs(urlsplit(src).query)["websocket"][0]
     urls.append(viewer_ws)
     paths = {urlsplit(u).path for u in urls}
-    assert {"/", "/static/console.js", "/api/config", "/ws/telemetry", "/viewer/"} <= paths, sorted(paths)
+    expected = {"/", "/static/js/estop.js", "/static/console.js", "/static/js/sticks.js", "/api/config",
+                "/ws/telemetry", "/viewer/"}
+    assert expected <= paths, sorted(paths)
     assert urlsplit(viewer_ws).port == hrp2_console.viewer_port
     assert not leaving(urls, ports), leaving(urls, ports)
     shot(page, artifacts, "page_local_requests")
