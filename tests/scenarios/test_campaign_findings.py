@@ -165,7 +165,8 @@ def widened(width_m: float) -> LocalRobot:
     robot.run_for(3.5)
     steps = [SetFootstep("rleg", (0.0, 0.0, 0.0))]
     for i in (1, 2, 3):
-        steps += [SetFootstep("lleg", (0.0, 0.19 + (width_m - 0.19) * i / 3, 0.0)), SetFootstep("rleg", (0.0, 0.0, 0.0))]
+        y = 0.19 + (width_m - 0.19) * i / 3
+        steps += [SetFootstep("lleg", (0.0, y, 0.0)), SetFootstep("rleg", (0.0, 0.0, 0.0))]
     robot.submit(SetFootsteps(tuple(steps[:-1]))).result()
     robot.run_until(lambda obs: not obs.layers["abc"].walking, 15.0)
     obs = robot.run_for(1.5)
