@@ -157,3 +157,10 @@ def quat_xyzw_to_rpy(x: float, y: float, z: float, w: float) -> tuple[float, flo
     return (math.atan2(2.0 * (w * x + y * z), n2 - 2.0 * (x * x + y * y)),
             math.asin(max(-1.0, min(1.0, 2.0 * (w * y - x * z) / n2))),
             math.atan2(2.0 * (w * z + x * y), n2 - 2.0 * (y * y + z * z)))
+
+
+def homogeneous(p: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """(4, 4) transform of position `p` (3,) [m] and rotation `R` (3, 3)."""
+    T = np.eye(4)
+    T[:3, :3], T[:3, 3] = R, p
+    return T

@@ -8,79 +8,43 @@ from __future__ import annotations
 import dataclasses
 import math
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass, field
 
 import numpy as np
 import pinocchio as pin
 
-from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
+from controller.balance.capture_point import HRP2_RIGHT_SOLE
 from controller.balance.hand_force_cog_offset import cog_offset_against_hand_forces
 from controller.balance.tilt_anchor import TiltAnchor
 from controller.core.constants import GRAVITY_M_S2
-from controller.core.errors import InvalidCommand, InvalidState
-from controller.core.layer import Layer, Params, Status, described
-from controller.core.types import (
-    BalanceEstimate,
-    GaitState,
-    Ports,
-    Reference,
-    StepInProgress,
-    TickContext,
-    WalkCommand,
-    read_only,
-)
+from controller.core.errors import InvalidState
+from controller.core.layer import Layer
+from controller.core.types import GaitState, Ports, Reference, StepInProgress, TickContext, WalkCommand, read_only
 from controller.interpolation.blend import Transition
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, nearest_leg_limit
 from controller.kinematics.model import RobotKinematics
-from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix, rpy_to_rows
-from controller.operation.ranges import (
-    WALK_FOOT_DISTANCE_RANGE_M,
-    WALK_MAX_ANGULAR_RAD_S,
-    WALK_MAX_LINEAR_M_S,
-    WALK_MAX_STRIDE_RANGE_M,
+from controller.kinematics.rotations import homogeneous, rpy_to_rows
+from controller.walking.auto_balancer_params import (
+    WALK_STANCE_MAX_WIDTH_M,
+    AutoBalancerParams,
+    AutoBalancerStatus,
+    FootstepStatus,
+    stance_width_m,
+    walk_command_valid,
 )
-from controller.walking.emergency_step import EmergencyStepParams, EmergencyStepPlan, SupportRegion, swing_leg_for
-from controller.walking.footsteps import Footstep, FootstepParams, StepParams, StrideLimits
-from controller.walking.gait_generator import GaitGenerator, GaitParams, GaitPatch
+from controller.walking.emergency_stepping import EmergencyStepping, PreparedReplan
+from controller.walking.footsteps import StepParams
+from controller.walking.gait_generator import GaitGenerator
 from controller.walking.preview_control import PreviewController, PreviewControlParams
+from controller.walking.stop_from_rest import levelling_time_s, rest_zmp_xy, tilted, tipped
 from controller.walking.toe_heel import ToeHeelParams
 from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
 
 HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
-REST_ZMP_MARGIN_M = 0.02  # [m] a robot stopped on one foot keeps its ZMP this far inside the sole
-FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
-#: [N] a swing foot reading more has touched down (the Stabilizer's contact threshold)
-SWING_FOOT_LOADED_N = 25.0
 #: the AutoBalancer stops only this close to where its input reference places BODY (x, y [m]; yaw [rad]):
 #: stopped, it passes that reference on, and the Stabilizer then balances the robot toward that place (a stop
 #: 0.3 m from it after a walk tipped the robot over). Standing where it started, BODY is 3 mm from it.
 STOP_PLACE_TOLERANCE_M = 0.02
 STOP_YAW_TOLERANCE_RAD = math.radians(2.0)
-#: [rad/s] a robot that tipped onto its swing foot under the hard e-stop lands it, and so levels, along a
-#: minimum-jerk path whose peak rate is this: well below the KalmanFilter's gyro trust band (0.1 rad/s), so its
-#: accelerometer keeps the attitude right as the robot turns back (levelling 7 deg in 2 s, 0.11 rad/s at the
-#: peak, the estimate lagged 0.5 deg and caught up in a jump: a capture-point error of 42-58 mm; in 5.7 s (0.04
-#: rad/s) 30-38 mm, in 7.6 s 32-36 mm)
-TIPPED_LEVELLING_RATE_RAD_S = 0.03
-#: [rad] ... when it rests tilted more than this (a swing foot loaded with the robot level lands in the usual time)
-TIPPED_MIN_TILT_RAD = math.radians(1.0)
-#: [-] peak over mean rate of a minimum-jerk path (15/8)
-MIN_JERK_PEAK_RATIO = 1.875
-#: [-] share of the robot's weight the feet must carry for an emergency step (a robot held in the air does not step)
-EMERGENCY_STEP_MIN_LOAD_RATIO = 0.5
-#: [-] an emergency step's foot touches down early when it carries this share of the weight after this share of its
-#: swing (the force sensor of a foot swung fast reads its inertia: up to 110 N measured 5 cm above the ground)
-TOUCHDOWN_LOAD_RATIO = 0.25
-TOUCHDOWN_SWING_SHARE = 0.6
-#: [s] the swing of a capture step from a walk: the walk's remaining swing, within these (the foot needs time to go
-#: where the capture point calls it; a long swing is shortened so the foot lands before the capture point runs away)
-CATCH_SWING_S = (0.16, 0.25)
-#: [s] after an emergency step's touchdown, a capture point still outside the two soles calls for another step
-RESTEP_AFTER_S = 0.05
-#: emergency steps one after the other at most (each from the last one's feet)
-EMERGENCY_STEPS_IN_A_ROW = 3
-#: emergency steps remembered in the status
-EMERGENCY_STEPS_KEPT = 10
 #: [s] the BODY lowering of an emergency step comes in over this time, and goes back over 4 times it once standing
 BASE_LOWERING_TIME_S = 0.2
 #: [m/s] a waist raised above the walking height comes down to it at this rate once a walk starts (within the first
@@ -88,201 +52,6 @@ BASE_LOWERING_TIME_S = 0.2
 WALK_HEIGHT_RATE_M_S = 0.2
 #: [m] BODY may stand this much above the walking height while walking (no lowering for rounding)
 WALK_HEIGHT_SLACK_M = 0.001
-#: [m] the widest stance (the soles' centres across, in their mean heading) a walk starts from: measured from 0.32 m
-#: with the swing knee 7 deg from straight, from 0.36 m it straightens and raises the flag (a wide catching step)
-WALK_STANCE_MAX_WIDTH_M = 0.34
-
-
-def stance_width_m(T_world_rfoot: np.ndarray, T_world_lfoot: np.ndarray) -> float:
-    """How far apart the soles' centres are across [m]: in the frame of their mean heading."""
-    yaw = math.atan2(T_world_rfoot[1, 0] + T_world_lfoot[1, 0], T_world_rfoot[0, 0] + T_world_lfoot[0, 0])
-    dx, dy = (T_world_lfoot[:2, 3] - T_world_rfoot[:2, 3]).tolist()
-    return abs(-math.sin(yaw) * dx + math.cos(yaw) * dy)
-
-
-def check_walk_command(cmd: WalkCommand) -> None:
-    """Raise InvalidCommand naming the field and the allowed range when the walking point's command is not
-    one the AutoBalancer takes (what the operation layer and the verbs check before it reaches the loop)."""
-    for name, value, limit, unit in (("vx_m_s", cmd.vx_m_s, WALK_MAX_LINEAR_M_S, "m/s"),
-                                     ("vy_m_s", cmd.vy_m_s, WALK_MAX_LINEAR_M_S, "m/s"),
-                                     ("vtheta_rad_s", cmd.vtheta_rad_s, WALK_MAX_ANGULAR_RAD_S, "rad/s")):
-        if not (math.isfinite(value) and abs(value) <= limit):
-            raise InvalidCommand(f"walk.{name}={value!r} [{unit}]; allowed: [{-limit:g}, {limit:g}]")
-    for name, value, (lo, hi) in (("max_stride_m", cmd.max_stride_m, WALK_MAX_STRIDE_RANGE_M),
-                                  ("foot_distance_m", cmd.foot_distance_m, WALK_FOOT_DISTANCE_RANGE_M)):
-        if value is not None and not (math.isfinite(value) and lo <= value <= hi):
-            raise InvalidCommand(f"walk.{name}={value!r} [m]; allowed: [{lo:g}, {hi:g}] or null (the gait's own)")
-
-
-def _walk_command_valid(cmd: WalkCommand) -> bool:
-    try:
-        check_walk_command(cmd)
-    except InvalidCommand:
-        return False
-    return True
-
-
-@dataclass(frozen=True)
-class AutoBalancerParams(Params):
-    """The AutoBalancer's parameters, the gait generator's among them (hrpsys setGaitGeneratorParam): a change
-    applies to the footsteps planned from then on (a velocity walk's at its next mid-step check)."""
-
-    transition_time_s: float = field(default=2.0, metadata={"unit": "s", "min": 0.01, "max": 10.0})
-    use_hand_force_offset: bool = field(default=True, metadata={"unit": "-"})
-    # preview-control weights (ZMP error, jerk); a change applies at the next standstill (PREVIEW_GAINS_DELAY_S)
-    preview_q: float = field(default=1.0, metadata={"unit": "-", "min": 1e-6, "max": 1e6,
-                                                    "doc": "preview control's ZMP-error weight"})
-    preview_r: float = field(default=1e-6, metadata={"unit": "-", "min": 1e-12, "max": 1.0,
-                                                     "doc": "preview control's jerk weight"})
-    # gait (hrpsys default_step_time, rounded to whole control ticks; default_step_height; toe/heel angles)
-    step_time_s: float = field(default=1.0, metadata={"unit": "s", "min": 0.4, "max": 5.0})
-    step_height_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.2})
-    toe_angle_rad: float = field(default=0.0, metadata={"unit": "rad", "min": 0.0, "max": 0.6})
-    heel_angle_rad: float = field(default=0.0, metadata={"unit": "rad", "min": 0.0, "max": 0.6})
-    # share of each step's time in double support at its start and at its end (hrpsys default_double_support_ratio_*)
-    double_support_ratio_before: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
-    double_support_ratio_after: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
-    # largest feet mid-coords displacement per step (hrpsys stride_parameter); "inside": towards the support foot
-    stride_fwd_x_m: float = field(default=0.15, metadata={"unit": "m", "min": 0.0, "max": 0.4})
-    stride_bwd_x_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.3})
-    stride_outside_y_m: float = field(default=0.05, metadata={"unit": "m", "min": 0.0, "max": 0.3})
-    stride_inside_y_m: float = field(default=0.025, metadata={"unit": "m", "min": 0.0, "max": 0.3})
-    stride_outside_th_rad: float = field(default=math.radians(10.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
-    stride_inside_th_rad: float = field(default=math.radians(5.0), metadata={"unit": "rad", "min": 0.0, "max": 0.8})
-    # distance between the feet's centres when walking (hrpsys leg_default_translate_pos, both legs)
-    foot_distance_m: float = field(default=0.19, metadata={"unit": "m", "min": WALK_FOOT_DISTANCE_RANGE_M[0],
-                                                           "max": WALK_FOOT_DISTANCE_RANGE_M[1]})
-    # the Stabilizer's capture-point flag rising while walking (Ports.cp_flag, its estop_while_walking) calls the
-    # emergency walking stop: the steps end in place while the EmergencyStopper holds the motion
-    walking_stop_on_cp_flag: bool = field(default=True, metadata={"unit": "-"})
-    # ... by a capture step (issue 26): the walk ends where it is, a foot in the air lands where the capture point
-    # will be (the emergency step below, from the swing in progress), both feet down stand; false: hrpsys'
-    # emergencyStop, steps in place after the committed ones
-    walking_capture_step: bool = field(default=True, metadata={"unit": "-"})
-    # the capture-point emergency step (issue 13.3): standing, when the measured capture point is farther than
-    # emergency_step_cp_margin_m outside the support polygon (the ankles cannot bring it back), one step where it
-    # will be (controller/walking/emergency_step.py); the EmergencyStopper holds the motion, the robot ends
-    # standing with its feet apart. The other fields are EmergencyStepParams' (units and ranges the same)
-    emergency_step: bool = field(default=True, metadata={"unit": "-"})
-    emergency_step_cp_margin_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
-    emergency_step_zmp_margin_m: float = field(default=0.015, metadata={"unit": "m", "min": 0.0, "max": 0.05})
-    emergency_step_initial_double_support_s: float = field(default=0.05, metadata={"unit": "s", "min": 0.005,
-                                                                                   "max": 0.5})
-    emergency_step_time_s: float = field(default=0.3, metadata={"unit": "s", "min": 0.2, "max": 1.5})
-    emergency_step_double_support_ratio: float = field(default=0.2, metadata={"unit": "-", "min": 0.05, "max": 0.5})
-    emergency_step_final_double_support_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.2, "max": 5.0})
-    emergency_step_height_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.01, "max": 0.1})
-    emergency_step_max_forward_m: float = field(default=0.55, metadata={"unit": "m", "min": 0.0, "max": 0.7})
-    emergency_step_max_backward_m: float = field(default=0.4, metadata={"unit": "m", "min": 0.0, "max": 0.7})
-    emergency_step_min_width_m: float = field(default=0.16, metadata={"unit": "m", "min": 0.14, "max": 0.4})
-    emergency_step_max_width_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.16, "max": 0.7})
-    emergency_step_landing_offset_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
-    emergency_step_replan_until_s: float = field(default=0.1, metadata={"unit": "s", "min": 0.0, "max": 0.5})
-    emergency_step_zmp_shift_s: float = field(default=0.03, metadata={"unit": "s", "min": 0.005, "max": 0.3})
-    # BODY is lowered by this while the emergency step is taken (the legs reach farther), and raised again once
-    # the robot stands
-    emergency_step_base_lowering_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.0, "max": 0.1})
-
-    def validate(self) -> None:
-        super().validate()
-        if self.emergency_step_min_width_m > self.emergency_step_max_width_m:
-            raise InvalidCommand(f"AutoBalancerParams.emergency_step_min_width_m={self.emergency_step_min_width_m} "
-                                 f"> emergency_step_max_width_m={self.emergency_step_max_width_m}; "
-                                 "the lateral range must not be empty")
-
-    def emergency_step_params(self) -> EmergencyStepParams:
-        return EmergencyStepParams(
-            cp_margin_m=self.emergency_step_cp_margin_m, zmp_margin_m=self.emergency_step_zmp_margin_m,
-            initial_double_support_s=self.emergency_step_initial_double_support_s,
-            step_time_s=self.emergency_step_time_s, double_support_ratio=self.emergency_step_double_support_ratio,
-            final_double_support_s=self.emergency_step_final_double_support_s,
-            step_height_m=self.emergency_step_height_m, max_forward_m=self.emergency_step_max_forward_m,
-            max_backward_m=self.emergency_step_max_backward_m, min_width_m=self.emergency_step_min_width_m,
-            max_width_m=self.emergency_step_max_width_m, landing_offset_m=self.emergency_step_landing_offset_m,
-            replan_until_s=self.emergency_step_replan_until_s, zmp_shift_s=self.emergency_step_zmp_shift_s)
-
-    def gait_params(self, base: GaitParams | None = None) -> GaitParams:
-        return (base or GaitParams()).replaced(double_support_ratio_before=self.double_support_ratio_before,
-                                               double_support_ratio_after=self.double_support_ratio_after)
-
-    def footstep_params(self, dt_s: float, base: FootstepParams | None = None) -> FootstepParams:
-        step_time = max(1, round(self.step_time_s / dt_s)) * dt_s  # a whole number of control ticks
-        return (base or FootstepParams()).replaced(step_time_s=step_time, step_height_m=self.step_height_m,
-                                                   toe_angle_rad=self.toe_angle_rad,
-                                                   heel_angle_rad=self.heel_angle_rad,
-                                                   leg_offset_y_m=0.5 * self.foot_distance_m)
-
-    def stride_limits(self) -> StrideLimits:
-        return StrideLimits(fwd_x_m=self.stride_fwd_x_m, outside_y_m=self.stride_outside_y_m,
-                            outside_th_rad=self.stride_outside_th_rad, bwd_x_m=self.stride_bwd_x_m,
-                            inside_y_m=self.stride_inside_y_m, inside_th_rad=self.stride_inside_th_rad)
-
-
-@dataclass(frozen=True, slots=True)
-class FootstepStatus:
-    """A planned footstep not landed yet, world frame."""
-
-    leg: str = field(metadata=described("'rleg' or 'lleg'"))
-    pos: tuple[float, float, float] = field(metadata=described("sole position", "m"))
-    rpy: tuple[float, float, float] = field(metadata=described("sole roll, pitch, yaw", "rad"))
-    step_time_s: float = field(metadata=described("duration of the step", "s"))
-    step_height_m: float = field(metadata=described("swing height", "m"))
-
-
-@dataclass(frozen=True, slots=True)
-class EmergencyStepRecord:
-    """A capture-point emergency step the AutoBalancer took, world frame."""
-
-    leg: str = field(metadata=described("the leg that stepped, 'rleg' or 'lleg'"))
-    time_s: float = field(metadata=described("simulated time the step was triggered", "s"))
-    cp_at_trigger: tuple[float, float] = field(metadata=described("measured capture point at the trigger", "m"))
-    landing: tuple[float, float] = field(metadata=described(
-        "where the sole lands (x, y): the target while stepping, where it touched down once landed", "m"))
-    landed: bool = field(metadata=described("the foot is down"))
-    landed_early: bool = field(metadata=described("it touched down before the planned time (where it was)"))
-
-
-@dataclass(frozen=True, slots=True)
-class AutoBalancerStatus(Status):
-    active: bool = field(metadata=described("the AutoBalancer is running (started)"))
-    weight: float = field(metadata=described("start/stop blend weight, 0..1", "-"))
-    walking: bool = field(metadata=described("a walk is in progress"))
-    support: str = field(metadata=described("support phase: 'both', 'rleg' or 'lleg'"))
-    walking_stop: bool = field(metadata=described("the emergency walking stop is in force (stepping in place)"))
-    has_ik_failed: bool = field(metadata=described("the whole-body IK could not reach its targets this tick"))
-    footsteps: tuple[FootstepStatus, ...] = field(metadata=described("the footsteps not landed yet"))
-    walk_point: str = field(default="idle", metadata=described(
-        "the walking point (Ports.walk_command): 'idle', 'walking' (abc walks at it), or 'ignored: <why>'"))
-    preview_gains: str = field(default="current", metadata=described(
-        "'current', or 'pending': new preview_q / preview_r wait for the next standstill"))
-    emergency_step: bool = field(default=False, metadata=described(
-        "a capture-point emergency step is in progress: goPos, goVelocity, setFootSteps and the walking point are "
-        "refused and the EmergencyStopper holds the motion"))
-    emergency_steps: tuple[EmergencyStepRecord, ...] = field(default=(), metadata=described(
-        "the emergency steps taken, oldest first (the last 10)"))
-    walk_cut: str | None = field(default=None, metadata=described(
-        "why the last walk ended before its plan, and when (the capture-point flag, or a capture-point error with "
-        "both feet down); None when it ended as planned or a new walk began"))
-    walk_height_lowering_m: float = field(default=0.0, metadata=described(
-        "how far BODY is held below the operated waist height because a walk is on: walking plans at the "
-        "half-sitting height (a raised waist stretches the swing leg straight when the COM shifts over the "
-        "stance foot)", "m"))
-
-
-@dataclass(frozen=True, slots=True)
-class PreparedReplan:
-    """The emergency step's re-plan of sample k, made after the last tick's command was written (after_write) from
-    the ports that tick published: the next tick adopts it if it re-plans the same plan at k from those ports."""
-
-    ports: Ports  # what it read (the next tick's last_ports)
-    plan: EmergencyStepPlan  # the live plan, unchanged; `replanned` is its copy, replanned at k
-    k: int
-    replanned: EmergencyStepPlan
-    moved: bool  # replan's result
-    gait_op: str | None  # what the gait gets with it: "move" (the landing and the ZMP), "zmp", or None
-    zmp: np.ndarray | None  # replanned.zmp(k) for that op
-    patch: GaitPatch | None  # the gait's change for that op, None if it must be done in the tick
-
 
 #: New preview gains (preview_q / preview_r) are computed off the control thread (a Riccati solve, ~15 ms) and
 #: swapped in at the first standstill tick at least this long after the change: a fixed delay in ticks keeps a
@@ -308,7 +77,7 @@ class AutoBalancer(Layer):
         self._q_lower_rad, self._q_upper_rad = self.kin.q_lower.tolist(), self.kin.q_upper.tolist()
         self.total_mass = self.kin.total_mass
         self.kin.update_rpy(initial.base_pos_world, initial.base_rpy_rad, initial.q_rad)
-        T_r, T_l = (_homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
+        T_r, T_l = (homogeneous(*self.kin.frame_pose(f)) for f in ("rleg_end", "lleg_end"))
         # toe and heel edges of HRP-2's sole (the model's sole box), not HRP2-JSKNT's 0.137 / -0.10
         toe_heel = ToeHeelParams(toe_offset_x_m=HRP2_RIGHT_SOLE.front_m, heel_offset_x_m=-HRP2_RIGHT_SOLE.rear_m)
         p = self.params
@@ -343,16 +112,9 @@ class AutoBalancer(Layer):
         self._walk_armed = True  # False after an e-stop or walking stop, until the walking point reads zero
         self._walk_point = "idle"
         self._last_cp_flag = False  # Ports.cp_flag as the last tick read it (the walking stop is on its rise)
-        self._estep: EmergencyStepPlan | None = None  # the emergency step being taken
-        self._estep_k = 0  # samples of its plan handed out
-        self._estep_lifted = False  # the swinging foot has been unloaded in this swing
-        self._estep_landing_pending = False  # the plan's landing moved before the swing; the gait's not yet
-        self._estep_records: tuple[EmergencyStepRecord, ...] = ()
-        self._estep_in_a_row = 0  # emergency steps taken one after the other (the first included)
-        self._estep_from_walk = False  # the emergency step in progress caught a walk (it may step again)
+        self.estep = EmergencyStepping(self.gait, dt_s, self.total_mass)  # the capture-point emergency steps
         self._walk_cut: str | None = None  # why the last walk ended early (status)
         self._was_walking = False
-        self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
         self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
         self._walk_base_z_m = float(initial.base_pos_world[2])  # [m] the height walks plan at (the preview's)
         self._walk_lowering_m = 0.0  # [m] BODY below a raised waist while walking
@@ -472,10 +234,10 @@ class AutoBalancer(Layer):
     @property
     def emergency_step(self) -> bool:
         """A capture-point emergency step is in progress."""
-        return self._estep is not None
+        return self.estep.active
 
     def _require_balanced(self, what: str) -> None:
-        if self._estep is not None:
+        if self.estep.active:
             raise InvalidState(f"{what}: a capture-point emergency step is in progress; {what} again once the "
                                "robot stands (status: abc.emergency_step false)")
         if self._last_cp_flag and not self.gait.walking:  # a walk started off balance falls (campaign seed 1009)
@@ -505,7 +267,7 @@ class AutoBalancer(Layer):
         """Remaining footsteps replaced so the robot stops in place (manipulation is left alone). The walking
         point is ignored from now until it reads zero (a held stick does not walk on after the stop). An emergency
         step in progress goes on (it ends standing by itself)."""
-        if self._estep is not None:
+        if self.estep.active:
             return
         self.gait.emergency_stop()
         self._walking_stop_requested = True
@@ -541,7 +303,7 @@ class AutoBalancer(Layer):
         self._walk_point = "walking"
 
     def _walk_point_refusal(self, cmd: WalkCommand) -> str | None:
-        if self._estep is not None:
+        if self.estep.active:
             return "ignored: a capture-point emergency step is in progress"
         if self._last_cp_flag and not self.gait.walking:
             return "ignored: the capture-point flag is up; the walking point must read zero once after it drops"
@@ -558,7 +320,7 @@ class AutoBalancer(Layer):
         if gait.walking and gait.velocity_mode not in ("walking", "ending"):
             return ("ignored: the walk is ending after the e-stop" if gait.stopping_from_rest
                     else "ignored: walking a footstep list (goPos / setFootSteps)")
-        if not _walk_command_valid(cmd):
+        if not walk_command_valid(cmd):
             return "ignored: out of range (see check_walk_command)"
         return None
 
@@ -609,7 +371,7 @@ class AutoBalancer(Layer):
             out = self._hold()
             tilt = self._tipped(ctx, out.gait, 1.0)
             if tilt is not None:  # the references follow the robot that tipped while held (nothing moves)
-                gait, base, base_rpy = self._tilted(out.gait, tilt)
+                gait, base, base_rpy = tilted(out.gait, tilt)
                 out = out.with_(gait=gait, base_pos_world=base, base_rpy_rad=base_rpy)
             if out.gait is not None:
                 ctx.ports.cog_acc_world = out.gait.cog_acc_world
@@ -617,7 +379,7 @@ class AutoBalancer(Layer):
             return out
         if self._holding:
             self._resume(ctx)
-        if ctx.last_ports.landing and self.gait.walking and self._estep is None and not self._walking_stop_requested:
+        if ctx.last_ports.landing and self.gait.walking and not self.estep.active and not self._walking_stop_requested:
             self.emergency_stop_walking()  # the hard e-stop lets this step land: no step after it
         if self._blend is not None:
             self._weight = self._blend.step(ctx.dt_s)
@@ -626,13 +388,16 @@ class AutoBalancer(Layer):
         if self._weight <= 0.0 and not self.active:
             self.last_gait = None
             return ref
-        if self._estep is not None:
-            self._emergency_step_tick(ctx, prepared)
+        if self.estep.active:
+            if self.estep.tick(ctx, self.params, self.preview, self.last_gait, prepared):
+                self._disarm_walk_point()  # a stick held through the step must be released before it walks again
         elif self.params.emergency_step and not self.gait.walking and self._blend is None:
-            self._check_emergency_step(ctx)
+            if self.estep.check_standing(ctx, self.last_gait, self.params, self.preview):
+                self._walking_stop_requested = False
+                self._disarm_walk_point()
         flag = ctx.last_ports.cp_flag
         if flag and not self._last_cp_flag and self.params.walking_stop_on_cp_flag and self.gait.walking \
-                and not self.walking_stop and self._estep is None:
+                and not self.walking_stop and not self.estep.active:
             self._walk_cut = f"the capture-point flag at t = {ctx.time_s:.3f} s"
             if self._can_catch_while_walking(ctx):
                 self._catch_while_walking(ctx)
@@ -651,9 +416,9 @@ class AutoBalancer(Layer):
         future = self.gait.zmp_preview(self.preview.preview_length)
         cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
         g = self.gait.tick()
-        if g.walking and not self._was_walking and self._estep is None:
+        if g.walking and not self._was_walking and not self.estep.active:
             self._walk_cut = None  # a new walk began
-        self._was_walking = g.walking and self._estep is None
+        self._was_walking = g.walking and not self.estep.active
         zmp = g.zmp_world
         cog_abc_xy = self._hand_force_offset(ref, cog_xy, zmp[2])
         # BODY yaw follows the feet (mean of the two sole yaws); roll and pitch from the plan
@@ -667,7 +432,7 @@ class AutoBalancer(Layer):
         base_z = float(ref.base_pos_world[2])
         if g.walking or self._walk_lowering_m:  # campaign seed 2013: a raised waist straightened the swing knee
             base_z -= self._lower_to_walking_height(base_z, g.walking, ctx.dt_s)
-        if self._base_lowering_m or self._estep is not None:
+        if self._base_lowering_m or self.estep.active:
             base_z -= self._lower_base(ctx.dt_s)
         res = self.ik.solve(ref.q_rad, base_z, R_body, cog_abc_xy, rsole, lsole)
         self.has_ik_failed = not res.reachable
@@ -690,7 +455,7 @@ class AutoBalancer(Layer):
         )
         zmp_base = R_body.T @ (zmp - base)
         if self._tilt is not None:
-            gait, base, base_rpy = self._tilted(gait, self._tilt)
+            gait, base, base_rpy = tilted(gait, self._tilt)
             self._tilt.step(ctx.dt_s)
             if self._tilt.done:
                 self._tilt = None
@@ -702,14 +467,14 @@ class AutoBalancer(Layer):
         ctx.ports.cog_acc_world = gait.cog_acc_world
         ctx.ports.gait = gait
         ctx.ports.step = self._step_in_progress(ctx)
-        if self._estep is not None:
-            self._estep_k += 1
+        if self.estep.active:
+            self.estep.k += 1
         return self._last_out
 
     def _step_in_progress(self, ctx: TickContext) -> StepInProgress | None:
         """Ports.step this tick: the emergency step until it ends, or a walk's swing while its foot is in the air."""
-        if self._estep is not None:
-            samples, catching = self._estep.touchdown_k - self._estep_k, True
+        if self.estep.active:
+            samples, catching = self.estep.plan.touchdown_k - self.estep.k, True
         else:
             samples, catching = self.gait.swing_samples_left(), False
             if samples == 0:
@@ -722,224 +487,25 @@ class AutoBalancer(Layer):
         return last
 
     # ---- the capture-point emergency step ---------------------------------------------------------------
-    def _check_emergency_step(self, ctx: TickContext) -> None:
-        """Standing: step when the capture point the Stabilizer measured last tick is farther than the margin
-        outside the support polygon of the two soles (and the feet carry the robot)."""
-        bal = ctx.last_ports.balance
-        g = self.last_gait
-        if bal is None or g is None or g.walking or (ctx.hold and not ctx.last_ports.landing):
-            return
-        support = self._support
-        if support is None or support[0] is not g.p_rsole_world:  # the idle soles' arrays: rebuilt when they move
-            support = self._support = (g.p_rsole_world, SupportRegion.of_soles(
-                (g.p_rsole_world, g.R_rsole_world), (g.p_lsole_world, g.R_lsole_world)))
-        cx, cy = bal.cp_world_xy.tolist()
-        if support[1].outside_m(cx, cy) <= self.params.emergency_step_cp_margin_m:
-            return
-        rows = ctx.estimate.wrenches_ext.tolist()
-        fz_r, fz_l = rows[FEET[0]][2], rows[FEET[1]][2]
-        if fz_r + fz_l < EMERGENCY_STEP_MIN_LOAD_RATIO * self.total_mass * GRAVITY_M_S2:
-            return
-        self._start_emergency_step(ctx, bal, fz_r, fz_l)
-
     def _can_catch_while_walking(self, ctx: TickContext) -> bool:
         return (self.params.walking_capture_step and self.params.emergency_step and self._blend is None
                 and not self.gait.stopping_from_rest and ctx.last_ports.balance is not None
                 and not ctx.last_ports.landing)
 
     def _catch_while_walking(self, ctx: TickContext) -> None:
-        """The capture-point flag rose while walking: the walk ends where it is. A foot in the air lands where the
-        capture point will be, as the emergency step does (the swing's time kept, within CATCH_SWING_S); with both
-        feet down the robot stands there, and the standing emergency step follows if the ankles cannot hold it."""
-        bal = ctx.last_ports.balance
-        swing_left = self.gait.swing_samples_left()
-        support = self.gait.abort()
+        """The capture-point flag rose while walking: the walk ends where it is, a foot in the air lands where the
+        capture point will be (EmergencyStepping.catch); the walking stop is in force until the robot stands."""
+        caught = self.estep.catch(ctx, self.params, self.preview)
         self._disarm_walk_point()
-        if support == "both" or swing_left == 0:
-            return  # the COG plan goes on to rest over the feet; the Stabilizer's feedback takes the push
-        self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
-        swing_leg = "lleg" if support == "rleg" else "rleg"
-        T_swing = self.gait.T_world_lfoot if swing_leg == "lleg" else self.gait.T_world_rfoot
-        T_stance = self.gait.T_world_rfoot if swing_leg == "lleg" else self.gait.T_world_lfoot
-        p = self.params.emergency_step_params()
-        lo, hi = CATCH_SWING_S
-        swing_s = min(max(swing_left * self.dt_s, lo), hi)
-        height = float(T_swing[2, 3] - T_stance[2, 3])  # the foot is this high already: the arc adds the rest
-        p = p.replaced(initial_double_support_s=self.dt_s,
-                       step_time_s=max(swing_s / (1.0 - p.double_support_ratio), 0.2),
-                       step_height_m=min(max(p.step_height_m - height, 0.01), p.step_height_m))
-        rows = ctx.estimate.wrenches_ext.tolist()
-        self._start_emergency_step(ctx, bal, rows[FEET[0]][2], rows[FEET[1]][2], swing_leg=swing_leg, params=p)
-        self._walking_stop_requested = True  # the walking stop is in force until the robot stands
-        self._estep_from_walk = True
-
-    def _start_emergency_step(self, ctx: TickContext, bal: BalanceEstimate, fz_r: float, fz_l: float,
-                              swing_leg: str | None = None, params: EmergencyStepParams | None = None) -> None:
-        """Plan the step from the feet where the (idle) gait has them and start it this tick; `swing_leg`: the foot
-        in the air of a walk that ended (else the leg the capture point calls for)."""
-        gait = self.gait
-        rfoot, lfoot = Footstep.from_T("rleg", gait.T_world_rfoot), Footstep.from_T("lleg", gait.T_world_lfoot)
-        leg = swing_leg
-        if leg is None:
-            yaw = math.atan2(math.sin(rfoot.yaw) + math.sin(lfoot.yaw), math.cos(rfoot.yaw) + math.cos(lfoot.yaw))
-            dx = float(bal.cp_world_xy[0]) - 0.5 * (rfoot.x + lfoot.x)
-            dy = float(bal.cp_world_xy[1]) - 0.5 * (rfoot.y + lfoot.y)
-            c, s_ = math.cos(yaw), math.sin(yaw)
-            leg = swing_leg_for((c * dx + s_ * dy, -s_ * dx + c * dy), fz_r, fz_l)
-        self._begin_emergency_step(ctx, bal, self._plan_emergency_step(bal, rfoot, lfoot, leg, params))
-
-    def _plan_emergency_step(self, bal: BalanceEstimate, rfoot: Footstep, lfoot: Footstep, leg: str,
-                             params: EmergencyStepParams | None = None) -> EmergencyStepPlan:
-        stance, swing = (rfoot, lfoot) if leg == "lleg" else (lfoot, rfoot)
-        return EmergencyStepPlan(params or self.params.emergency_step_params(), self.dt_s, stance, swing,
-                                 bal.cp_world_xy, bal.zmp_world, bal.omega_1_s)
-
-    def _begin_emergency_step(self, ctx: TickContext, bal: BalanceEstimate, plan: EmergencyStepPlan) -> None:
-        """Walk `plan` from this tick (the gait idle, its feet where the plan starts)."""
-        gait, leg = self.gait, plan.swing.leg
-        gait.plan(plan.footsteps(), params=plan.gait_params(gait.params))
-        gait.set_zmp(plan.zmp(0))
-        self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
-        again = self._estep is not None
-        self._estep_in_a_row = self._estep_in_a_row + 1 if again else 1
-        self._estep_from_walk = self._estep_from_walk and again
-        self._estep, self._estep_k = plan, 0
-        self._estep_landing_pending = False
-        self._walking_stop_requested = False
-        self._disarm_walk_point()  # a stick held through the step must be released before it walks again
-        self._estep_records = (*self._estep_records, EmergencyStepRecord(
-            leg=leg, time_s=ctx.time_s, cp_at_trigger=tuple(bal.cp_world_xy.tolist()),
-            landing=tuple(plan.landing_xy.tolist()), landed=False, landed_early=False))[-EMERGENCY_STEPS_KEPT:]
-        ctx.ports.emergency_step = True
+        if caught:
+            self._walking_stop_requested = True
 
     def after_write(self, ports: Ports) -> None:
         """The emergency step's re-plan of the next tick's sample from the capture point this tick measured
         (ports.balance), made once the command is out: the next tick adopts it (PreparedReplan) instead of
         computing it, if nothing changed its inputs meanwhile. It changes nothing: the status, a command at the
         tick boundary and a next tick that does not re-plan (held, touched down, stepping again) see none of it."""
-        self._prepared = None
-        plan, bal = self._estep, ports.balance
-        if plan is None or bal is None or not self.gait.walking:
-            return
-        k = self._estep_k
-        if k >= plan.n_touchdown or plan.landed_k is not None:
-            return  # replan does nothing any more: nothing worth preparing
-        new, moved = plan.replanned(k, bal.cp_world_xy)
-        op = self._estep_gait_op(plan, k, moved, new.landing_xy is not plan.landing_xy)
-        zmp = patch = None
-        if op is not None:
-            zmp = new.zmp(k)
-            patch = self.gait.prepare_set_zmp(zmp) if op == "zmp" else \
-                self.gait.prepare_move_swing({1: tuple(new.landing_xy.tolist())}, zmp)
-        self._prepared = PreparedReplan(ports, plan, k, new, moved, op, zmp, patch)
-
-    def _estep_gait_op(self, plan: EmergencyStepPlan, k: int, moved: bool, foot_moved: bool) -> str | None:
-        """What the gait gets after a re-plan of sample k (no touchdown): "move" (the landing with the ZMP), "zmp"
-        (the ZMP alone) or None; the landing reaches the gait once, the tick before the swing (what samples the
-        foot's path before it is not used; a move then resamples the whole step, the last one is what counts)."""
-        if foot_moved and k < plan.n_lift - 1:
-            return "zmp" if moved else None
-        if foot_moved or (self._estep_landing_pending and k >= plan.n_lift - 1):
-            return "move"
-        return "zmp" if moved else None
-
-    def _emergency_step_tick(self, ctx: TickContext, prepared: PreparedReplan | None = None) -> None:
-        """One tick of the emergency step before the gait samples it: the landing follows the measured capture
-        point (until shortly before touchdown), a foot that touches down early lands where it is, the COG plan
-        restarts from the measured COG until the foot is down; the plan's end ends it (standing, the feet apart).
-        The re-plan is `prepared`'s when it was made from this tick's inputs (after_write)."""
-        plan, k = self._estep, self._estep_k
-        if not self.gait.walking:
-            self._estep = None
-            self._update_record(plan, landed=True)
-            return
-        ctx.ports.emergency_step = True
-        bal = ctx.last_ports.balance
-        if self._step_again(ctx, plan, k):
-            return
-        ready = None  # the prepared re-plan, adopted
-        if plan.swinging(k) and self._touched_down(ctx, plan, k):
-            plan.land(k, self._measured_sole_xy(ctx, plan))
-            moved, landed = True, True
-            op = self._estep_gait_op(plan, k, moved, True)
-        elif bal is not None:
-            landing = plan.landing_xy
-            if prepared is not None and prepared.ports is ctx.last_ports and prepared.plan is plan \
-                    and prepared.k == k and prepared.replanned.revision == plan.revision + 1:
-                plan.adopt(prepared.replanned)
-                moved, ready = prepared.moved, prepared
-            else:
-                moved = plan.replan(k, bal.cp_world_xy)
-            op, landed = self._estep_gait_op(plan, k, moved, plan.landing_xy is not landing), False
-            if plan.landing_xy is not landing and k < plan.n_lift - 1:
-                self._estep_landing_pending = True
-        else:
-            moved, landed, op = False, False, None
-        if ready is not None and ready.gait_op != op:
-            ready = None  # the same decision from the same state: never, but then the gait's part is done here
-        if op == "move":  # the footstep and the plan's ZMP in one (the ZMP the moved feet give would be overwritten)
-            self._estep_landing_pending = False
-            if ready is None or ready.patch is None or not self.gait.apply(ready.patch):
-                zmp = plan.zmp(k) if ready is None else ready.zmp
-                self.gait.move_footsteps({1: tuple(plan.landing_xy.tolist())}, landed=landed, zmp_world=zmp)
-        elif op == "zmp":
-            if ready is None or not self.gait.apply(ready.patch):
-                self.gait.set_zmp(plan.zmp(k) if ready is None else ready.zmp)
-        if moved or k == plan.touchdown_k:
-            self._update_record(plan, landed=k >= plan.touchdown_k)
-        if bal is not None and k < plan.touchdown_k:  # the COG plan follows the measured COG until the foot is down
-            self.preview.reset(bal.cog_world[:2], bal.cog_vel_world[:2])
-
-    def _step_again(self, ctx: TickContext, plan: EmergencyStepPlan, k: int) -> bool:
-        """A step from a walk (the catch): once the foot is down and the weight shared (RESTEP_AFTER_S), a capture
-        point still outside the new support polygon calls for another step, from where the feet are (at most
-        EMERGENCY_STEPS_IN_A_ROW). The standing emergency step stays one step (its [MLC] experiments' verdicts)."""
-        bal = ctx.last_ports.balance
-        if bal is None or not self._estep_from_walk or k < plan.touchdown_k + round(RESTEP_AFTER_S / self.dt_s) \
-                or ctx.last_ports.landing or self._estep_in_a_row >= EMERGENCY_STEPS_IN_A_ROW:
-            return False
-        support = self._support
-        if support is None or support[0] is not plan:
-            support = self._support = (plan, SupportRegion(plan.support_polygon_after()))
-        cx, cy = bal.cp_world_xy.tolist()
-        if support[1].outside_m(cx, cy) <= self.params.emergency_step_cp_margin_m:
-            return False
-        rows = ctx.estimate.wrenches_ext.tolist()
-        fz_r, fz_l = rows[FEET[0]][2], rows[FEET[1]][2]
-        if fz_r + fz_l < EMERGENCY_STEP_MIN_LOAD_RATIO * self.total_mass * GRAVITY_M_S2:
-            return False
-        # the leg whose landing leaves the capture point predicted at its touchdown least outside the feet
-        g = self.last_gait
-        rfoot = Footstep.from_T("rleg", _homogeneous(g.p_rsole_world, g.R_rsole_world))
-        lfoot = Footstep.from_T("lleg", _homogeneous(g.p_lsole_world, g.R_lsole_world))
-        again = min((self._plan_emergency_step(bal, rfoot, lfoot, leg) for leg in (plan.stance.leg, plan.swing.leg)),
-                    key=lambda c: SupportRegion(c.support_polygon_after()).outside_m(*c.cp_touchdown_xy.tolist()))
-        self._update_record(plan, landed=True)
-        walking_stop = self._walking_stop_requested
-        self.gait.abort()
-        self._begin_emergency_step(ctx, bal, again)
-        self._walking_stop_requested = walking_stop
-        return True
-
-    def _touched_down(self, ctx: TickContext, plan: EmergencyStepPlan, k: int) -> bool:
-        """The swing foot, in the air before, carries TOUCHDOWN_LOAD_RATIO of the weight late in its swing: it has
-        touched the ground early. (A foot that never left the ground is not landing: it is dragged.)"""
-        fz = float(ctx.estimate.wrenches_ext[FEET[0 if plan.swing.leg == "rleg" else 1]][2])
-        if k == plan.n_lift:
-            self._estep_lifted = False
-        if fz < SWING_FOOT_LOADED_N:
-            self._estep_lifted = True
-            return False
-        late = k - plan.n_lift >= TOUCHDOWN_SWING_SHARE * (plan.n_touchdown - plan.n_lift)
-        return self._estep_lifted and late and fz > TOUCHDOWN_LOAD_RATIO * self.total_mass * GRAVITY_M_S2
-
-    @staticmethod
-    def _measured_sole_xy(ctx: TickContext, plan: EmergencyStepPlan) -> tuple[float, float]:
-        """Where the swing sole is [m]: the stance sole where the plan has it plus the measured kinematics from it to
-        the swing sole (encoders and the KalmanFilter attitude)."""
-        pos = ctx.estimate.sensor_pos_from_base.tolist()
-        i_sw, i_st = (FEET[0], FEET[1]) if plan.swing.leg == "rleg" else (FEET[1], FEET[0])
-        return (plan.stance.x + pos[i_sw][0] - pos[i_st][0], plan.stance.y + pos[i_sw][1] - pos[i_st][1])
+        self._prepared = self.estep.prepare(ports)
 
     def _lower_to_walking_height(self, base_z_m: float, walking: bool, dt_s: float) -> float:
         """BODY's lowering [m] this tick: while walking, toward how far the operated waist is above the walking
@@ -953,20 +519,13 @@ class AutoBalancer(Layer):
     def _lower_base(self, dt_s: float) -> float:
         """BODY's lowering [m] this tick: toward emergency_step_base_lowering_m while an emergency step is taken,
         back to zero once the robot stands (rate-limited, both ways)."""
-        target = self.params.emergency_step_base_lowering_m if self._estep is not None else 0.0
+        target = self.params.emergency_step_base_lowering_m if self.estep.active else 0.0
         rate = self.params.emergency_step_base_lowering_m / BASE_LOWERING_TIME_S * (1.0 if target else 0.25)
         step = max(rate, 1e-6) * dt_s
         low = self._base_lowering_m
         low = min(low + step, target) if target > low else max(low - step, target)
         self._base_lowering_m = low
         return low
-
-    def _update_record(self, plan: EmergencyStepPlan, landed: bool) -> None:
-        """The status record of the step in progress (the last one): its landing and whether it is down."""
-        if self._estep_records:
-            *rest, last = self._estep_records
-            self._estep_records = (*rest, dataclasses.replace(
-                last, landing=tuple(plan.landing_xy.tolist()), landed=landed, landed_early=plan.landed_k is not None))
 
     def _resume(self, ctx: TickContext) -> None:
         """Released from the hard e-stop: the robot stood still, so the COG plan restarts from rest where it
@@ -978,37 +537,15 @@ class AutoBalancer(Layer):
         gait = self._last_out.gait if self._last_out is not None else None
         if self.gait.walking and gait is not None and gait.support != "both":
             tilt = self._tipped(ctx, gait, 1.0)
-            levelling_s = 0.0 if tilt is None or tilt.angle0_rad <= TIPPED_MIN_TILT_RAD else \
-                MIN_JERK_PEAK_RATIO * tilt.angle0_rad / TIPPED_LEVELLING_RATE_RAD_S
-            landing_s = self.gait.stop_from_rest(self._rest_zmp_xy(gait if tilt is None else None),
+            landing_s = self.gait.stop_from_rest(rest_zmp_xy(self.preview.x[0], gait if tilt is None else None),
                                                  swing_foot_loaded=tilt is not None,
-                                                 min_landing_time_s=max(0.8, levelling_s))
+                                                 min_landing_time_s=max(0.8, levelling_time_s(tilt)))
             if tilt is not None and landing_s > 0.0:
                 self._tilt = self._tipped(ctx, gait, landing_s)
 
     def _tipped(self, ctx: TickContext, gait: GaitState | None, duration_s: float) -> TiltAnchor | None:
-        """The held walk's robot resting on its swing foot as well (it tipped onto it): the plan as it sees it,
-        levelling over `duration_s`; None when the plan is not on one foot or the swing foot carries nothing."""
-        if gait is None or gait.support == "both" or not self.gait.walking:
-            return None
-        swing = FEET[0] if gait.support == "lleg" else FEET[1]
-        if not float(ctx.estimate.wrenches_ext[swing][2]) > SWING_FOOT_LOADED_N:
-            return None
-        p_support = gait.p_rsole_world if gait.support == "rleg" else gait.p_lsole_world
-        return TiltAnchor(rpy_to_matrix(gait.base_rpy_rad), rpy_to_matrix(ctx.estimate.base_rpy_rad), p_support,
-                          duration_s)
-
-    @staticmethod
-    def _tilted(gait: GaitState, t: TiltAnchor) -> tuple[GaitState, np.ndarray, np.ndarray]:
-        """The gait, BODY position and rpy as the robot tipped by `t` sees them."""
-        R_body = t.rotation(rpy_to_matrix(gait.base_rpy_rad))
-        out = dataclasses.replace(
-            gait, p_rsole_world=t.point(gait.p_rsole_world), R_rsole_world=t.rotation(gait.R_rsole_world),
-            p_lsole_world=t.point(gait.p_lsole_world), R_lsole_world=t.rotation(gait.R_lsole_world),
-            zmp_world=t.point(gait.zmp_world), cog_world=t.point(gait.cog_world),
-            cog_vel_world=t.velocity(gait.cog_world, gait.cog_vel_world), cog_pc_world=t.point(gait.cog_pc_world),
-            base_pos_world=t.point(gait.base_pos_world), base_rpy_rad=matrix_to_rpy(R_body))
-        return out, out.base_pos_world, out.base_rpy_rad
+        """The held walk's robot resting on its swing foot as well (stop_from_rest.tipped); None when not walking."""
+        return tipped(gait, ctx.estimate, duration_s) if self.gait.walking else None
 
     def _hold(self) -> Reference:
         """A tick under the hard e-stop: the plan does not advance, and the last output is repeated with the
@@ -1018,10 +555,10 @@ class AutoBalancer(Layer):
             self._holding = True
             self._disarm_walk_point()
             self._walk_point = "ignored: the hard e-stop holds"
-            self._estep = None  # the stop from rest replaces an emergency step too
+            self.estep.drop()  # the stop from rest replaces an emergency step too
             if self.gait.walking:
                 self._walking_stop_requested = True
-                self.gait.stop_from_rest(self._rest_zmp_xy(self._last_out.gait))
+                self.gait.stop_from_rest(rest_zmp_xy(self.preview.x[0], self._last_out.gait))
             out = self._last_out
             if out.gait is not None:
                 still = read_only(np.zeros(3))
@@ -1038,7 +575,7 @@ class AutoBalancer(Layer):
                                   footsteps=self._status_footsteps() if self.gait.walking else (),
                                   walk_point=self._walk_point,
                                   preview_gains="current" if self._pending_preview is None else "pending",
-                                  emergency_step=self._estep is not None, emergency_steps=self._estep_records,
+                                  emergency_step=self.estep.active, emergency_steps=self.estep.records,
                                   walk_cut=self._walk_cut, walk_height_lowering_m=round(self._walk_lowering_m, 4))
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
@@ -1051,29 +588,3 @@ class AutoBalancer(Layer):
         if cache is None or cache[0] != plan or cache[1] != len(remaining):
             cache = self._footsteps_cache = (plan, len(remaining), self.remaining_footsteps())
         return cache[2]
-
-
-    def _rest_zmp_xy(self, gait: GaitState | None) -> tuple[float, float]:
-        """Where the ZMP of the robot frozen now is once at rest: under the planned COG, kept REST_ZMP_MARGIN_M
-        inside the support sole when on one foot."""
-        x, y = self.preview.x[0].tolist()
-        if gait is None or gait.support == "both":
-            return x, y
-        right = gait.support == "rleg"
-        p, R = (gait.p_rsole_world, gait.R_rsole_world) if right else (gait.p_lsole_world, gait.R_lsole_world)
-        sole = HRP2_RIGHT_SOLE if right else HRP2_LEFT_SOLE
-        c, s_ = float(R[0, 0]), float(R[1, 0])
-        n = math.hypot(c, s_)
-        c, s_ = c / n, s_ / n
-        dx, dy = x - float(p[0]), y - float(p[1])
-        u, v = c * dx + s_ * dy, -s_ * dx + c * dy  # in the sole frame
-        m = REST_ZMP_MARGIN_M
-        u = min(max(u, -sole.rear_m + m), sole.front_m - m)
-        v = min(max(v, -sole.right_m + m), sole.left_m - m)
-        return float(p[0]) + c * u - s_ * v, float(p[1]) + s_ * u + c * v
-
-
-def _homogeneous(p: np.ndarray, R: np.ndarray) -> np.ndarray:
-    T = np.eye(4)
-    T[:3, :3], T[:3, 3] = R, p
-    return T

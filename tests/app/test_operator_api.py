@@ -84,8 +84,8 @@ def test_a_walk_step_parameter_the_auto_balancer_cannot_honour_is_refused_at_the
     r = client.put("/api/operator/velocity", json={"point": "walk", "linear": [0.1, 0, 0], field: value})
     assert r.status_code == 422 and r.json()["field"] == f"walk.{field}" and words in r.json()["detail"], r.json()
     from controller.core.types import WalkCommand
-    from controller.layers.auto_balancer import check_walk_command
     from controller.operation.ranges import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
+    from controller.walking.auto_balancer_params import check_walk_command
 
     for stride, distance in ((WALK_MAX_STRIDE_RANGE_M[1], WALK_FOOT_DISTANCE_RANGE_M[0]),
                              (WALK_MAX_STRIDE_RANGE_M[0], WALK_FOOT_DISTANCE_RANGE_M[1])):

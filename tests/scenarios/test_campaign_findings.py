@@ -11,7 +11,7 @@ from app.service.setpoints import Setpoint
 from app.service.verbs import GoPos, GoVelocity, WalkEmergencyStop, WalkStop
 from app.service.verbs.walking import Footstep as SetFootstep
 from app.service.verbs.walking import SetFootsteps
-from controller.layers.auto_balancer import stance_width_m
+from controller.walking.auto_balancer_params import stance_width_m
 from robot.names import JOINT_NAMES
 
 STICK_PERIOD_TICKS = 8  # the page streams a held stick every 40 ms

@@ -26,8 +26,8 @@ import numpy as np
 import pytest
 
 from app.service import OperatorService
-from controller.layers.auto_balancer import SWING_FOOT_LOADED_N
 from controller.layers.hard_emergency_stopper import HardEmergencyStopperParams
+from controller.walking.auto_balancer_params import SWING_FOOT_LOADED_N
 from robot.names import FORCE_SENSOR_NAMES
 from tests.scenarios.helpers import make_system, tilt_deg
 

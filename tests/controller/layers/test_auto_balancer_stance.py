@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.layers.auto_balancer import stance_width_m
+from controller.walking.auto_balancer_params import stance_width_m
 
 
 def sole(x: float, y: float, yaw_deg: float) -> np.ndarray:

@@ -9,8 +9,9 @@ import pytest
 from controller.core.errors import InvalidCommand, InvalidState
 from controller.core.types import Ports, WalkCommand
 from controller.kinematics.model import RobotKinematics
-from controller.layers.auto_balancer import AutoBalancer, check_walk_command
+from controller.layers.auto_balancer import AutoBalancer
 from controller.system import initial_reference
+from controller.walking.auto_balancer_params import check_walk_command
 from robot.generate import half_sitting_deg
 from tests.controller.fakes import make_ctx
 

@@ -7,10 +7,10 @@ import pytest
 
 from controller.core.errors import InvalidCommand
 from controller.core.types import WalkCommand
-from controller.layers.auto_balancer import check_walk_command
 from controller.operation import ranges
 from controller.operation.points import POINTS, USED_COMPONENTS
 from controller.operation.ranges import WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
+from controller.walking.auto_balancer_params import check_walk_command
 
 
 def test_every_point_has_bounds_and_a_component_it_does_not_use_is_bounded_at_zero():
