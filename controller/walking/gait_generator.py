@@ -3,14 +3,12 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
 from controller.core.errors import InvalidCommand, InvalidState
-from controller.core.layer import Params
 from controller.core.types import read_only
-from controller.interpolation.hoff_arbib import min_jerk
 from controller.walking.footsteps import (
     Footstep,
     FootstepParams,
@@ -25,34 +23,25 @@ from controller.walking.footsteps import (
     set_footsteps,
     stop_in_place,
 )
-from controller.walking.swing_trajectory import ORBIT_TYPES, swing_position, swing_rpy
-from controller.walking.toe_heel import ToeHeelParams, cop_offset_x, foot_pitch_offset
+from controller.walking.gait_edits import GaitEdits, GaitPatch
+from controller.walking.gait_sampling import (
+    BOTH,
+    LEFT,
+    RIGHT,
+    SUPPORT_NAMES,
+    GaitParams,
+    Segment,
+    compose_planar,
+    n_ticks,
+    q_of,
+    relative_planar,
+    rest_stop,
+    sample_segment,
+    zmp_offsets,
+)
+from controller.walking.toe_heel import ToeHeelParams
 
 __all__ = ["GaitGenerator", "GaitParams", "GaitPatch", "GaitSample"]
-
-_R, _L = 0, 1  # foot index in the (2, ...) arrays
-_SUPPORT_NAMES = ("rleg", "lleg", "both")
-_BOTH = 2
-#: [s] the final double support of a stop from rest: the ZMP (and the COG with it) moves to the feet's middle
-REST_STOP_DOUBLE_SUPPORT_S = 2.0
-
-
-@dataclass(frozen=True)
-class GaitParams(Params):
-    """Timing and ZMP of the walking plan (hrpsys GaitGenerator defaults)."""
-
-    # ZMP moves foot to foot over the last `after` and the first `before` fraction of the step times
-    double_support_ratio_before: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
-    double_support_ratio_after: float = field(default=0.1, metadata={"unit": "-", "min": 0.0, "max": 0.45})
-    orbit_type: str = field(default="cycloid", metadata={"choices": ORBIT_TYPES})
-    # hrpsys default_zmp_offsets: each foot's COP in its sole frame [m]
-    rleg_zmp_offset_x_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.1, "max": 0.1})
-    rleg_zmp_offset_y_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.1, "max": 0.1})
-    lleg_zmp_offset_x_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.1, "max": 0.1})
-    lleg_zmp_offset_y_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.1, "max": 0.1})
-    # duration of the final double support that brings the ZMP back to the feet mid-coords [s]
-    final_double_support_s: float = field(default=1.0, metadata={"unit": "s", "min": 0.05, "max": 10.0})
-    preview_time_s: float = field(default=1.6, metadata={"unit": "s", "min": 0.0, "max": 10.0})  # ZMP preview
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,70 +67,8 @@ class GaitSample:
         return (self.support != "lleg", self.support != "rleg")
 
 
-@dataclass(frozen=True, slots=True)
-class GaitPatch:
-    """A change of the plan computed ahead (GaitGenerator.prepare_set_zmp / prepare_move_swing), nothing changed
-    yet; `GaitGenerator.apply` puts it in while the plan is still the one it was computed from."""
 
-    source: tuple  # (sample arrays, next tick, plan version, params) it was computed from, compared by identity
-    arrays: dict  # the sample arrays after the change
-    #: a moved landing: (segment index, the footstep moved, its segment's end pose (2, 6), a copy of it)
-    landing: tuple | None = None
-
-
-@dataclass
-class _Segment:
-    """One footstep's share of the plan: "start" (initial double support), "step", or "end"."""
-
-    kind: str
-    index: int  # footstep index (len(footsteps) for "end")
-    duration_s: float
-    n_ticks: int
-    start_tick: int  # absolute tick of its first sample
-    q_start: np.ndarray  # (2, 6) feet (x, y, z, roll, pitch, yaw) at its start
-    q_end: np.ndarray | None = None
-    # the GaitParams the segment was planned with: a parameter change applies to the segments planned
-    # after it, a replan that resamples this segment keeps its timing (no jump of the ZMP mid-step)
-    params: GaitParams | None = None
-
-
-def _rpy_matrices(rpy: np.ndarray) -> np.ndarray:
-    """(n, 3, 3) R = Rz(yaw) Ry(pitch) Rx(roll) for (n, 3) roll-pitch-yaw [rad]."""
-    r, p, y = rpy[:, 0], rpy[:, 1], rpy[:, 2]
-    cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-    return np.stack([
-        np.stack([cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr], axis=-1),
-        np.stack([sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr], axis=-1),
-        np.stack([-sp, cp * sr, cp * cr], axis=-1),
-    ], axis=1)
-
-
-def _ry(theta: np.ndarray) -> np.ndarray:
-    c, s = np.cos(theta), np.sin(theta)
-    z, o = np.zeros_like(theta), np.ones_like(theta)
-    return np.stack([np.stack([c, z, s], -1), np.stack([z, o, z], -1), np.stack([-s, z, c], -1)], axis=1)
-
-
-def _compose_planar(a: tuple, b: tuple) -> tuple[float, float, float]:
-    """Planar pose a composed with b: (x [m], y [m], yaw [rad])."""
-    c, s = np.cos(a[2]), np.sin(a[2])
-    yaw = (a[2] + b[2] + np.pi) % (2.0 * np.pi) - np.pi
-    return (float(a[0] + c * b[0] - s * b[1]), float(a[1] + s * b[0] + c * b[1]), float(yaw))
-
-
-def _relative_planar(a: tuple, b: tuple) -> tuple[float, float, float]:
-    """b in the frame of a: (x [m], y [m], yaw [rad])."""
-    c, s = np.cos(a[2]), np.sin(a[2])
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    yaw = (b[2] - a[2] + np.pi) % (2.0 * np.pi) - np.pi
-    return (float(c * dx + s * dy), float(-s * dx + c * dy), float(yaw))
-
-
-def _q_of(step: Footstep) -> np.ndarray:
-    return np.array([step.x, step.y, step.z, step.roll, step.pitch, step.yaw])
-
-
-class GaitGenerator:
+class GaitGenerator(GaitEdits):
     """hrpsys GaitGenerator's planning half: footsteps in, per-tick reference ZMP and foot poses out.
 
     `plan` / the go_* commands sample the whole plan at once (vectorised, a few ms); a replan (goVelocity
@@ -167,10 +94,9 @@ class GaitGenerator:
         if T_world_lfoot is not None:
             self._feet["lleg"] = Footstep.from_T("lleg", T_world_lfoot)
         p = self.params
-        self._zmp_offsets = np.array([[p.rleg_zmp_offset_x_m, p.rleg_zmp_offset_y_m, 0.0],
-                                      [p.lleg_zmp_offset_x_m, p.lleg_zmp_offset_y_m, 0.0]])  # (2, 3) [m]
+        self._zmp_offsets = zmp_offsets(p)  # (2, 3) [m]
         self._footsteps: list[Footstep] = []
-        self._segments: list[_Segment] = []
+        self._segments: list[Segment] = []
         self._stepper: VelocityStepper | None = None
         self._walking = False
         self._tick = 0  # absolute index of the next sample
@@ -247,7 +173,7 @@ class GaitGenerator:
             return 0
         support = self._arrays["support"]
         j = self._tick - 1 - self._origin
-        if not 0 <= j < len(support) or support[j] == _BOTH:
+        if not 0 <= j < len(support) or support[j] == BOTH:
             return 0
         cache = self._swing_end  # (the support array, the swing's first and end sample): one search per swing
         if cache is None or cache[0] is not support or not cache[1] <= j < cache[2]:
@@ -276,8 +202,8 @@ class GaitGenerator:
         self._stopping_from_rest = False
         self._plan_params = params
         self._walk_origin = mid_coords(self._feet["rleg"], self._feet["lleg"])
-        q0 = np.stack([_q_of(self._feet["rleg"]), _q_of(self._feet["lleg"])])
-        self._segments = [_Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0,
+        q0 = np.stack([q_of(self._feet["rleg"]), q_of(self._feet["lleg"])])
+        self._segments = [Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0,
                                    params=params or self.params)]
         self._tick = self._origin = 0
         self._arrays = None
@@ -302,7 +228,7 @@ class GaitGenerator:
             return steps
         if self._stopping_from_rest:
             raise InvalidState("the walk is ending (a stop from rest after the e-stop): goPos once it stands")
-        goal = _compose_planar(self._walk_origin, (dx_m, dy_m, dtheta_rad))
+        goal = compose_planar(self._walk_origin, (dx_m, dy_m, dtheta_rad))
         k = self._free_index()
         if k > len(self._footsteps):
             self._pending_goal, self._pending_velocity = goal, None
@@ -358,9 +284,7 @@ class GaitGenerator:
         mid-step check, keep theirs)."""
         if params is not None:
             self.params = params
-            p = params
-            self._zmp_offsets = np.array([[p.rleg_zmp_offset_x_m, p.rleg_zmp_offset_y_m, 0.0],
-                                          [p.lleg_zmp_offset_x_m, p.lleg_zmp_offset_y_m, 0.0]])
+            self._zmp_offsets = zmp_offsets(params)
             if not self._walking:
                 self._idle = self._idle_sample()
         if footstep_params is not None:
@@ -407,7 +331,7 @@ class GaitGenerator:
             return
         steps = self._footsteps[:k]
         landed = steps[-1]
-        q_other = self._segments[k - 1].q_start[_L if landed.leg == "rleg" else _R]
+        q_other = self._segments[k - 1].q_start[LEFT if landed.leg == "rleg" else RIGHT]
         x, y, z, roll, pitch, yaw = (float(v) for v in q_other)
         other = Footstep(other_leg(landed.leg), x, y, z, yaw, roll, pitch,
                          step_time_s=self.footstep_params.step_time_s)
@@ -434,50 +358,9 @@ class GaitGenerator:
         if j >= 0:
             self._rest_from = (a["p"][:, j].copy(), a["R"][:, j].copy(), int(a["support"][j]),
                                self._footsteps[min(int(a["index"][j]), len(self._footsteps) - 1)])
-        p, R, support, dst = self._rest_from
-        p, R = p.copy(), R.copy()  # (2, 3), (2, 3, 3)
-        zmp0 = np.array([float(zmp_world_xy[0]), float(zmp_world_xy[1]), 0.0])
-        zmp0[2] = 0.5 * (p[_R, 2] + p[_L, 2]) if support == _BOTH or swing_foot_loaded else p[support, 2]
-        legs = ("rleg", "lleg")
-        stand = support if support != _BOTH else _R
-        steps = [Footstep(legs[stand], *(float(v) for v in p[stand]),
-                          yaw=float(np.arctan2(R[stand, 1, 0], R[stand, 0, 0])),
-                          step_time_s=self.footstep_params.step_time_s)]
-        blocks = []
-        landing_s = 0.0
-        if support != _BOTH:
-            sw = 1 - support
-            if dst.leg != legs[sw]:  # (the footstep being stepped is the swing foot's) else land it level
-                dst = Footstep(legs[sw], float(p[sw, 0]), float(p[sw, 1]), float(p[support, 2]))
-            yaw_now = float(np.arctan2(R[sw, 1, 0], R[sw, 0, 0]))
-            landing = Footstep(dst.leg, float(p[sw, 0]), float(p[sw, 1]), dst.z, yaw_now, dst.roll, dst.pitch,
-                               step_time_s=self.footstep_params.step_time_s)
-            height = float(p[sw, 2] - landing.z)
-            n = self._n_ticks(self.dt_s * max(1, int(np.ceil(max(min_landing_time_s, abs(height) / landing_speed_m_s)
-                                                            / self.dt_s))))
-            s_mj = min_jerk(np.arange(1, n + 1) / n)
-            landing_s = n * self.dt_s
-            q_dst = _q_of(landing)
-            rpy_now = np.array([float(np.arctan2(R[sw, 2, 1], R[sw, 2, 2])), float(-np.arcsin(R[sw, 2, 0])), yaw_now])
-            rpy_sw = rpy_now[None] + s_mj[:, None] * (q_dst[3:] - rpy_now)[None]
-            pp = np.repeat(p[:, None], n, axis=1)
-            RR = np.repeat(R[:, None], n, axis=1)
-            pp[sw] = p[sw][None] + s_mj[:, None] * (q_dst[:3] - p[sw])[None]
-            RR[sw] = _rpy_matrices(rpy_sw)
-            landing_support = _BOTH if swing_foot_loaded else support
-            blocks.append({"zmp": np.repeat(zmp0[None], n, axis=0), "p": pp, "R": RR,
-                           "r": np.full(n, float(support == _L)), "cop": np.zeros((n, 2)), "pitch": np.zeros((n, 2)),
-                           "support": np.full(n, landing_support, dtype=np.int8),
-                           "index": np.full(n, 1, dtype=np.int32)})
-            p[sw], R[sw] = q_dst[:3], _rpy_matrices(q_dst[None, 3:])[0]
-            steps.append(landing)
-        n = self._n_ticks(REST_STOP_DOUBLE_SUPPORT_S)
-        t = min_jerk(np.arange(1, n + 1) / n)[:, None]
-        mid = 0.5 * (p[_R] + R[_R] @ self._zmp_offsets[_R] + p[_L] + R[_L] @ self._zmp_offsets[_L])
-        blocks.append({"zmp": zmp0[None] + t * (mid - zmp0)[None], "p": np.repeat(p[:, None], n, axis=1),
-                       "R": np.repeat(R[:, None], n, axis=1), "r": np.full(n, 0.5), "cop": np.zeros((n, 2)),
-                       "pitch": np.zeros((n, 2)), "support": np.full(n, _BOTH, dtype=np.int8),
-                       "index": np.full(n, len(steps), dtype=np.int32)})
+        steps, blocks, landing_s = rest_stop(self._rest_from, zmp_world_xy, swing_foot_loaded, landing_speed_m_s,
+                                             min_landing_time_s, self.footstep_params.step_time_s, self._zmp_offsets,
+                                             self.dt_s)
         new = {key: np.concatenate([b[key] for b in blocks], axis=1 if key in ("p", "R") else 0) for key in blocks[0]}
         self._arrays = {key: read_only(v) for key, v in new.items()}
         self._origin = self._tick
@@ -487,8 +370,8 @@ class GaitGenerator:
         for k, b in enumerate(blocks):
             kind = "end" if k == len(blocks) - 1 else "step"
             index = int(b["index"][0])
-            seg = _Segment(kind, index, len(b["zmp"]) * self.dt_s, len(b["zmp"]), start, np.stack(
-                [np.concatenate([b["p"][f, 0], [0.0, 0.0, 0.0]]) for f in (_R, _L)]))
+            seg = Segment(kind, index, len(b["zmp"]) * self.dt_s, len(b["zmp"]), start, np.stack(
+                [np.concatenate([b["p"][f, 0], [0.0, 0.0, 0.0]]) for f in (RIGHT, LEFT)]))
             self._segments.append(seg)
             start += len(b["zmp"])
         self._footsteps = steps
@@ -515,161 +398,6 @@ class GaitGenerator:
         self._plan_version += 1
         self._resample_from(from_index - 1)
 
-    def move_footsteps(self, xy_by_index: dict[int, tuple[float, float]], landed: bool = False,
-                       zmp_world: np.ndarray | None = None) -> None:
-        """Move footsteps {index: (x, y) [m]} (world; heights and orientations kept) while the plan is walked: the
-        emergency step re-plans its landings from the measured capture point.
-
-        A footstep not stepped yet is replaced. The footstep being stepped on: the rest of its swing bends toward
-        the new landing by a min-jerk blend from the pose planned for the next tick (no jump); `landed`: its foot
-        has touched the ground there already (earlier than planned), so it stays there and the rest of the step is
-        double support. The reference ZMP of the rest of that step is recomputed from the new foot poses (flat
-        soles, no toe-heel offsets); the later segments are resampled once.
-
-        `zmp_world`: the reference ZMP of the next ticks, as set_zmp takes it, set with the move (the emergency
-        step's, planned from the capture point); the feet's is then not computed where it replaces it."""
-        if not self._walking or self._stopping_from_rest:
-            raise InvalidState("move_footsteps needs a footstep plan being walked")
-        seg_i = self._segments.index(self._current_segment())
-        seg = self._segments[seg_i]
-        for index in xy_by_index:
-            if not seg.index <= index < len(self._footsteps) or (index == seg.index and seg.kind != "step"):
-                raise InvalidCommand(f"move_footsteps({index}): only the footstep being stepped on ({seg.index}, "
-                                     f"{seg.kind}) or a later one (< {len(self._footsteps)}) may move")
-        if landed and seg.index not in xy_by_index:
-            raise InvalidState(f"move_footsteps(landed=True) must move the footstep being stepped on ({seg.index})")
-        if zmp_world is not None and not landed:
-            patch = self._swing_patch(seg_i, xy_by_index, zmp_world)
-            if patch is not None:
-                self.apply(patch)
-                return
-        for index, (x_m, y_m) in xy_by_index.items():
-            fs = self._footsteps[index]
-            if index == seg.index:
-                self._bend_swing(seg, fs, float(x_m), float(y_m), landed)
-            self._footsteps[index] = fs.replaced(x=float(x_m), y=float(y_m))
-        self._plan_version += 1
-        self._resample_from(seg_i, keep_first=True)
-        if zmp_world is not None:
-            self.set_zmp(zmp_world)
-
-    def prepare_move_swing(self, xy_by_index: dict[int, tuple[float, float]],
-                           zmp_world: np.ndarray) -> GaitPatch | None:
-        """move_footsteps(xy_by_index, zmp_world=zmp_world) computed ahead, the plan unchanged: its patch when it
-        takes the swing-only path (_swing_patch), else None (the call itself then does it, or says what is wrong)."""
-        if not self._walking or self._stopping_from_rest:
-            return None
-        seg_i = self._segments.index(self._current_segment())
-        seg = self._segments[seg_i]
-        if any(not seg.index <= i < len(self._footsteps) or (i == seg.index and seg.kind != "step")
-               for i in xy_by_index):
-            return None
-        return self._swing_patch(seg_i, xy_by_index, zmp_world)
-
-    def _swing_patch(self, seg_i: int, xy_by_index: dict[int, tuple[float, float]],
-                     zmp_world: np.ndarray) -> GaitPatch | None:
-        """move_footsteps of the footstep in the air when only the final double support follows it and the ZMP
-        given replaces all of the feet's: the swing bends and the swing foot's position in the final double support
-        moves, nothing else changes (what resampling gives, without it: the emergency step moves its landing
-        every tick). None (nothing to patch this way) in any other case."""
-        seg = self._segments[seg_i]
-        rest = self._segments[seg_i + 1:]
-        j0 = self._tick - self._origin
-        if (seg.kind != "step" or list(xy_by_index) != [seg.index] or len(rest) != 1 or rest[0].kind != "end"
-                or len(zmp_world) < len(self._arrays["zmp"]) - j0):
-            return None
-        end = rest[0]
-        fs = self._footsteps[seg.index]
-        x_m, y_m = (float(v) for v in xy_by_index[seg.index])
-        sw = _L if fs.leg == "lleg" else _R
-        a = self._arrays
-        base = seg.start_tick - self._origin
-        j1 = base + seg.n_ticks
-        p, zmp = a["p"].copy(), a["zmp"].copy()
-        w = self._swing_blend(seg, j0)
-        p[sw, j0:j1, 0] += w * (x_m - fs.x)
-        p[sw, j0:j1, 1] += w * (y_m - fs.y)
-        e0 = end.start_tick - self._origin
-        p[sw, e0:e0 + end.n_ticks, :2] = (x_m, y_m)  # the final double support: the feet where the step ends
-        zmp[j0:] = np.asarray(zmp_world, dtype=float)[:len(zmp) - j0]
-        q_end = seg.q_end.copy()
-        q_end[sw, :2] = (x_m, y_m)
-        return GaitPatch(self._source(), {**a, "p": read_only(p), "zmp": read_only(zmp)},
-                         (seg_i, fs.replaced(x=x_m, y=y_m), q_end, q_end.copy()))
-
-    def prepare_set_zmp(self, zmp_world: np.ndarray) -> GaitPatch:
-        """set_zmp(zmp_world) computed ahead, the plan unchanged (see there)."""
-        if not self._walking:
-            raise InvalidState("set_zmp needs a walk in progress")
-        zmp = self._arrays["zmp"].copy()
-        j0 = self._tick - self._origin
-        m = min(len(zmp_world), len(zmp) - j0)
-        zmp[j0:j0 + m] = np.asarray(zmp_world, dtype=float)[:m]
-        return GaitPatch(self._source(), {**self._arrays, "zmp": read_only(zmp)})
-
-    def _source(self) -> tuple:
-        return (self._arrays, self._tick, self._plan_version, self.params, self._plan_params, self._walking,
-                self._stopping_from_rest)
-
-    def apply(self, patch: GaitPatch) -> bool:
-        """Put in a patch computed ahead; False (nothing done) when the plan is no longer the one it was computed
-        from (a tick, a new plan or re-plan, a ZMP set, new parameters, the walk ended), the caller then redoes it."""
-        arrays, tick, version, params, plan_params, walking, stopping = patch.source
-        if not (self._arrays is arrays and self._tick == tick and self._plan_version == version
-                and self.params is params and self._plan_params is plan_params and self._walking == walking
-                and self._stopping_from_rest == stopping):
-            return False
-        self._arrays = patch.arrays
-        if patch.landing is not None:
-            seg_i, fs, q_end, q_end_copy = patch.landing
-            seg, end = self._segments[seg_i], self._segments[seg_i + 1]
-            seg.q_end = q_end
-            end.q_start, end.q_end = q_end, q_end_copy
-            self._footsteps[seg.index] = fs
-            self._plan_version += 1
-        return True
-
-    def _swing_blend(self, seg: _Segment, j0: int) -> np.ndarray:
-        """The min-jerk blend [-] toward a moved landing of the segment's samples from j0 (array row) on: local rows
-        0 .. n_land - 1 swing (t < ta), the blend reaching 1 on the last of them."""
-        gp = seg.params or self.params
-        base = seg.start_tick - self._origin
-        n_land = int(np.ceil((1.0 - gp.double_support_ratio_after) * seg.n_ticks - 1e-9)) - 1
-        i = np.arange(j0, base + seg.n_ticks) - base
-        i0 = j0 - base
-        return np.where(i >= n_land - 1, 1.0, min_jerk((i - i0 + 1) / max(n_land - i0, 1)))
-
-    def _bend_swing(self, seg: _Segment, fs: Footstep, x_m: float, y_m: float, landed: bool) -> None:
-        """move_footsteps' patch of the rest of the segment being stepped (see there)."""
-        sw = _L if fs.leg == "lleg" else _R
-        a = self._arrays
-        j0 = self._tick - self._origin  # the next sample handed out
-        base = seg.start_tick - self._origin  # the segment's first sample
-        j1 = base + seg.n_ticks
-        p, R, support, zmp = a["p"].copy(), a["R"].copy(), a["support"].copy(), a["zmp"].copy()
-        if landed:
-            q_dst = _q_of(fs)
-            p[sw, j0:j1] = (x_m, y_m, q_dst[2])
-            R[sw, j0:j1] = _rpy_matrices(q_dst[None, 3:])[0]
-            support[j0:j1] = _BOTH
-        else:
-            w = self._swing_blend(seg, j0)
-            p[sw, j0:j1, 0] += w * (x_m - fs.x)
-            p[sw, j0:j1, 1] += w * (y_m - fs.y)
-        r = a["r"][j0:j1]
-        cop = np.einsum("fnij,fj->fni", R[:, j0:j1], self._zmp_offsets)  # (2, n, 3) flat soles
-        zmp[j0:j1] = (1.0 - r)[:, None] * (p[_R, j0:j1] + cop[_R]) + r[:, None] * (p[_L, j0:j1] + cop[_L])
-        self._arrays = {**a, "p": read_only(p), "R": read_only(R), "support": read_only(support),
-                        "zmp": read_only(zmp)}
-        seg.q_end = seg.q_end.copy()
-        seg.q_end[sw, :2] = (x_m, y_m)
-
-    def set_zmp(self, zmp_world: np.ndarray) -> None:
-        """Overwrite the reference ZMP of the next ticks with `zmp_world` (m, 3) [m], row 0 for the next tick
-        (the emergency step plans it from the measured capture point); rows past the plan's end are dropped,
-        the plan's own ZMP stays after the m given."""
-        self.apply(self.prepare_set_zmp(zmp_world))
-
     # ----- per tick -------------------------------------------------------------------------------------
 
     def tick(self) -> GaitSample:
@@ -690,14 +418,14 @@ class GaitGenerator:
         sample = GaitSample(
             time_s=(self._tick + 1) * self.dt_s,
             walking=True,
-            support=_SUPPORT_NAMES[a["support"][j]],
+            support=SUPPORT_NAMES[a["support"][j]],
             footstep_index=int(a["index"][j]),
             remaining_footsteps=len(self._footsteps) - max(int(a["index"][j]), 1),
             zmp_world=a["zmp"][j],
-            p_rfoot_world=a["p"][_R, j],
-            R_rfoot_world=a["R"][_R, j],
-            p_lfoot_world=a["p"][_L, j],
-            R_lfoot_world=a["R"][_L, j],
+            p_rfoot_world=a["p"][RIGHT, j],
+            R_rfoot_world=a["R"][RIGHT, j],
+            p_lfoot_world=a["p"][LEFT, j],
+            R_lfoot_world=a["R"][LEFT, j],
             r_lleg=float(a["r"][j]),
             cop_offset_x_m=a["cop"][j],
             pitch_offset_rad=a["pitch"][j],
@@ -729,13 +457,10 @@ class GaitGenerator:
     # ----- internals ------------------------------------------------------------------------------------
 
     def _n_ticks(self, duration_s: float) -> int:
-        n = int(round(duration_s / self.dt_s))
-        if n < 1 or abs(n * self.dt_s - duration_s) > 1e-9:
-            raise InvalidCommand(f"step time {duration_s} s is not a whole number of ticks of {self.dt_s} s; "
-                                 f"use e.g. {max(n, 1) * self.dt_s:.6g} s")
-        return n
+        return n_ticks(duration_s, self.dt_s)
 
-    def _current_segment(self) -> _Segment:
+
+    def _current_segment(self) -> Segment:
         t = min(self._tick, self._end_tick - 1)
         for seg in reversed(self._segments):
             if seg.start_tick <= t:
@@ -756,7 +481,7 @@ class GaitGenerator:
         """Plan the goPos that waited for the walk's end: to its goal mid-coords from the feet as they stand."""
         goal, self._pending_goal = self._pending_goal, None
         start = mid_coords(self._feet["rleg"], self._feet["lleg"])
-        dx, dy, dth = _relative_planar(start, goal)
+        dx, dy, dth = relative_planar(start, goal)
         origin = self._walk_origin
         self.go_pos(dx, dy, dth)
         self._walk_origin = origin  # still the same walk as far as the next goPos is concerned
@@ -772,7 +497,7 @@ class GaitGenerator:
     def _idle_sample(self) -> GaitSample:
         rf, lf = self._feet["rleg"], self._feet["lleg"]
         R_r, R_l = rf.T_world_foot[:3, :3], lf.T_world_foot[:3, :3]
-        zmp = 0.5 * (rf.position + R_r @ self._zmp_offsets[_R] + lf.position + R_l @ self._zmp_offsets[_L])
+        zmp = 0.5 * (rf.position + R_r @ self._zmp_offsets[RIGHT] + lf.position + R_l @ self._zmp_offsets[LEFT])
         return GaitSample(0.0, False, "both", 0, 0, read_only(zmp), read_only(rf.position), read_only(R_r),
                           read_only(lf.position), read_only(R_l), 0.5, read_only(np.zeros(2)),
                           read_only(np.zeros(2)))
@@ -784,7 +509,7 @@ class GaitGenerator:
         if not self._walking:
             return "both"
         j = max(self._tick - 1 - self._origin, 0)
-        support = _SUPPORT_NAMES[int(self._arrays["support"][j])]
+        support = SUPPORT_NAMES[int(self._arrays["support"][j])]
         self._pending_goal = self._pending_velocity = None
         self._stopping_from_rest = False
         self._finish(j)
@@ -793,7 +518,7 @@ class GaitGenerator:
     def _finish(self, j: int | None = None) -> None:
         a = self._arrays
         j = self._end_tick - 1 - self._origin if j is None else j
-        for leg, f in (("rleg", _R), ("lleg", _L)):
+        for leg, f in (("rleg", RIGHT), ("lleg", LEFT)):
             T = np.eye(4)
             T[:3, :3] = a["R"][f, j]
             T[:3, 3] = a["p"][f, j]
@@ -802,10 +527,6 @@ class GaitGenerator:
         if self._stepper is not None:
             self._stepper.state = "idle"
         self._idle = self._idle_sample()
-
-    def _weight(self, k: int) -> float:
-        """Eq. 4 weight of the left foot while footstep k is stepped on (support = the other leg)."""
-        return 1.0 if other_leg(self._footsteps[k].leg) == "lleg" else 0.0
 
     def _resample_from(self, seg_index: int, keep_first: bool = False) -> None:
         """Rebuild segments seg_index.. (and the end segment) and their samples; keep what comes before.
@@ -817,7 +538,7 @@ class GaitGenerator:
         for k in range(seg_index + 1, n_steps + 1):
             prev = segs[-1]
             duration = self._footsteps[k].step_time_s if k < n_steps else gp.final_double_support_s
-            segs.append(_Segment("step" if k < n_steps else "end", k, duration, self._n_ticks(duration),
+            segs.append(Segment("step" if k < n_steps else "end", k, duration, self._n_ticks(duration),
                                  prev.start_tick + prev.n_ticks, None, params=gp))
         self._segments = segs
         blocks = []
@@ -825,7 +546,8 @@ class GaitGenerator:
         for k in range(first, len(segs)):
             if k > 0:
                 segs[k].q_start = segs[k - 1].q_end
-            blocks.append(self._sample_segment(segs[k]))
+            blocks.append(sample_segment(segs[k], self._footsteps, self.params, self.toe_heel, self._zmp_offsets,
+                                         self.dt_s))
         keep_from = self._current_segment().start_tick if self._arrays is not None else 0
         new = {key: np.concatenate([b[key] for b in blocks], axis=1 if key in ("p", "R") else 0)
                for key in blocks[0]}
@@ -840,66 +562,3 @@ class GaitGenerator:
         if self._stepper is not None:
             for seg in segs[:-1]:
                 self._checks[seg.start_tick + seg.n_ticks // 2 - 1] = seg.index
-
-    def _sample_segment(self, seg: _Segment) -> dict[str, np.ndarray]:
-        """Vectorised samples of one segment at local times dt, 2 dt, ..., duration (the last one exact)."""
-        n, T = seg.n_ticks, seg.duration_s
-        t = np.arange(1, n + 1) * self.dt_s
-        t[-1] = T
-        q = seg.q_start.copy()  # (2, 6)
-        p = np.repeat(q[:, None, :3], n, axis=1)  # (2, n, 3)
-        R = np.repeat(_rpy_matrices(q[:, 3:])[:, None], n, axis=1)  # (2, n, 3, 3)
-        cop = np.zeros((n, 2))
-        pitch = np.zeros((n, 2))
-        support = np.full(n, _BOTH, dtype=np.int8)
-        R_flat = R.copy()  # sole orientation without the toe-heel pitch (COP frame)
-        p_flat = p.copy()
-        steps, k = self._footsteps, seg.index
-        gp = seg.params or self.params
-        ds_b, ds_a = gp.double_support_ratio_before, gp.double_support_ratio_after
-        if seg.kind == "start":
-            w = self._weight(1) if len(steps) > 1 else 0.5
-            r = 0.5 + (w - 0.5) * t / T
-        elif seg.kind == "end":
-            r_start = self._weight(k - 1) if k > 1 else 0.5
-            r = r_start + (0.5 - r_start) * t / T
-        else:
-            fs = steps[k]
-            sw = _L if fs.leg == "lleg" else _R
-            w = self._weight(k)
-            r_start = 0.5 * (self._weight(k - 1) + w) if k > 1 else w
-            r_end = 0.5 * (w + self._weight(k + 1)) if k + 1 < len(steps) else w
-            tb, ta = ds_b * T, T - ds_a * T
-            r = np.full(n, w)
-            if tb > 0.0:
-                r = np.where(t < tb, r_start + (w - r_start) * t / tb, r)
-            if ta < T:
-                r = np.where(t > ta, w + (r_end - w) * (t - ta) / (T - ta), r)
-            support[(t > tb) & (t < ta)] = 1 - sw
-            q_dst = _q_of(fs)
-            s = np.clip((t - tb) / max(ta - tb, 1e-12), 0.0, 1.0)
-            p_sw = swing_position(s, q[sw, :3], q_dst[:3], fs.step_height_m, gp.orbit_type)
-            rpy_sw = swing_rpy(s, q[sw, 3:], q_dst[3:])
-            R_sw = _rpy_matrices(rpy_sw)
-            p_flat[sw], R_flat[sw] = p_sw, R_sw
-            th = self.toe_heel
-            backward = float((R[sw, 0].T @ (q_dst[:3] - q[sw, :3]))[0]) < -1e-6
-            if th.use_cop_transition:
-                cop[:, sw] = cop_offset_x(t, T, th, backward)
-            if fs.toe_angle_rad > 0.0 or fs.heel_angle_rad > 0.0:
-                theta = foot_pitch_offset(t, T, fs.toe_angle_rad, fs.heel_angle_rad, th, backward)
-                pitch[:, sw] = theta
-                R_pitched = R_sw @ _ry(theta)
-                pivot = np.zeros((n, 3))
-                pivot[:, 0] = np.where(theta > 0.0, th.toe_offset_x_m, th.heel_offset_x_m)
-                p_sw = p_sw + np.einsum("nij,nj->ni", R_sw - R_pitched, pivot)
-                R_sw = R_pitched
-            p[sw], R[sw] = p_sw, R_sw
-            q[sw] = q_dst
-        cop_local = np.repeat(self._zmp_offsets[None], n, axis=0)  # (n, 2, 3)
-        cop_local[:, :, 0] += cop
-        p_cop = p_flat + np.einsum("fnij,nfj->fni", R_flat, cop_local)  # (2, n, 3)
-        zmp = (1.0 - r)[:, None] * p_cop[_R] + r[:, None] * p_cop[_L]
-        seg.q_end = q
-        return {"zmp": zmp, "p": p, "R": R, "r": r, "cop": cop, "pitch": pitch, "support": support,
-                "index": np.full(n, k, dtype=np.int32)}
