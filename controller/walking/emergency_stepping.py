@@ -87,15 +87,24 @@ class EmergencyStepping:
         if support is None or support[0] is not g.p_rsole_world:  # the idle soles' arrays: rebuilt when they move
             support = self._support = (g.p_rsole_world, SupportRegion.of_soles(
                 (g.p_rsole_world, g.R_rsole_world), (g.p_lsole_world, g.R_lsole_world)))
-        cx, cy = bal.cp_world_xy.tolist()
-        if support[1].outside_m(cx, cy) <= params.emergency_step_cp_margin_m:
+        loads = self._loads_if_outside(ctx, bal, support[1], params)
+        if loads is None:
             return False
+        self._start(ctx, bal, *loads, params.emergency_step_params(), preview)
+        return True
+
+    def _loads_if_outside(self, ctx: TickContext, bal: BalanceEstimate, region: SupportRegion,
+                          params: AutoBalancerParams) -> tuple[float, float] | None:
+        """The feet's vertical forces (right, left) [N] when the capture point is farther than the margin outside
+        `region` and the feet carry the robot (a step is called for); None otherwise."""
+        cx, cy = bal.cp_world_xy.tolist()
+        if region.outside_m(cx, cy) <= params.emergency_step_cp_margin_m:
+            return None
         rows = ctx.estimate.wrenches_ext.tolist()
         fz_r, fz_l = rows[FEET[0]][2], rows[FEET[1]][2]
         if fz_r + fz_l < EMERGENCY_STEP_MIN_LOAD_RATIO * self.total_mass_kg * GRAVITY_M_S2:
-            return False
-        self._start(ctx, bal, fz_r, fz_l, params.emergency_step_params(), preview)
-        return True
+            return None
+        return fz_r, fz_l
 
     def catch(self, ctx: TickContext, params: AutoBalancerParams, preview: PreviewController) -> bool:
         """The capture-point flag rose while walking: the walk ends where it is. A foot in the air lands where the
@@ -251,12 +260,8 @@ class EmergencyStepping:
         support = self._support
         if support is None or support[0] is not plan:
             support = self._support = (plan, SupportRegion(plan.support_polygon_after()))
-        cx, cy = bal.cp_world_xy.tolist()
-        if support[1].outside_m(cx, cy) <= params.emergency_step_cp_margin_m:
-            return False
-        rows = ctx.estimate.wrenches_ext.tolist()
-        fz_r, fz_l = rows[FEET[0]][2], rows[FEET[1]][2]
-        if fz_r + fz_l < EMERGENCY_STEP_MIN_LOAD_RATIO * self.total_mass_kg * GRAVITY_M_S2:
+        loads = self._loads_if_outside(ctx, bal, support[1], params)
+        if loads is None:
             return False
         # the leg whose landing leaves the capture point predicted at its touchdown least outside the feet
         g = last_gait
