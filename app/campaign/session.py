@@ -74,6 +74,13 @@ class _Stream:
         return {**z, "linear": [0.0, 0.0, 0.0], "angular": [0.0, 0.0, 0.0]}
 
 
+class StateUnavailable(Exception):
+    """GET /api/state answered something else than the state document."""
+
+    def __init__(self, status: int, body: Any) -> None:
+        super().__init__(f"GET /api/state answered {status}: {str(body)[:300]}")
+
+
 class Session:
     """Drives one session on the console listening on `port`; `run()` returns its SessionResult."""
 
@@ -136,7 +143,9 @@ class Session:
         return r.status, answer
 
     def poll(self, check: bool = True) -> dict[str, Any]:
-        _, s = self.request("GET", "/api/state", check=check)
+        status, s = self.request("GET", "/api/state", check=check)
+        if status != 200 or not isinstance(s, dict) or "time" not in s:
+            raise StateUnavailable(status, s)
         t = float(s["time"])
         if self._last_time is not None and t >= self._last_time:
             self.elapsed_s += t - self._last_time
@@ -227,23 +236,29 @@ class Session:
     def run(self) -> SessionResult:
         wall = time.monotonic()
         try:
-            self.start()
-            half_sitting = {n: j["meas_deg"] for n, j in self.state["joints"].items()}
-            pending = list(self.actions)
-            while self.elapsed_s < self.seconds:
-                while pending and pending[0].at_s <= self.elapsed_s:
-                    self.act(pending.pop(0))
-                self.serve()
-                time.sleep(POLL_SLEEP_S)
-                self.poll()
-            self.finish(half_sitting)
-            if self.record:
-                self.keep_recordings()
+            self._run()
+        except StateUnavailable as exc:  # the session cannot go on without the state: a finding, not a crash
+            self.checker.violate(5, f"the state document is unavailable: {exc}")
         finally:
             self.close()
         c = self.checker
         return SessionResult(self.seed, self.seconds, self.actions, list(c.violations), self.counts,
                              self.simulated_s, time.monotonic() - wall, c.falls, [], self.trace, self.recordings)
+
+    def _run(self) -> None:
+        """Start, act and check for the session's seconds, then the end-of-session check."""
+        self.start()
+        half_sitting = {n: j["meas_deg"] for n, j in self.state["joints"].items()}
+        pending = list(self.actions)
+        while self.elapsed_s < self.seconds:
+            while pending and pending[0].at_s <= self.elapsed_s:
+                self.act(pending.pop(0))
+            self.serve()
+            time.sleep(POLL_SLEEP_S)
+            self.poll()
+        self.finish(half_sitting)
+        if self.record:
+            self.keep_recordings()
 
     def start(self) -> None:
         """A fresh robot: the defaults of the parameters, a reset, the warm-up."""
