@@ -403,7 +403,8 @@ class Session:
                     lambda s: not s["emergency"]["motion_stop"] or s["emergency"]["motion_stop_time"] != stopped_at,
                     t + 1.0, frozenset({"motion_stop", "reset"})))
         elif a.kind in ("push", "push_beyond"):
-            body, impulse, envelope = push_request(a, walking=bool(self.state.get("walking")))
+            body, impulse, envelope = push_request(a, walking=bool(self.state.get("walking")),
+                                                   frozen=bool(self.state["emergency"].get("hard_stop")))
             status, _ = self.request("POST", "/api/sim/push", body)
             if status == 200:
                 self.checker.push(impulse, envelope)

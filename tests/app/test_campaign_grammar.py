@@ -93,3 +93,14 @@ def test_a_push_is_a_fraction_of_the_envelope_the_robot_is_in():
     body, impulse, envelope = push_request(a, walking=True)
     assert envelope == PUSH_ENVELOPE_NS["walking"] and impulse == pytest.approx(envelope / 2)
     assert body["force"][0] == pytest.approx(0.0, abs=1e-6) and body["force"][1] == pytest.approx(impulse / 0.1)
+
+
+@pytest.mark.parametrize("walking", [False, True])
+def test_a_push_while_the_hard_estop_holds_the_robot_frozen_is_beyond_the_envelope(walking):
+    # campaign seed 3006: frozen mid-stride by the e-stop, a 9.4 N s push (inside the walking 10) felled it; frozen,
+    # nothing balances: the impulse is drawn as before, the fall invariant holds it to no envelope
+    a = Action(1.0, "push", {"envelope_fraction": 0.5, "direction_deg": 90.0})
+    body, impulse, envelope = push_request(a, walking=walking, frozen=True)
+    drawn = PUSH_ENVELOPE_NS["walking" if walking else "standing"]
+    assert impulse == pytest.approx(drawn / 2) and envelope == 0.0 and impulse > envelope
+    assert push_request(a, walking=walking)[0] == body
