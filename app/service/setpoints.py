@@ -211,7 +211,10 @@ class BoardSource:
         v = self.board.version()
         if v == self._version or v % 2:
             return None
-        table = self.board.get()
+        try:  # one try: the loop never waits for the console's writer (a torn read is taken next tick)
+            table = self.board.get(retries=1, stale_ok=False)
+        except TimeoutError:
+            return None
         self._version = v
         return table
 
