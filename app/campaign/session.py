@@ -466,6 +466,8 @@ class Session:
             self.wait_until(lambda s: not s["emergency"]["flag"], 6.0, "the CP flag down")
             self.request("POST", "/api/motion/release")
             self.wait_until(lambda s: not s["emergency"]["motion_stop"], 6.0, "the motion stop's release")
+        # as an operator would: `stand` walks, and no walk starts while the flag is up (seed 1003 asked at once)
+        self.wait_until(lambda s: not s["emergency"]["flag"], 6.0, "the CP flag down")
         stand = None
         for _ in range(STAND_TRIES):  # a stop that ends by itself (the collision hold) may refuse it a while
             status, body = self.request("POST", "/api/behaviors/stand", {})
