@@ -79,6 +79,10 @@ class Commands(Protocol):
         """goStop: stop after the committed steps, feet side by side."""
         ...
 
+    def close_stance(self) -> float:
+        """One slow, lowered step closing a stance too wide to walk from; returns its duration [s]."""
+        ...
+
     def set_joint_angles(self, angles_rad: Mapping[str, float], time_s: float) -> None:
         """Interpolate the named joints (SequencePlayer) to `angles_rad` in `time_s` [s]."""
         ...

@@ -1,6 +1,7 @@
 """`stand`: back to half-sitting: feet apart or turned (after an emergency step, a walk cut short) first step back
-side by side (goPos(0, 0, 0): the aligning steps), then the operation layer's targets back onto the reference and
-the joints (all but the grippers) interpolated to HRP-2's half-sitting posture by the SequencePlayer."""
+side by side (goPos(0, 0, 0): the aligning steps; a stance too wide to walk from is closed by one step first),
+then the operation layer's targets back onto the reference and the joints (all but the grippers) interpolated to
+HRP-2's half-sitting posture by the SequencePlayer."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from dataclasses import dataclass, field
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
 from controller.core.errors import InvalidState
+from controller.walking.auto_balancer_params import WALK_STANCE_MAX_WIDTH_M
 from robot.generate import half_sitting_deg
 from robot.names import JOINT_NAMES
 
@@ -21,6 +23,12 @@ HALF_SITTING_STANCE = (0.0, 0.19, 0.0)
 STANCE_TOLERANCE_M = 0.01
 STANCE_TOLERANCE_RAD = math.radians(2.0)
 ALIGN_START_TIMEOUT_S = 0.5  # [s] the aligning walk shows in the view a tick after goPos
+
+
+def across_m(lsole_from_rsole) -> float:
+    """How far apart the soles' centres are across [m], in the frame of their mean heading."""
+    x, y, yaw = lsole_from_rsole
+    return abs(-math.sin(0.5 * yaw) * x + math.cos(0.5 * yaw) * y)
 
 
 def feet_side_by_side(lsole_from_rsole) -> bool:
@@ -40,6 +48,8 @@ class Stand(Behavior):
     Params = StandParams
     _walk_s = 0.0  # [s] the aligning steps' planned duration
     _posture_from_s: float | None = None  # [s] run time the posture's interpolation started (None: not yet)
+    _asked_s = 0.0  # [s] run time the last walk was asked
+    _closing = False  # the walk under way closes a stance too wide to walk from
     summary = "Back to half-sitting (feet side by side first, operation targets reset, joints interpolated)"
 
     def points(self) -> tuple[str, ...]:
@@ -52,11 +62,15 @@ class Stand(Behavior):
         view = ctx.require_view()
         if view.walking:
             raise InvalidState("stand refused: the robot is walking; stop it first")
-        self._walk_s, self._posture_from_s, self._walked = 0.0, None, False
-        if not feet_side_by_side(view.lsole_from_rsole):
-            self._walk_s = ctx.commands.go_pos(0.0, 0.0, 0.0)  # the aligning steps
-        else:
+        self._walk_s, self._posture_from_s, self._walked, self._asked_s = 0.0, None, False, ctx.elapsed_s
+        self._closing = False
+        if feet_side_by_side(view.lsole_from_rsole):
             self._to_half_sitting(ctx)
+        elif across_m(view.lsole_from_rsole) > WALK_STANCE_MAX_WIDTH_M:  # too wide to walk from: one step first
+            self._closing = True
+            self._walk_s = ctx.commands.close_stance()
+        else:
+            self._walk_s = ctx.commands.go_pos(0.0, 0.0, 0.0)  # the aligning steps
 
     def _to_half_sitting(self, ctx: Context) -> None:
         ctx.commands.reset_operation_targets()
@@ -67,9 +81,13 @@ class Stand(Behavior):
         if self._posture_from_s is None:
             view = ctx.require_view()
             self._walked = self._walked or view.walking
-            if not self._walked and ctx.elapsed_s > ALIGN_START_TIMEOUT_S:
+            if not self._walked and ctx.elapsed_s - self._asked_s > ALIGN_START_TIMEOUT_S:
                 return self.fail(f"timeout: the aligning steps did not start within {ALIGN_START_TIMEOUT_S:g} s")
             if view.walking or not self._walked:  # the view is the last tick's: the walk shows from the next one
+                return NOTHING
+            if self._closing and not feet_side_by_side(view.lsole_from_rsole):  # closed: then the aligning steps
+                self._closing, self._walked, self._asked_s = False, False, ctx.elapsed_s
+                self._walk_s += ctx.commands.go_pos(0.0, 0.0, 0.0)
                 return NOTHING
             if not feet_side_by_side(view.lsole_from_rsole):
                 x, y, yaw = view.lsole_from_rsole

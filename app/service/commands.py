@@ -12,6 +12,7 @@ import numpy as np
 
 from app.service.errors import InvalidArgument, Refused
 from app.service.verbs import (
+    CloseStance,
     GetFootsteps,
     GoPos,
     Host,
@@ -22,6 +23,7 @@ from app.service.verbs import (
     WalkStop,
 )
 from behaviors.base import Capture, JointReading
+from controller.walking.close_stance import closing_duration_s
 from robot.names import FORCE_SENSOR_NAMES, joint_index
 
 
@@ -50,6 +52,10 @@ class HostCommands:
 
     def walk_stop(self) -> None:
         self._apply(WalkStop())
+
+    def close_stance(self) -> float:
+        self._apply(CloseStance())
+        return closing_duration_s(self.host.layer("abc").gait.params)
 
     def set_joint_angles(self, angles_rad: Mapping[str, float], time_s: float) -> None:
         try:

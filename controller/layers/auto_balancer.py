@@ -31,6 +31,7 @@ from controller.walking.auto_balancer_params import (
     stance_width_m,
     walk_command_valid,
 )
+from controller.walking.close_stance import CLOSE_STANCE_LOWERING_M, closing_gait_params, closing_steps
 from controller.walking.emergency_stepping import EmergencyStepping, PreparedReplan
 from controller.walking.footsteps import StepParams
 from controller.walking.gait_generator import GaitGenerator
@@ -117,7 +118,8 @@ class AutoBalancer(Layer):
         self._was_walking = False
         self._base_lowering_m = 0.0  # [m] BODY below the planned height (emergency step)
         self._walk_base_z_m = float(initial.base_pos_world[2])  # [m] the height walks plan at (the preview's)
-        self._walk_lowering_m = 0.0  # [m] BODY below a raised waist while walking
+        self._walk_lowering_m = 0.0  # [m] BODY below a raised waist while walking (and while closing a stance)
+        self._closing_stance = False  # the walk is close_stance's step
         self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
         self._prepared: PreparedReplan | None = None  # after_write's re-plan, for the next tick only
         if active:
@@ -236,27 +238,45 @@ class AutoBalancer(Layer):
         """A capture-point emergency step is in progress."""
         return self.estep.active
 
-    def _require_balanced(self, what: str) -> None:
+    def close_stance(self) -> int:
+        """A stance wider than a walk starts from (a catching step's landing) closed by one slow step with BODY
+        lowered (controller/walking/close_stance.py); returns the footsteps planned."""
+        self._require_active("closeStance")
+        if self.gait.walking:
+            raise InvalidState("closeStance: the robot is walking; closeStance once it stands")
+        self._require_balanced("closeStance", stance=False)
+        cog = self.last_gait.cog_world if self.last_gait is not None else self.preview.x[0]
+        steps = closing_steps(self.gait.T_world_rfoot, self.gait.T_world_lfoot, (float(cog[0]), float(cog[1])),
+                              self.gait.footstep_params)  # raises InvalidState outside the widths it closes
+        self.gait.plan(steps, params=closing_gait_params(self.gait.params))
+        self._closing_stance = True
+        self._walking_stop_requested = False
+        self._port_walking = False
+        return len(steps)
+
+    def _require_balanced(self, what: str, stance: bool = True) -> None:
+        if self._closing_stance and self.gait.walking:
+            raise InvalidState(f"{what}: the robot is closing its stance (closeStance); {what} once it stands")
         if self.estep.active:
             raise InvalidState(f"{what}: a capture-point emergency step is in progress; {what} again once the "
                                "robot stands (status: abc.emergency_step false)")
         if self._last_cp_flag and not self.gait.walking:  # a walk started off balance falls (campaign seed 1009)
             raise InvalidState(f"{what}: the capture-point flag is up (the robot is balancing a disturbance); "
                                f"{what} again once it drops (status: st.emergency false)")
-        near = self._legs_near_limit()
+        near = self._legs_near_limit(stance)
         if near is not None:
             raise InvalidState(f"{what}: {near}")
 
-    def _legs_near_limit(self) -> str | None:
+    def _legs_near_limit(self, stance: bool = True) -> str | None:
         """Why a walk cannot start from the legs' pose (the waist tilted until a leg joint has too little range
         left to walk; campaign seeds 1017, 1018; the feet too far apart, seed 1004), or None."""
         if self.gait.walking or self._last_out is None:
             return None
         width = stance_width_m(self.gait.T_world_rfoot, self.gait.T_world_lfoot)
-        if width > WALK_STANCE_MAX_WIDTH_M:
+        if stance and width > WALK_STANCE_MAX_WIDTH_M:
             return (f"the feet stand {width:.3f} m apart across (a catching step's landing), wider than a walk can "
                     f"start from ({WALK_STANCE_MAX_WIDTH_M:g} m): the COM over one foot stretches the other leg "
-                    "straight")
+                    "straight; `stand` (closeStance) closes it first")
         i, margin = nearest_leg_limit(self._last_out.q_rad, self._q_lower_rad, self._q_upper_rad)
         if margin >= WALK_LEG_LIMIT_MARGIN_RAD:
             return None
@@ -510,7 +530,9 @@ class AutoBalancer(Layer):
     def _lower_to_walking_height(self, base_z_m: float, walking: bool, dt_s: float) -> float:
         """BODY's lowering [m] this tick: while walking, toward how far the operated waist is above the walking
         height; standing, back to zero (rate-limited both ways)."""
+        self._closing_stance = self._closing_stance and walking
         target = max(0.0, base_z_m - self._walk_base_z_m - WALK_HEIGHT_SLACK_M) if walking else 0.0
+        target += CLOSE_STANCE_LOWERING_M if self._closing_stance else 0.0
         step = WALK_HEIGHT_RATE_M_S * dt_s
         low = self._walk_lowering_m
         self._walk_lowering_m = low = min(low + step, target) if target > low else max(low - step, target)

@@ -201,6 +201,7 @@ class GaitGenerator(GaitEdits):
         self._plan_version += 1
         self._stopping_from_rest = False
         self._plan_params = params
+        self._zmp_offsets = zmp_offsets(params or self.params)  # a plan's own COPs (the closing step's) while it lasts
         self._walk_origin = mid_coords(self._feet["rleg"], self._feet["lleg"])
         q0 = np.stack([q_of(self._feet["rleg"]), q_of(self._feet["lleg"])])
         self._segments = [Segment("start", 0, first.step_time_s, self._n_ticks(first.step_time_s), 0, q0,

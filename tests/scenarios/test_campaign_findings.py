@@ -5,12 +5,14 @@ import math
 
 import pytest
 
+from app.service import OperatorService
 from app.service.errors import Refused
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
-from app.service.verbs import GoPos, GoVelocity, WalkEmergencyStop, WalkStop
+from app.service.verbs import GoPos, GoVelocity, ReleaseMotion, WalkEmergencyStop, WalkStop
 from app.service.verbs.walking import Footstep as SetFootstep
 from app.service.verbs.walking import SetFootsteps
+from behaviors.stand import HALF_SITTING_RAD
 from controller.walking.auto_balancer_params import stance_width_m
 from robot.names import JOINT_NAMES
 
@@ -194,3 +196,45 @@ def test_seed_1004_no_walk_starts_from_a_stance_wider_than_a_step_can_leave(widt
         bent = min(bent, *(obs.q_cmd_rad[i] for i in KNEES))
         assert not obs.fallen and not obs.layers["st"].emergency
     assert bent > math.radians(12.0)  # measured 0.48 rad from 0.28 m, 0.13 rad from 0.32 m
+
+
+def stand_from(robot: LocalRobot, timeout_s: float = 20.0):
+    """Release the motion stop (widening may have latched it) and run `stand` through the operator service: (its
+    final status, the least knee bend [rad], the flag rose)."""
+    service = OperatorService(robot)
+    if robot.step().layers["es"].stopped:
+        robot.submit(ReleaseMotion()).result()
+    run_id = service.run_behavior("stand", {"time_s": 2.0})
+    bent, flag = math.inf, False
+    for _ in range(int(round(timeout_s / 0.005))):
+        obs = robot.step()
+        assert not obs.fallen and obs.safety.fault is None
+        bent = min(bent, *(obs.q_cmd_rad[i] for i in KNEES))
+        flag = flag or obs.layers["st"].emergency
+        status = service.get_run(run_id)
+        if status.state != "running":
+            return status, bent, flag
+    raise AssertionError(f"stand still running after {timeout_s} s")
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("width_m", [0.35, 0.39, 0.43])
+def test_seed_1004_stand_closes_a_stance_too_wide_to_walk_from_and_ends_in_half_sitting(width_m):
+    # a catching step landed the feet 0.41 m apart and `stand` was refused (no walk starts from there): one slow
+    # step with BODY lowered 8 cm and the ZMP 3 cm inward now brings the far foot beside the other, then the
+    # posture. Measured: the knees at least 0.38 rad from straight (at 0.43 m), the flag never up
+    robot = widened(width_m)
+    status, bent, flag = stand_from(robot)
+    assert status.state == "succeeded", status.message
+    assert not flag
+    assert bent > math.radians(15.0)
+    obs = robot.run_for(1.0)
+    off = {n: math.degrees(abs(obs.q_meas_rad[JOINT_NAMES.index(n)] - q)) for n, q in HALF_SITTING_RAD.items()}
+    assert max(off.values()) < 3.0, off  # the campaign's invariant 6
+
+
+@pytest.mark.slow
+def test_seed_1004_a_stance_no_step_can_leave_is_refused_naming_why():
+    robot = widened(0.45)
+    with pytest.raises(Refused, match=r"0\.450 m apart across; it closes 0\.34-0\.43 m .* hip roll reaches its limit"):
+        stand_from(robot)

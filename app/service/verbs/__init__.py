@@ -66,6 +66,7 @@ from app.service.verbs.walking import (
     MAX_FOOTSTEPS,
     MAX_GO_POS_M,
     MAX_GO_POS_RAD,
+    CloseStance,
     Footstep,
     GetFootsteps,
     GoPos,
@@ -85,4 +86,4 @@ __all__ = ["Call", "CancelRun", "ChainTiming", "ClearSequence", "ConfirmRecognit
            "SequenceStatus", "SetFootsteps", "SetGroupSequence", "SetJointAngles", "SetJointAnglesSequence",
            "SetOperatorVelocity", "SetParams", "SetSomeJointAngles", "SetTargetPose", "Shutdown", "StartImpedance",
            "StartLayer", "StartRecording", "StopImpedance", "StopLayer", "StopMotion", "StopRecording", "TARGET_LIMBS",
-           "Verb", "WalkEmergencyStop", "WalkStop", "list_behaviors", "step_params", "typed_changes"]
+           "Verb", "CloseStance", "WalkEmergencyStop", "WalkStop", "list_behaviors", "step_params", "typed_changes"]

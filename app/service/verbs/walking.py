@@ -1,4 +1,4 @@
-"""Walking verbs (hrpsys AutoBalancerService): goPos, goVelocity, goStop, setFootSteps."""
+"""Walking verbs (hrpsys AutoBalancerService): goPos, goVelocity, goStop, setFootSteps; closeStance."""
 
 from __future__ import annotations
 
@@ -78,6 +78,18 @@ class WalkStop(Verb):
     def run(self, host: Host) -> str:
         host.layer("abc").go_stop()
         return "stopping"
+
+
+@dataclass(frozen=True)
+class CloseStance(Verb):
+    """A stance wider than a walk starts from (a catching step's landing) closed by one slow, lowered step."""
+
+    name = "close_stance"
+    motion = True
+
+    def run(self, host: Host) -> str:
+        host.layer("abc").close_stance()
+        return "closing the stance: one foot steps beside the other"
 
 
 @dataclass(frozen=True)
