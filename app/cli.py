@@ -179,7 +179,7 @@ def bench(argv: Sequence[str]) -> int:
 
 def _bind_http(host: str, port: int) -> socket.socket:
     """The HTTP server's listening socket, bound before the robot starts: its e-stop door lets in pages of this
-    port only (app.security.origin_allowed), so the port must be known first (--port 0 picks a free one)."""
+    port only (app.console.security.origin_allowed), so the port must be known first (--port 0 picks a free one)."""
     try:
         return socket.create_server((host, port), family=socket.AF_INET6 if ":" in host else socket.AF_INET,
                                     backlog=2048)
@@ -190,7 +190,7 @@ def _bind_http(host: str, port: int) -> socket.socket:
 def _start_http(app, sock: socket.socket, log_level: str):
     import uvicorn
 
-    from app.ws import MAX_MESSAGE_BYTES
+    from app.console.ws import MAX_MESSAGE_BYTES
 
     # ws_max_size: a WebSocket message over the limit is refused by the server (close 1009) from its frame's
     # length, before it is read into memory (uvicorn's default is 16 MB)
@@ -228,7 +228,7 @@ def test_hooks_from_env() -> bool:
 def run(argv: Sequence[str]) -> int:
     args = run_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
-    from app.security import TokenRequired, allowed_hosts_for, check_token_config, is_loopback, token_from_env
+    from app.console.security import TokenRequired, allowed_hosts_for, check_token_config, is_loopback, token_from_env
 
     token = token_from_env(args.token)
     try:  # before anything starts: nothing answers other machines without a token
@@ -237,12 +237,12 @@ def run(argv: Sequence[str]) -> int:
         print(f"hrp2-console: error: {exc}", file=sys.stderr)
         return 2
 
-    from app.main import create_app
+    from app.console.main import create_app
+    from app.console.settings import Settings
     from app.service import OperatorService, ServiceError
     from app.service.estop_door import EstopDoorConfig
     from app.service.process import RobotConfig, RobotProcess
     from app.session.files import prune_sessions
-    from app.settings import Settings
     from robot.sensors import is_fallen
 
     # many request threads share this interpreter: hand the GIL over every 0.5 ms rather than 5 ms, so the
@@ -267,7 +267,7 @@ def run(argv: Sequence[str]) -> int:
     server = http_thread = None
     try:
         if not args.headless:
-            from app.viewer import Viewer
+            from app.console.viewer import Viewer
 
             # viser's own server checks no token and its panel can release the e-stop: it stays on this
             # machine whatever --host says

@@ -14,9 +14,9 @@ import mujoco
 import numpy as np
 import viser
 
+from app.console.viewer_meshes import add_model
 from app.service.log_row import column
 from app.session.reader import Session
-from app.viewer_meshes import add_model
 from robot.names import BASE_LINK, JOINT_NAMES
 from robot.plant import scene_path
 

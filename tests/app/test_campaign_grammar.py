@@ -17,9 +17,9 @@ from app.campaign.grammar import (
     catalogue_of,
     push_request,
 )
-from app.routers.behaviors import params_model
-from app.routers.operator import _REQUEST as VELOCITY_REQUEST
-from app.schemas import GoPosRequest, GoVelocityRequest, PushRequest
+from app.console.routers.behaviors import params_model
+from app.console.routers.operator import _REQUEST as VELOCITY_REQUEST
+from app.console.schemas import GoPosRequest, GoVelocityRequest, PushRequest
 from behaviors.registry import BEHAVIORS
 
 

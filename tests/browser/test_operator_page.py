@@ -857,11 +857,11 @@ def viser_legend_t(page) -> float:
 
 
 def fail_if_viser_froze(page, c: Console) -> None:
-    """viser 1.1.1's lost wake-up (app/viser_wakeup.py) froze the whole viser panel for good (time, plot, legend)
-    about one browser run in three before its repair. Recognised by the legend more than 5 s behind the robot,
+    """viser 1.1.1's lost wake-up (app/console/viser_wakeup.py) froze the whole viser panel for good (time, plot,
+    legend) about one browser run in three before its repair. Recognised by the legend more than 5 s behind the robot,
     it fails saying so (the repair did not hold); any other way of failing fails as itself."""
     shown_s, robot_s = viser_legend_t(page), c.state()["time"]
-    assert robot_s - shown_s <= 5.0, (f"viser's panel froze despite app/viser_wakeup.py: its legend at t "
+    assert robot_s - shown_s <= 5.0, (f"viser's panel froze despite app/console/viser_wakeup.py: its legend at t "
                                       f"{shown_s:.2f} s, the robot at {robot_s:.2f} s")
 
 
