@@ -128,10 +128,10 @@ def run_parser() -> argparse.ArgumentParser:
 
 
 def bench_parser() -> argparse.ArgumentParser:
-    from app.bench import CHAINS, CONSOLE_SCENARIOS
-    from app.bench_cameras import CAMERA_SCENARIOS
-    from app.bench_recording import RECORDING_SCENARIOS
-    from app.bench_scenarios import SCENARIOS
+    from app.lab.bench import CHAINS, CONSOLE_SCENARIOS
+    from app.lab.bench_cameras import CAMERA_SCENARIOS
+    from app.lab.bench_recording import RECORDING_SCENARIOS
+    from app.lab.bench_scenarios import SCENARIOS
 
     p = argparse.ArgumentParser(prog="hrp2-console bench",
                                 description="Run the chain synchronously as fast as possible (no servers) "
@@ -154,7 +154,7 @@ def bench_parser() -> argparse.ArgumentParser:
 
 
 def _layers(text: str) -> tuple[str, ...]:
-    from app.bench import layer_selection
+    from app.lab.bench import layer_selection
 
     try:
         return layer_selection(text)
@@ -164,7 +164,7 @@ def _layers(text: str) -> tuple[str, ...]:
 
 # ---- commands -------------------------------------------------------------------------------------
 def bench(argv: Sequence[str]) -> int:
-    from app.bench import run_bench
+    from app.lab.bench import run_bench
 
     p = bench_parser()
     args = p.parse_args(argv)
@@ -399,7 +399,7 @@ def replay(argv: Sequence[str]) -> int:
 
 
 def _view(session, args) -> int:
-    from app.replay_viewer import ReplayViewer
+    from app.lab.replay_viewer import ReplayViewer
 
     stop = _StopRequested()
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
@@ -419,7 +419,7 @@ def experiment(argv: Sequence[str]) -> int:
     """`hrp2-console experiment NAME [--no-es] [--out DIR]`: one [MLC] IV-C experiment, verdict last."""
     from pathlib import Path
 
-    from app.experiments import EXPERIMENTS, run_experiment
+    from app.lab.experiments import EXPERIMENTS, run_experiment
 
     p = argparse.ArgumentParser(prog="hrp2-console experiment",
                                 description="Run an emergency-stop experiment of [MLC] IV-C in simulation.")
@@ -478,15 +478,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv and argv[0] == "bench":
         code = bench(argv[1:])
     elif argv[:2] == ["experiment", "expo"]:
-        from app.experiments.expo import main as expo_main
+        from app.lab.experiments.expo import main as expo_main
 
         code = expo_main(argv[2:])
     elif argv[:2] == ["study", "estop"]:
-        from app.study.cli import main as study_main
+        from app.lab.study.cli import main as study_main
 
         code = study_main(argv[2:])
     elif argv[:2] == ["study", "push-walking"]:
-        from app.study.push_cli import main as push_main
+        from app.lab.study.push_cli import main as push_main
 
         code = push_main(argv[2:])
     elif argv and argv[0] == "study":
@@ -495,13 +495,13 @@ def main(argv: Sequence[str] | None = None) -> int:
               file=sys.stderr)
         code = 2
     elif argv[:2] == ["experiment", "floor"]:
-        from app.experiments.floor_object import main as floor_main
+        from app.lab.experiments.floor_object import main as floor_main
 
         code = floor_main(argv[2:])
     elif argv and argv[0] == "experiment":
         code = experiment(argv[1:])
     elif argv and argv[0] == "campaign":
-        from app.campaign.cli import main as campaign_main
+        from app.lab.campaign.cli import main as campaign_main
 
         code = campaign_main(argv[1:])
     elif argv and argv[0] == "replay":

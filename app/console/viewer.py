@@ -1,7 +1,7 @@
 """The viser 3D view: MuJoCo bodies moved from ground truth, E-STOP panel, markers and the capture-point plot.
 
 The pieces it draws with live beside it: the MuJoCo geoms (app/console/viewer_meshes.py, which
-app/replay_viewer.py plays a recorded session back with), the markers (app/console/viewer_markers.py), the
+app/lab/replay_viewer.py plays a recorded session back with), the markers (app/console/viewer_markers.py), the
 capture-point plot (app/console/viewer_plots.py), the camera following the robot (app/console/viewer_camera.py)
 and the websocket's origin check (app/console/viewer_origin.py); these and the replay are the only modules that
 import viser.

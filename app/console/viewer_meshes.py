@@ -1,5 +1,5 @@
 """MuJoCo geoms as viser scene nodes: a model's bodies as frames holding their visual geoms (boxes, planes as grids,
-the rest as triangle meshes), for the live view (app/console/viewer.py) and the replay (app/replay_viewer.py)."""
+the rest as triangle meshes), for the live view (app/console/viewer.py) and the replay (app/lab/replay_viewer.py)."""
 
 from __future__ import annotations
 

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from app.console_process import Console, run_load
+from app.lab.console_process import Console, run_load
 
 HUGE = "1" + "0" * 400  # 10**400 written out: no float holds it
 #: (method, path, the field given HUGE, the field the 422 names): every request that takes layer parameters

@@ -11,7 +11,7 @@ import time
 import pytest
 from websockets.sync.client import connect
 
-from app.console_process import Console
+from app.lab.console_process import Console
 from app.service.estop import COPY_WINDOW_S
 
 pytestmark = pytest.mark.slow

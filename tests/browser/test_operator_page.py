@@ -934,7 +934,7 @@ def test_the_camera_and_every_plot_keep_updating_while_watched(page, hrp2_consol
     shows new frames, samples and redraws, viser's CP-error plot too. How fast is the `page-rates` benchmark's
     (`hrp2-console bench --scenario page-rates`, docs/measurements/speed.md): the issue's camera >= 10 Hz and
     plots >= 20 Hz are speed goals, not this test's."""
-    from app.bench_browser import measure_page_rates
+    from app.lab.bench_browser import measure_page_rates
 
     page.locator("#camera").scroll_into_view_if_needed()
     rates = measure_page_rates(page, hrp2_console.base, RATE_WINDOW_S)

@@ -18,11 +18,11 @@ from fastapi import APIRouter, Body, Path, Request
 from fastapi.responses import Response
 from pydantic import Field, WithJsonSchema
 
-from app import experiments
 from app.console.errors import errors
 from app.console.params_http import ES_DEPRECATED, ES_PARAMS, es_changes, es_changes_schema
 from app.console.schemas import ExperimentInfo, ExperimentList, ExperimentRequest, ExperimentResponse
 from app.console.state import jsonable
+from app.lab import experiments
 from app.service import InvalidArgument, NotFound, Refused
 from app.service.verbs import typed_changes
 from controller.layers.emergency_stopper import EmergencyStopperParams
@@ -63,7 +63,7 @@ class ExperimentRunner:
 
     def run(self, name: str, es: bool, variant: str | None, params: dict, save: bool,
             duration_s: float | None = None) -> tuple[int, dict]:
-        from app.experiments.worker import run_in_worker
+        from app.lab.experiments.worker import run_in_worker
 
         if not self._lock.acquire(blocking=False):
             raise Refused("state", "another experiment is running; try again when it has finished")
