@@ -380,3 +380,33 @@ def test_the_controller_core_imports_nothing_of_the_controller_above_it():
     offenders = {m: sorted(i for i in imports if not core(i)) for m, imports in import_graph(("controller",)).items()
                  if core(m)}
     assert {m: found for m, found in offenders.items() if found} == {}
+
+
+# ---- app/ in rooms: the console, the service, the sessions, and the lab on top -----------------------------------
+#: app/'s top level: the command line (the composition root, `hrp2-console`) over its four rooms
+APP_TOP_LEVEL = {"__init__.py", "cli.py", "cli_args.py", "console", "service", "session", "lab"}
+ROOMS = ("console", "service", "session", "lab")
+#: the only imports of the lab from the other rooms (module, imported module)
+LAB_IMPORTS_ALLOWED = {
+    # POST /api/experiments is the lab's experiments over HTTP: the router lists them and runs one in a worker
+    ("app.console.routers.experiments", "app.lab.experiments"),
+    ("app.console.routers.experiments", "app.lab.experiments.worker"),
+}
+
+
+def in_room(module: str, room: str) -> bool:
+    return module == f"app.{room}" or module.startswith(f"app.{room}.")
+
+
+def test_app_is_the_command_line_over_its_rooms():
+    assert {p.name for p in (ROOT / "app").iterdir() if p.name != "__pycache__"} == APP_TOP_LEVEL
+    assert all((ROOT / "app" / room / "__init__.py").exists() for room in ROOMS)
+
+
+def test_the_lab_sits_on_top_of_the_console_the_service_and_the_sessions():
+    """The benches, experiments, studies and the campaign use the other rooms; none of them needs the lab (only
+    app.cli, above every room, starts what the lab has), but for LAB_IMPORTS_ALLOWED."""
+    graph = import_graph(("app",))
+    edges = {(m, i) for m, imports in graph.items() for i in imports
+             if any(in_room(m, room) for room in ROOMS if room != "lab") and in_room(i, "lab")}
+    assert edges == LAB_IMPORTS_ALLOWED
