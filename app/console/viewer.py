@@ -34,7 +34,7 @@ from app.console.viser_wakeup import wake_stuck_buffers
 from app.service import OperatorService, ServiceError
 from robot.plant import scene_path
 
-#: names other modules and the tests take from here (defined in the app.viewer_* modules)
+#: names other modules and the tests take from here (defined in the app.console.viewer_* modules)
 __all__ = ["MAX_FOOTSTEPS", "PLOT_RANGE_MM", "PLOT_RATE_HZ", "CameraFollower", "CpErrorHistory", "Viewer", "add_model",
            "footstep_rectangles", "ray_at_height"]
 
