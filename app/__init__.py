@@ -1,4 +1,5 @@
-"""The console: FastAPI app, viser view, the robot process and its service, benchmarks and experiments."""
+"""The operator console: the command line (cli.py) over four rooms: console/ (FastAPI app, viser view),
+service/ (the robot process and its door), session/ (recordings) and lab/ (benches, experiments, studies)."""
 
 import os
 

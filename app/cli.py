@@ -128,10 +128,10 @@ def run_parser() -> argparse.ArgumentParser:
 
 
 def bench_parser() -> argparse.ArgumentParser:
-    from app.bench import CHAINS, CONSOLE_SCENARIOS
-    from app.bench_cameras import CAMERA_SCENARIOS
-    from app.bench_recording import RECORDING_SCENARIOS
-    from app.bench_scenarios import SCENARIOS
+    from app.lab.bench import CHAINS, CONSOLE_SCENARIOS
+    from app.lab.bench_cameras import CAMERA_SCENARIOS
+    from app.lab.bench_recording import RECORDING_SCENARIOS
+    from app.lab.bench_scenarios import SCENARIOS
 
     p = argparse.ArgumentParser(prog="hrp2-console bench",
                                 description="Run the chain synchronously as fast as possible (no servers) "
@@ -154,7 +154,7 @@ def bench_parser() -> argparse.ArgumentParser:
 
 
 def _layers(text: str) -> tuple[str, ...]:
-    from app.bench import layer_selection
+    from app.lab.bench import layer_selection
 
     try:
         return layer_selection(text)
@@ -164,7 +164,7 @@ def _layers(text: str) -> tuple[str, ...]:
 
 # ---- commands -------------------------------------------------------------------------------------
 def bench(argv: Sequence[str]) -> int:
-    from app.bench import run_bench
+    from app.lab.bench import run_bench
 
     p = bench_parser()
     args = p.parse_args(argv)
@@ -179,7 +179,7 @@ def bench(argv: Sequence[str]) -> int:
 
 def _bind_http(host: str, port: int) -> socket.socket:
     """The HTTP server's listening socket, bound before the robot starts: its e-stop door lets in pages of this
-    port only (app.security.origin_allowed), so the port must be known first (--port 0 picks a free one)."""
+    port only (app.console.security.origin_allowed), so the port must be known first (--port 0 picks a free one)."""
     try:
         return socket.create_server((host, port), family=socket.AF_INET6 if ":" in host else socket.AF_INET,
                                     backlog=2048)
@@ -190,7 +190,7 @@ def _bind_http(host: str, port: int) -> socket.socket:
 def _start_http(app, sock: socket.socket, log_level: str):
     import uvicorn
 
-    from app.ws import MAX_MESSAGE_BYTES
+    from app.console.ws import MAX_MESSAGE_BYTES
 
     # ws_max_size: a WebSocket message over the limit is refused by the server (close 1009) from its frame's
     # length, before it is read into memory (uvicorn's default is 16 MB)
@@ -228,7 +228,7 @@ def test_hooks_from_env() -> bool:
 def run(argv: Sequence[str]) -> int:
     args = run_parser().parse_args(argv)
     logging.basicConfig(level=args.log_level.upper(), format="%(levelname)s %(name)s: %(message)s")
-    from app.security import TokenRequired, allowed_hosts_for, check_token_config, is_loopback, token_from_env
+    from app.console.security import TokenRequired, allowed_hosts_for, check_token_config, is_loopback, token_from_env
 
     token = token_from_env(args.token)
     try:  # before anything starts: nothing answers other machines without a token
@@ -237,12 +237,12 @@ def run(argv: Sequence[str]) -> int:
         print(f"hrp2-console: error: {exc}", file=sys.stderr)
         return 2
 
-    from app.main import create_app
+    from app.console.main import create_app
+    from app.console.settings import Settings
     from app.service import OperatorService, ServiceError
     from app.service.estop_door import EstopDoorConfig
     from app.service.process import RobotConfig, RobotProcess
     from app.session.files import prune_sessions
-    from app.settings import Settings
     from robot.sensors import is_fallen
 
     # many request threads share this interpreter: hand the GIL over every 0.5 ms rather than 5 ms, so the
@@ -267,7 +267,7 @@ def run(argv: Sequence[str]) -> int:
     server = http_thread = None
     try:
         if not args.headless:
-            from app.viewer import Viewer
+            from app.console.viewer import Viewer
 
             # viser's own server checks no token and its panel can release the e-stop: it stays on this
             # machine whatever --host says
@@ -399,7 +399,7 @@ def replay(argv: Sequence[str]) -> int:
 
 
 def _view(session, args) -> int:
-    from app.replay_viewer import ReplayViewer
+    from app.lab.replay_viewer import ReplayViewer
 
     stop = _StopRequested()
     previous = {sig: signal.signal(sig, stop) for sig in (signal.SIGINT, signal.SIGTERM)}
@@ -419,7 +419,7 @@ def experiment(argv: Sequence[str]) -> int:
     """`hrp2-console experiment NAME [--no-es] [--out DIR]`: one [MLC] IV-C experiment, verdict last."""
     from pathlib import Path
 
-    from app.experiments import EXPERIMENTS, run_experiment
+    from app.lab.experiments import EXPERIMENTS, run_experiment
 
     p = argparse.ArgumentParser(prog="hrp2-console experiment",
                                 description="Run an emergency-stop experiment of [MLC] IV-C in simulation.")
@@ -478,15 +478,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv and argv[0] == "bench":
         code = bench(argv[1:])
     elif argv[:2] == ["experiment", "expo"]:
-        from app.experiments.expo import main as expo_main
+        from app.lab.experiments.expo import main as expo_main
 
         code = expo_main(argv[2:])
     elif argv[:2] == ["study", "estop"]:
-        from app.study.cli import main as study_main
+        from app.lab.study.cli import main as study_main
 
         code = study_main(argv[2:])
     elif argv[:2] == ["study", "push-walking"]:
-        from app.study.push_cli import main as push_main
+        from app.lab.study.push_cli import main as push_main
 
         code = push_main(argv[2:])
     elif argv and argv[0] == "study":
@@ -495,13 +495,13 @@ def main(argv: Sequence[str] | None = None) -> int:
               file=sys.stderr)
         code = 2
     elif argv[:2] == ["experiment", "floor"]:
-        from app.experiments.floor_object import main as floor_main
+        from app.lab.experiments.floor_object import main as floor_main
 
         code = floor_main(argv[2:])
     elif argv and argv[0] == "experiment":
         code = experiment(argv[1:])
     elif argv and argv[0] == "campaign":
-        from app.campaign.cli import main as campaign_main
+        from app.lab.campaign.cli import main as campaign_main
 
         code = campaign_main(argv[1:])
     elif argv and argv[0] == "replay":

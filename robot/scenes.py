@@ -53,7 +53,7 @@ def mjcf_scene(params: dict) -> str:
 
 # ------------------------------------------------------------------------ emergency-stop scenes [ES IV-C]
 # The robot stands at the origin facing +x in the `home` keyframe. The walls are placed from the hands of
-# the experiments' reach poses (app/experiments/wall.py, where the poses and the reasoning live):
+# the experiments' reach poses (app/lab/experiments/wall.py, where the poses and the reasoning live):
 # the front wall face 0.05 m beyond the foremost hand geom of REACH_FORWARD_DEG (x = 0.35 m), the left wall
 # face 0.10 m beyond the left hand of REACH_LEFT_DEG (y = 0.725 m). tests/robot/test_model_files.py checks it.
 
@@ -235,7 +235,7 @@ TRASH_BOX_YAW_DEG = 0.0
 
 #: The "unknown object" on the floor [OP VI, Fig. 7c: a bag]: a box the robot has no model of, narrow across the
 #: jaws (y: 55 mm; the 85 mm JRL-hand opens to 0.10 m) and tall (x 80 mm, z 200 mm: a carton), so the squatting
-#: robot's hand takes it from the floor with a side grasp above its middle (app/experiments/floor_object.py).
+#: robot's hand takes it from the floor with a side grasp above its middle (app/lab/experiments/floor_object.py).
 UNKNOWN_OBJECT_SIZE_M = (0.08, 0.055, 0.20)
 UNKNOWN_OBJECT_MASS_KG = 0.30
 UNKNOWN_OBJECT_CENTRE_M = (1.6, 1.0)

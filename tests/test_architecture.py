@@ -182,39 +182,40 @@ def test_the_controller_tree_shows_its_architecture():
 
 
 def router_imports(source: str, filename: str = "<module>") -> list[str]:
-    """The app.routers modules a router module imports: absolute (`from app.routers.x import y`,
-    `from app.routers import x`, `import app.routers.x`) or relative (`from .x import y`)."""
+    """The app.console.routers modules a router module imports: absolute (`from app.console.routers.x import y`,
+    `from app.console.routers import x`, `import app.console.routers.x`) or relative (`from .x import y`)."""
     found = []
     for node in ast.walk(ast.parse(source, filename=filename)):
         if isinstance(node, ast.Import):
-            found += [a.name for a in node.names if a.name == "app.routers" or a.name.startswith("app.routers.")]
+            found += [a.name for a in node.names
+                      if a.name == "app.console.routers" or a.name.startswith("app.console.routers.")]
         elif isinstance(node, ast.ImportFrom):
             module = node.module or ""
             if node.level > 0:
                 found.append("." * node.level + module)
-            elif module == "app.routers":  # `from app.routers import x`: x is a router module
-                found += [f"app.routers.{a.name}" for a in node.names]
-            elif module.startswith("app.routers."):
+            elif module == "app.console.routers":  # `from app.console.routers import x`: x is a router module
+                found += [f"app.console.routers.{a.name}" for a in node.names]
+            elif module.startswith("app.console.routers."):
                 found.append(module)
     return found
 
 
 def test_the_router_import_check_sees_absolute_and_relative_imports():
-    source = ("from app.routers.params import params_document\n"
-              "from app.routers import rate_stream\n"
-              "import app.routers.operator\n"
+    source = ("from app.console.routers.params import params_document\n"
+              "from app.console.routers import rate_stream\n"
+              "import app.console.routers.operator\n"
               "from .layers import ChangesBody\n"
-              "from app.params_http import ChangesBody\n"
-              "from app.ws import RateStream\n")
-    assert router_imports(source) == ["app.routers.params", "app.routers.rate_stream", "app.routers.operator",
-                                      ".layers"]
+              "from app.console.params_http import ChangesBody\n"
+              "from app.console.ws import RateStream\n")
+    assert router_imports(source) == ["app.console.routers.params", "app.console.routers.rate_stream",
+                                      "app.console.routers.operator", ".layers"]
 
 
 def test_no_router_imports_another():
     """Each router is one door's HTTP face: what routers share (params documents, WebSocket helpers, schemas)
-    lives in non-router modules of app (app.params_http, app.ws, app.schemas)."""
+    lives in non-router modules of the console (app.console.params_http, app.console.ws, app.console.schemas)."""
     offenders = {}
-    for path in sorted((ROOT / "app" / "routers").glob("*.py")):
+    for path in sorted((ROOT / "app" / "console" / "routers").glob("*.py")):
         found = router_imports(path.read_text(), str(path))
         if found:
             offenders[str(path.relative_to(ROOT))] = found
@@ -379,3 +380,33 @@ def test_the_controller_core_imports_nothing_of_the_controller_above_it():
     offenders = {m: sorted(i for i in imports if not core(i)) for m, imports in import_graph(("controller",)).items()
                  if core(m)}
     assert {m: found for m, found in offenders.items() if found} == {}
+
+
+# ---- app/ in rooms: the console, the service, the sessions, and the lab on top -----------------------------------
+#: app/'s top level: the command line (the composition root, `hrp2-console`) over its four rooms
+APP_TOP_LEVEL = {"__init__.py", "cli.py", "cli_args.py", "console", "service", "session", "lab"}
+ROOMS = ("console", "service", "session", "lab")
+#: the only imports of the lab from the other rooms (module, imported module)
+LAB_IMPORTS_ALLOWED = {
+    # POST /api/experiments is the lab's experiments over HTTP: the router lists them and runs one in a worker
+    ("app.console.routers.experiments", "app.lab.experiments"),
+    ("app.console.routers.experiments", "app.lab.experiments.worker"),
+}
+
+
+def in_room(module: str, room: str) -> bool:
+    return module == f"app.{room}" or module.startswith(f"app.{room}.")
+
+
+def test_app_is_the_command_line_over_its_rooms():
+    assert {p.name for p in (ROOT / "app").iterdir() if p.name != "__pycache__"} == APP_TOP_LEVEL
+    assert all((ROOT / "app" / room / "__init__.py").exists() for room in ROOMS)
+
+
+def test_the_lab_sits_on_top_of_the_console_the_service_and_the_sessions():
+    """The benches, experiments, studies and the campaign use the other rooms; none of them needs the lab (only
+    app.cli, above every room, starts what the lab has), but for LAB_IMPORTS_ALLOWED."""
+    graph = import_graph(("app",))
+    edges = {(m, i) for m, imports in graph.items() for i in imports
+             if any(in_room(m, room) for room in ROOMS if room != "lab") and in_room(i, "lab")}
+    assert edges == LAB_IMPORTS_ALLOWED

@@ -485,7 +485,7 @@ class OperatorService:
         return self._state()[1]
 
     def _state(self) -> tuple[dict, bytes]:
-        from app.state import state_json
+        from app.console.state import state_json
 
         pub = self.published()
         key = (pub.generation, pub.seq)

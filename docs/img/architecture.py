@@ -47,11 +47,11 @@ def draw() -> str:
     box(RIGHT, 38, COL_W, ["a behaviour", "POST /api/behaviors/squat  {\"depth_m\": 0.15}",
                            "(or any client: curl, scripts, the viser buttons)"])
     # ---- the console process
-    band(150, 320, "console process: FastAPI (app/main.py: create_app; the door in app.state.service)", "b2")
-    l1 = box(LEFT, 180, COL_W, ["app/routers/operator.py: operator_stream",
+    band(150, 320, "console process: FastAPI (app/console/main.py: create_app; the door in app.state.service)", "b2")
+    l1 = box(LEFT, 180, COL_W, ["app/console/routers/operator.py: operator_stream",
                                 "pydantic OperatorVelocityRequest, the operator lock",
                                 "setpoint_of(req) -> Setpoint (app/service/setpoints.py)"])
-    box(RIGHT, 180, COL_W, ["app/routers/behaviors.py: start",
+    box(RIGHT, 180, COL_W, ["app/console/routers/behaviors.py: start",
                             "body checked against the schema made from squat's Params",
                             "-> service.run_behavior(name, values)"])
     arrow(mid_l, b1, mid_l, 180)

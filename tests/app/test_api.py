@@ -294,10 +294,10 @@ def test_a_reset_then_loop_timing_gives_the_figures_of_the_new_run_only():
 
     from fastapi.testclient import TestClient
 
-    from app.main import create_app
+    from app.console.main import create_app
+    from app.console.settings import Settings
     from app.service import OperatorService
     from app.service.local import LocalRobot
-    from app.settings import Settings
 
     robot = LocalRobot(speed=1.0)
     robot.start()
@@ -409,7 +409,7 @@ def test_motion_stop_reverts_the_planned_stream_holds_it_and_release_brings_it_b
 
 
 def test_the_state_matches_its_published_schema_generated_from_the_layers_status(client, runtime):
-    from app.routers.state import StateDocument
+    from app.console.routers.state import StateDocument
 
     step(runtime, 2.6)  # AutoBalancer and Stabilizer working
     doc = client.get("/api/state").json()
@@ -424,7 +424,7 @@ def test_the_state_matches_its_published_schema_generated_from_the_layers_status
 
 
 def test_every_422_the_api_sends_matches_the_error_schema_it_publishes(client):
-    from app.errors import ErrorBody
+    from app.console.errors import ErrorBody
 
     schema = client.get("/openapi.json").json()
     published = schema["components"]["schemas"]["HTTPValidationError"]

@@ -11,10 +11,10 @@ import pytest
 import schemathesis
 from hypothesis import HealthCheck, settings
 
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from app.settings import Settings
 
 pytestmark = pytest.mark.slow
 # per operation (schemathesis's coverage phase adds its boundary cases: 3 gave 4677 calls over 61 operations)

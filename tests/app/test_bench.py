@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from app.bench import layers_that_ran, run_bench
+from app.lab.bench import layers_that_ran, run_bench
 from app.service import OperatorService
 from app.service.local import LocalRobot
 from robot.names import joint_index

@@ -2,8 +2,8 @@
 
 import pytest
 
-from app.bench import run_bench
-from app.bench_cameras import run_camera_bench, run_recognition_bench
+from app.lab.bench import run_bench
+from app.lab.bench_cameras import run_camera_bench, run_recognition_bench
 
 
 def test_the_camera_bench_reports_wall_times_of_the_narrow_pair_against_the_goal():
@@ -26,7 +26,7 @@ def test_the_recognition_bench_finds_the_can_every_time_it_times_a_recognition()
 
 @pytest.mark.slow
 def test_the_paced_recognition_bench_compares_the_lateness_without_and_with_recognitions():
-    from app.bench_cameras import run_recognition_paced_bench
+    from app.lab.bench_cameras import run_recognition_paced_bench
 
     r = run_recognition_paced_bench(duration_s=3.0)
     assert r["scenario"] == "recognition-paced" and r["locate_can_runs"] >= 1

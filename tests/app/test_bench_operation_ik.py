@@ -1,6 +1,6 @@
-"""The operation IK's benchmark (python -m app.bench_operation_ik): every scenario solves and is timed."""
+"""The operation IK's benchmark (python -m app.lab.bench_operation_ik): every scenario solves and is timed."""
 
-from app.bench_operation_ik import benchmark, main
+from app.lab.bench_operation_ik import benchmark, main
 
 
 def test_every_scenario_solves_and_reports_its_times_and_placos():

@@ -3,7 +3,7 @@
 
 import pytest
 
-from app.bench_viewers import run_viewers_bench
+from app.lab.bench_viewers import run_viewers_bench
 
 pytestmark = pytest.mark.slow
 

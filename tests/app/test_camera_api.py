@@ -13,12 +13,12 @@ from fastapi.testclient import TestClient
 from PIL import Image
 from starlette.websockets import WebSocketDisconnect
 
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.camera_feed import VIEW_SIZE_PX, box_corners_world, image_box_px
 from app.service.commands import HostCommands
 from app.service.local import LocalRobot
-from app.settings import Settings
 from robot.images import CameraIntrinsics
 
 #: Pixel standard deviation of the wide view of the EXPO scene from the start pose: measured 43.7 (floor, table,

@@ -22,9 +22,9 @@ from pathlib import Path
 
 import pytest
 
-from app.campaign.checker import INVARIANTS
-from app.campaign.cli import main, run_campaign
-from app.campaign.grammar import PROBABILITIES
+from app.lab.campaign.checker import INVARIANTS
+from app.lab.campaign.cli import main, run_campaign
+from app.lab.campaign.grammar import PROBABILITIES
 
 pytestmark = pytest.mark.slow
 
@@ -62,10 +62,10 @@ def test_the_command_writes_the_report_and_a_finding_per_violating_session_and_e
 
 def test_a_violating_stretch_is_kept_as_mcap_that_replays_bit_for_bit_and_a_clean_one_is_not_kept(tmp_path,
                                                                                                  monkeypatch):
-    from app.campaign.cli import save_findings
-    from app.campaign.grammar import catalogue_of
-    from app.campaign.session import Session
-    from app.console_process import Console
+    from app.lab.campaign.cli import save_findings
+    from app.lab.campaign.grammar import catalogue_of
+    from app.lab.campaign.session import Session
+    from app.lab.console_process import Console
     from app.session.reader import read_session
     from app.session.replay import replay
 

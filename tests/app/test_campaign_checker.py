@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from app.campaign.checker import Checker, Expectation, run_cause
+from app.lab.campaign.checker import Checker, Expectation, run_cause
 
 
 def state(time_s: float, tick: int | None = None, fallen: bool = False, **emergency) -> dict:

@@ -8,7 +8,10 @@ from collections import Counter
 
 import pytest
 
-from app.campaign.grammar import (
+from app.console.routers.behaviors import params_model
+from app.console.routers.operator import _REQUEST as VELOCITY_REQUEST
+from app.console.schemas import GoPosRequest, GoVelocityRequest, PushRequest
+from app.lab.campaign.grammar import (
     PROBABILITIES,
     PUSH_ENVELOPE_NS,
     SCENE_BEHAVIORS,
@@ -17,9 +20,6 @@ from app.campaign.grammar import (
     catalogue_of,
     push_request,
 )
-from app.routers.behaviors import params_model
-from app.routers.operator import _REQUEST as VELOCITY_REQUEST
-from app.schemas import GoPosRequest, GoVelocityRequest, PushRequest
 from behaviors.registry import BEHAVIORS
 
 

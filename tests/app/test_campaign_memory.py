@@ -2,7 +2,7 @@
 
 import os
 
-from app.campaign.memory import growth_violations, tree_rss_mb
+from app.lab.campaign.memory import growth_violations, tree_rss_mb
 
 
 def fake_proc(root, tree: dict[int, tuple[int, list[int]]]):

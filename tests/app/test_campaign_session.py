@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from app.campaign.session import Session, StateUnavailable
+from app.lab.campaign.session import Session, StateUnavailable
 
 
 @pytest.mark.parametrize("status, body", [(503, {"detail": "the robot process is not running"}),

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from app.campaign.shrink import ddmin
+from app.lab.campaign.shrink import ddmin
 
 
 def test_two_culprits_among_forty_items_are_all_that_is_left():

@@ -139,7 +139,7 @@ def test_an_operator_session_over_http_on_the_real_console_replays_identical(tmp
     identical at --speed max."""
     import time
 
-    from app.console_process import Console
+    from app.lab.console_process import Console
 
     path = tmp_path / "http-session.mcap"
     with Console("--speed", "1.0", "--record", str(path)) as c:

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 
-from app.command_journal import CommandJournal
+from app.console.command_journal import CommandJournal
 
 
 def _commands(client) -> list[dict]:

@@ -9,7 +9,7 @@ import time
 
 import pytest
 
-from app.console_process import Console, run_load
+from app.lab.console_process import Console, run_load
 
 HUGE = "1" + "0" * 400  # 10**400 written out: no float holds it
 #: (method, path, the field given HUGE, the field the 422 names): every request that takes layer parameters
@@ -133,7 +133,7 @@ def test_a_websocket_message_over_the_limit_is_refused_by_the_server_with_1009_a
     from websockets.exceptions import ConnectionClosed
     from websockets.sync.client import connect
 
-    from app.ws import MAX_MESSAGE_BYTES
+    from app.console.ws import MAX_MESSAGE_BYTES
 
     url = f"ws://127.0.0.1:{console.port}/ws/operator"
     with connect(url, open_timeout=5) as ws:
@@ -196,7 +196,7 @@ def test_a_10_mb_body_sent_whole_before_reading_gets_a_readable_413_and_beyond_1
     """The server reads and discards a refused body up to 16 MB before it ends the 413 and closes: a client that
     sends all 10 MB first (here on a connection it asked to close, which the server closes after the answer)
     then reads the answer, where the close used to reset the connection under the unread body."""
-    from app.security import DRAIN_MAX_BYTES
+    from app.console.security import DRAIN_MAX_BYTES
 
     body = b"{" + b" " * (10 * 1024 * 1024) + b"}"
     with socket.create_connection(("127.0.0.1", console.port), timeout=30) as sock:

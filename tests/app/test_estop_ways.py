@@ -11,7 +11,7 @@ import time
 import pytest
 from websockets.sync.client import connect
 
-from app.console_process import Console
+from app.lab.console_process import Console
 from app.service.estop import COPY_WINDOW_S
 
 pytestmark = pytest.mark.slow
@@ -116,9 +116,9 @@ def test_no_answer_says_ok_unless_the_loop_has_the_stop_engaged(console):
 
 
 def test_the_3d_views_button_engages_and_shows_the_loops_answer():
+    from app.console.viewer import Viewer
     from app.service import OperatorService
     from app.service.local import LocalRobot
-    from app.viewer import Viewer
 
     robot = LocalRobot(speed=None)
     viewer = Viewer(OperatorService(robot), host="127.0.0.1", port=0, rate_hz=50.0)

@@ -5,8 +5,8 @@ import math
 
 import pytest
 
-from app.experiments import EXPERIMENTS
-from app.experiments.common import DisturbanceParam
+from app.lab.experiments import EXPERIMENTS
+from app.lab.experiments.common import DisturbanceParam
 from tests.app.test_cli import run
 
 

@@ -8,8 +8,8 @@ import time
 
 import pytest
 
-from app import experiments
-from app.routers import experiments as experiments_router
+from app.console.routers import experiments as experiments_router
+from app.lab import experiments
 
 RESULT_FIELDS = {"verdict", "flag_time_s", "peak_cp_error_m", "cp_error_at_flag_m", "edge_margin_at_flag_m",
                  "min_edge_margin_m", "below_threshold_after_revert_s", "duration_s", "outcome"}

@@ -9,11 +9,11 @@ import time
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.process import RobotConfig, RobotProcess
 from app.service.verbs import InjectFault
-from app.settings import Settings
 
 STANDING_Z_M = (0.55, 0.75)  # [m] BODY height of the standing robot (home pose: 0.648 m; a fallen one < 0.3)
 

@@ -12,11 +12,11 @@ import pytest
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.service import InvalidArgument, OperatorService, Refused, Sender, Superseded
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
-from app.settings import Settings
 from controller.operation.points import POINTS
 
 

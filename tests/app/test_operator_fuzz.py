@@ -9,10 +9,10 @@ import pytest
 import schemathesis
 from hypothesis import HealthCheck, settings
 
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from app.settings import Settings
 
 pytestmark = pytest.mark.slow
 EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "25"))  # per operation (a longer run: FUZZ_EXAMPLES=300)

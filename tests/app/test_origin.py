@@ -1,10 +1,10 @@
-"""Origins compared as scheme, host and port (app.security.origin_allowed), and the console refusing pages of
+"""Origins compared as scheme, host and port (app.console.security.origin_allowed), and the console refusing pages of
 another port of the same host: a dev server, a notebook or `python -m http.server` in the operator's browser."""
 
 import pytest
 from starlette.websockets import WebSocketDisconnect
 
-from app.security import origin_allowed, repeated_header, split_origin
+from app.console.security import origin_allowed, repeated_header, split_origin
 
 LOOPBACK = frozenset({"127.0.0.1", "localhost", "::1"})
 

@@ -6,7 +6,7 @@ import time
 import numpy as np
 import pytest
 
-from app.replay_viewer import ReplayViewer
+from app.lab.replay_viewer import ReplayViewer
 from app.service.data_logger import DataLogger
 from app.service.local import LocalRobot
 from app.service.verbs import SetSomeJointAngles

@@ -8,10 +8,10 @@ import time
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.service import OperatorService, Refused, Unavailable
 from app.service.process import RobotConfig, RobotProcess
-from app.settings import Settings
 
 
 def wait_for(predicate, timeout_s=20.0, period_s=0.01):

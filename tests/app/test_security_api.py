@@ -17,12 +17,12 @@ import uvicorn
 from fastapi.testclient import TestClient
 from starlette.websockets import WebSocketDisconnect
 
-from app.main import create_app
-from app.operator_lock import Locked, OperatorLock
-from app.security import TOKEN_ENV, TokenRequired, check_token_config, token_from_env
+from app.console.main import create_app
+from app.console.operator_lock import Locked, OperatorLock
+from app.console.security import TOKEN_ENV, TokenRequired, check_token_config, token_from_env
+from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from app.settings import Settings
 
 TOKEN = "s3cret-token-of-the-console"
 JSON = {"content-type": "application/json"}

@@ -6,9 +6,9 @@ import time
 import numpy as np
 import pytest
 
+from app.console.state import jsonable
 from app.service import InvalidArgument, OperatorService, Refused
 from app.service.local import LocalRobot
-from app.state import jsonable
 
 
 def wait_for(predicate, timeout_s=10.0):

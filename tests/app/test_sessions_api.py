@@ -6,10 +6,10 @@ import io
 import pytest
 from fastapi.testclient import TestClient
 
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.session.reader import read_stream
 from app.session.replay import replay
-from app.settings import Settings
 
 
 @pytest.fixture

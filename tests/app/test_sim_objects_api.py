@@ -7,10 +7,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 import robot.generate as gen
-from app.main import create_app
+from app.console.main import create_app
+from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from app.settings import Settings
 
 
 def client_for(scene: str):

@@ -19,7 +19,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from websockets.sync.client import connect
 
-from app.console_process import Console
+from app.lab.console_process import Console
 from app.service import estop
 
 pytestmark = pytest.mark.slow

@@ -1,6 +1,6 @@
-"""app/stats.py: latency percentiles."""
+"""app/lab/stats.py: latency percentiles."""
 
-from app.stats import percentiles_ms
+from app.lab.stats import percentiles_ms
 
 
 def test_no_samples_reports_only_the_count():

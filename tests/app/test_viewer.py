@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
+from app.console.viewer import PLOT_RANGE_MM, Viewer
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from app.viewer import PLOT_RANGE_MM, Viewer
 
 
 @pytest.fixture
@@ -73,7 +73,7 @@ def test_the_cp_error_plot_and_the_balance_markers_are_built_and_follow_the_snap
 
 
 def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewer, robot):
-    from app.viewer import MAX_FOOTSTEPS
+    from app.console.viewer import MAX_FOOTSTEPS
     from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
     from controller.balance.leg_odometry import control_to_world
     from controller.kinematics.rotations import rpy_to_matrix
@@ -113,7 +113,7 @@ def test_planned_footsteps_are_drawn_from_the_auto_balancer_with_their_yaw(viewe
 def test_the_cp_history_keeps_a_time_window_and_clears_on_reset():
     from types import SimpleNamespace
 
-    from app.viewer import CpErrorHistory
+    from app.console.viewer import CpErrorHistory
 
     h = CpErrorHistory(window_s=1.0)
     st = SimpleNamespace(cp_error=(0.01, -0.02), cp_threshold_m=0.04, emergency=False)
@@ -200,7 +200,7 @@ def test_a_located_object_gets_a_marker_at_its_position_and_a_correction_moves_i
 
 
 def test_a_click_in_3d_corrects_a_recognition_at_its_estimated_height(viewer, robot):
-    from app.viewer import ray_at_height
+    from app.console.viewer import ray_at_height
 
     assert ray_at_height((0, 0, 2.0), (0, 0, 1.0), 0.75) is None  # away from the plane
     assert ray_at_height((0, 0, 2.0), (1.0, 0, 0), 0.75) is None  # parallel to it
@@ -217,7 +217,7 @@ def test_a_click_in_3d_corrects_a_recognition_at_its_estimated_height(viewer, ro
 def test_the_camera_follower_puts_a_camera_on_the_body_then_moves_it_by_the_bodys_travel():
     from types import SimpleNamespace
 
-    from app.viewer import CameraFollower
+    from app.console.viewer import CameraFollower
 
     class Camera(SimpleNamespace):  # as viser's: setting the position moves the look-at point with it
         def __setattr__(self, name, value):
@@ -335,7 +335,7 @@ def test_the_cp_plot_is_pushed_at_least_20_times_a_second_with_the_robot_in_real
     (25) with the robot running at real time in this process; measured 24.9-25.0 per s."""
     import time
 
-    from app.viewer import PLOT_RATE_HZ
+    from app.console.viewer import PLOT_RATE_HZ
 
     robot = LocalRobot(speed=1.0)
     viewer = Viewer(OperatorService(robot), host="127.0.0.1", port=0)
@@ -357,7 +357,7 @@ SOLES_FROM_FEET_MM = 2.5
 
 
 def test_after_a_walk_the_markers_are_drawn_in_the_world_of_leg_odometry_on_the_simulated_feet(viewer, robot):
-    from app.viewer import footstep_rectangles
+    from app.console.viewer import footstep_rectangles
     from controller.balance.leg_odometry import control_to_world
 
     robot.run_for(2.5)

@@ -6,7 +6,7 @@ import threading
 
 import viser
 
-from app.viser_wakeup import wake_if_stuck, wake_stuck_buffers
+from app.console.viser_wakeup import wake_if_stuck, wake_stuck_buffers
 
 
 def test_a_waiter_left_on_a_set_event_is_woken_and_a_healthy_event_is_left_alone():

@@ -857,11 +857,11 @@ def viser_legend_t(page) -> float:
 
 
 def fail_if_viser_froze(page, c: Console) -> None:
-    """viser 1.1.1's lost wake-up (app/viser_wakeup.py) froze the whole viser panel for good (time, plot, legend)
-    about one browser run in three before its repair. Recognised by the legend more than 5 s behind the robot,
+    """viser 1.1.1's lost wake-up (app/console/viser_wakeup.py) froze the whole viser panel for good (time, plot,
+    legend) about one browser run in three before its repair. Recognised by the legend more than 5 s behind the robot,
     it fails saying so (the repair did not hold); any other way of failing fails as itself."""
     shown_s, robot_s = viser_legend_t(page), c.state()["time"]
-    assert robot_s - shown_s <= 5.0, (f"viser's panel froze despite app/viser_wakeup.py: its legend at t "
+    assert robot_s - shown_s <= 5.0, (f"viser's panel froze despite app/console/viser_wakeup.py: its legend at t "
                                       f"{shown_s:.2f} s, the robot at {robot_s:.2f} s")
 
 
@@ -934,7 +934,7 @@ def test_the_camera_and_every_plot_keep_updating_while_watched(page, hrp2_consol
     shows new frames, samples and redraws, viser's CP-error plot too. How fast is the `page-rates` benchmark's
     (`hrp2-console bench --scenario page-rates`, docs/measurements/speed.md): the issue's camera >= 10 Hz and
     plots >= 20 Hz are speed goals, not this test's."""
-    from app.bench_browser import measure_page_rates
+    from app.lab.bench_browser import measure_page_rates
 
     page.locator("#camera").scroll_into_view_if_needed()
     rates = measure_page_rates(page, hrp2_console.base, RATE_WINDOW_S)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import robot.generate as gen
-from app.experiments import wall as wall_experiment
+from app.lab.experiments import wall as wall_experiment
 from robot.names import MODEL_DIR
 from robot.plant import SCENES, MujocoPlant, available_scenes
 

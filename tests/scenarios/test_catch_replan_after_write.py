@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from app.bench_scenarios import CATCH_PUSH, CATCH_PUSH_AFTER_S, CATCH_WALK_START_S
+from app.lab.bench_scenarios import CATCH_PUSH, CATCH_PUSH_AFTER_S, CATCH_WALK_START_S
 from app.service.local import LocalRobot
 from app.service.verbs import GoVelocity, Push, SetParams
 from controller.core.layer import Layer

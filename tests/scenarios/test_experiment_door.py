@@ -4,7 +4,7 @@ flag stops and reverts it before the robot tips backward."""
 
 import pytest
 
-from app.experiments import EXPERIMENTS, run_experiment
+from app.lab.experiments import EXPERIMENTS, run_experiment
 
 #: The pull plan ends at -20 deg; the door follows the hand to about -19 deg.
 DOOR_OPENED_DEG = -10.0

@@ -6,9 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from app.experiments import EXPERIMENTS, run_experiment
-from app.experiments import valve as V
-from app.experiments.common import Rig
+from app.lab.experiments import EXPERIMENTS, run_experiment
+from app.lab.experiments import valve as V
+from app.lab.experiments.common import Rig
 from app.service import OperatorService
 from app.service.local import LocalRobot
 

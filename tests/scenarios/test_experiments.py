@@ -2,7 +2,7 @@
 
 import pytest
 
-from app.experiments import EXPERIMENTS, run_experiment
+from app.lab.experiments import EXPERIMENTS, run_experiment
 
 
 @pytest.mark.slow
@@ -71,7 +71,7 @@ def test_unknown_experiment_lists_the_available_ones():
 def test_settling_time_counts_until_the_error_stays_below_the_threshold():
     import numpy as np
 
-    from app.experiments import settled_below_after_s
+    from app.lab.experiments import settled_below_after_s
 
     t = np.arange(10) * 0.5
     err = np.array([0, 5, 1, 5, 1, 1, 5, 1, 1, 1], dtype=float)

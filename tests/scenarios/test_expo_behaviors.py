@@ -1,5 +1,5 @@
 """Scenario: the EXPO behaviours of [OP] VI on the real chain, as the experiment runs them
-(`app.experiments.expo.run_trial`: locate_can -> take_can -> locate_trash_box -> throw_can through the
+(`app.lab.experiments.expo.run_trial`: locate_can -> take_can -> locate_trash_box -> throw_can through the
 operator service, as fast as possible). The simulator's poses only measure the errors.
 
 1. One full trial (the can 0.15 m in from the near edge on the table's middle, the robot 1.5 m away): the can
@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import pytest
 
-from app.experiments.expo import run_trial
+from app.lab.experiments.expo import run_trial
 
 pytestmark = pytest.mark.slow
 

@@ -1,6 +1,6 @@
 """[OP] Fig. 7(c), issue 11: after `approach_table`, stick setpoints streamed through the operator service and
 the gripper buttons alone take the unknown object from the floor and leave it on the table
-(app/experiments/floor_object.py). The simulator's pose of the object is read only for the verdict.
+(app/lab/experiments/floor_object.py). The simulator's pose of the object is read only for the verdict.
 
 One run of the whole task (78 s simulated): the lift is asserted from the same run."""
 
@@ -11,7 +11,7 @@ import math
 import pytest
 
 import robot.generate as gen
-from app.experiments.floor_object import run
+from app.lab.experiments.floor_object import run
 
 pytestmark = pytest.mark.slow
 

@@ -1,4 +1,4 @@
-"""Scenario: the EXPO trial (`app.experiments.expo.run_trial`: locate_can -> take_can -> locate_trash_box ->
+"""Scenario: the EXPO trial (`app.lab.experiments.expo.run_trial`: locate_can -> take_can -> locate_trash_box ->
 throw_can) at the corners of the can's range ([OP] VI: anywhere along the near long side, U = +-0.6 m from
 its middle, 0.10-0.30 m in from the near edge) and at both ends of the robot's start distance (1.5-2.5 m).
 
@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import pytest
 
-from app.experiments.expo import run_trial
+from app.lab.experiments.expo import run_trial
 
 pytestmark = pytest.mark.slow
 

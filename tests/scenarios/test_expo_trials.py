@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from app.experiments.expo import placements, run_trials, summary_table
+from app.lab.experiments.expo import placements, run_trials, summary_table
 
 pytestmark = pytest.mark.slow
 

@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pytest
 
-from app.experiments.wall import REACH_FORWARD_DEG
+from app.lab.experiments.wall import REACH_FORWARD_DEG
 from controller.operation.points import Twist
 from robot.names import JOINT_NAMES
 from tests.scenarios.helpers import tilt_deg

@@ -14,7 +14,7 @@ import random
 
 import pytest
 
-from app.study.push_walking import PushSpec, _push_run, grid
+from app.lab.study.push_walking import PushSpec, _push_run, grid
 
 #: the sample's seed: the same runs on every machine (the study runs the whole grid)
 SAMPLE_SEED = 26

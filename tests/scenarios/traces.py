@@ -64,7 +64,7 @@ EXPERIMENT_TRACES = ("wall-push-forward", "wall-push-left", "valve", "door")
 
 def _experiment_trace(name: str) -> dict:
     """The experiment's own per-tick CSV (CP error, threshold, edge distance, flags) and its outcome."""
-    from app.experiments import run_experiment
+    from app.lab.experiments import run_experiment
 
     with tempfile.TemporaryDirectory() as d:
         r = run_experiment(name, out_dir=Path(d), plot=False)

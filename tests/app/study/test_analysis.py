@@ -3,9 +3,9 @@ first, then standing; its bootstrap stability; the held-out validation's counts.
 
 import math
 
-from app.study.analysis import collect, recommend, summarise, validate
-from app.study.space import Case, EstopParams
-from app.study.spec import RunSpec
+from app.lab.study.analysis import collect, recommend, summarise, validate
+from app.lab.study.space import Case, EstopParams
+from app.lab.study.spec import RunSpec
 
 LOW, MID, HIGH = EstopParams(0.02, 1.0, 0.5), EstopParams(0.04, 1.0, 0.5), EstopParams(0.06, 1.0, 0.5)
 CASES = [Case.make("wall-push-forward", None, {"wall_gap_m": g}) for g in (-0.02, 0.0, 0.05)]

@@ -6,11 +6,11 @@ import tempfile
 
 import ray
 
-from app.study.pool import PoolBackend
-from app.study.ray_backend import RayBackend
-from app.study.space import Case, EstopParams
-from app.study.store import RunStore
-from app.study.study import StudyConfig, run_study, tuning_specs, validation_specs
+from app.lab.study.pool import PoolBackend
+from app.lab.study.ray_backend import RayBackend
+from app.lab.study.space import Case, EstopParams
+from app.lab.study.store import RunStore
+from app.lab.study.study import StudyConfig, run_study, tuning_specs, validation_specs
 from tests.app.study.fakes import Counting
 
 #: Two parameter sets, one disturbed forward push (wall 2 cm nearer, pushed at 0.1 m/s), one held-out push, each

@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from app.study.capturability import GaitTiming, Lip, StepLimits, gait_moment, push_capturability
+from app.lab.study.capturability import GaitTiming, Lip, StepLimits, gait_moment, push_capturability
 
 #: HRP-2 as the AutoBalancer sees it: 58.0 kg, COM 0.8105 m above the soles (omega 3.48 1/s)
 LIP = Lip(58.0, 0.8105)
@@ -90,7 +90,7 @@ def test_invalid_input_is_refused():
 
 
 def test_the_largest_capturable_impulse_is_the_boundary_of_the_verdicts():
-    from app.study.capturability import largest_capturable_ns
+    from app.lab.study.capturability import largest_capturable_ns
 
     j0 = largest_capturable_ns(FORWARD, STANDING, 0.0, LIP, steps=0)
     j1 = largest_capturable_ns(FORWARD, STANDING, 0.0, LIP, steps=1)

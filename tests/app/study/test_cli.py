@@ -2,7 +2,7 @@
 
 import pytest
 
-from app.study.cli import parser
+from app.lab.study.cli import parser
 from tests.app.test_cli import run
 
 

@@ -2,9 +2,9 @@
 
 import numpy as np
 
-from app.study.analysis import ParamSummary
-from app.study.heatmap import BINS, levels, plot_heatmaps
-from app.study.space import EstopParams
+from app.lab.study.analysis import ParamSummary
+from app.lab.study.heatmap import BINS, levels, plot_heatmaps
+from app.lab.study.space import EstopParams
 
 
 def test_few_distinct_values_are_their_own_levels_and_many_are_binned():

@@ -2,7 +2,7 @@
 
 import io
 
-from app.study.progress import Progress, clock_text
+from app.lab.study.progress import Progress, clock_text
 
 
 class Clock:

@@ -8,12 +8,12 @@ from pathlib import Path
 
 import pytest
 
-from app.study.capturability import Lip
-from app.study.pool import PoolBackend
-from app.study.push_cli import parser, walk_list
-from app.study.push_map import Cell, cells_of, counts, plot_push_map, run_map, summary_markdown
-from app.study.push_walking import PushSpec, grid, run_push
-from app.study.store import RunStore
+from app.lab.study.capturability import Lip
+from app.lab.study.pool import PoolBackend
+from app.lab.study.push_cli import parser, walk_list
+from app.lab.study.push_map import Cell, cells_of, counts, plot_push_map, run_map, summary_markdown
+from app.lab.study.push_walking import PushSpec, grid, run_push
+from app.lab.study.store import RunStore
 from tests.app.study.fakes import Counting
 
 LIP = Lip(58.0, 0.8105)

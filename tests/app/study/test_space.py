@@ -2,8 +2,8 @@
 
 import pytest
 
-from app.experiments import EXPERIMENTS
-from app.study.space import (
+from app.lab.experiments import EXPERIMENTS
+from app.lab.study.space import (
     Case,
     EstopParams,
     allocation,

@@ -1,7 +1,7 @@
 """A study run's key names exactly what the run does."""
 
-from app.study.space import Case, EstopParams
-from app.study.spec import SETTLE_S, RunSpec
+from app.lab.study.space import Case, EstopParams
+from app.lab.study.spec import SETTLE_S, RunSpec
 
 CASE = Case.make("wall-push-left", None, {"wall_gap_m": -0.01})
 

@@ -1,6 +1,6 @@
 """Finished runs survive a restart; a torn last line (a study killed mid-write) is skipped and written past."""
 
-from app.study.store import RunStore
+from app.lab.study.store import RunStore
 
 
 def record(key: str, verdict: str = "stood") -> dict:

@@ -2,7 +2,7 @@
 
 import pytest
 
-from app.study.wilson import wilson_interval
+from app.lab.study.wilson import wilson_interval
 
 
 def test_known_values():

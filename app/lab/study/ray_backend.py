@@ -1,0 +1,63 @@
+"""Study runs on a Ray cluster (`--ray ADDRESS`; `ray` is the optional extra `.[ray]`): the same runs as the pool,
+one CPU each. Every node needs this project installed (the same version) in the Python that Ray runs."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Callable, Iterator, Sequence
+from typing import Any
+
+from app.lab.study.run import run_spec
+
+
+class RayUnavailable(RuntimeError):
+    """`ray` is not installed."""
+
+
+class RayBackend:
+    """`address`: a running cluster's ("HOST:PORT", "ray://HOST:10001", "auto"), or "local" to start a
+    private one on this machine (loopback only, no dashboard; shut down after the runs). Without an address,
+    a Ray session the caller already started is used (the tests start one). `fn` runs one spec (the e-stop
+    study's `run_spec` by default, the push map's `run_push`)."""
+
+    def __init__(self, address: str | None = None, fn: Callable[[dict[str, Any]], dict[str, Any]] = run_spec) -> None:
+        self.address = address
+        self.fn = fn
+
+    def __repr__(self) -> str:
+        return f"RayBackend(address={self.address!r})"
+
+    def describe(self) -> str:
+        return f"Ray ({self.address or 'the session already started'})"
+
+    def _connect(self):
+        try:
+            import ray
+        except ImportError as exc:
+            raise RayUnavailable("--ray needs the ray package: pip install -e '.[ray]'") from exc
+        started = False
+        if not ray.is_initialized():
+            if self.address in (None, "local"):
+                ray.init(address="local", num_cpus=os.cpu_count(), include_dashboard=False,
+                         _node_ip_address="127.0.0.1", log_to_driver=False)
+            else:
+                ray.init(address=self.address, log_to_driver=False)
+            started = True
+        return ray, started
+
+    def run(self, specs: Sequence[dict[str, Any]]) -> Iterator[dict[str, Any]]:
+        if not specs:
+            return
+        ray, started = self._connect()
+        remote = ray.remote(num_cpus=1)(self.fn)
+        pending = [remote.remote(s) for s in specs]
+        try:
+            while pending:
+                done, pending = ray.wait(pending, num_returns=1)
+                for ref in done:
+                    yield ray.get(ref)
+        finally:
+            for ref in pending:  # the caller stopped early
+                ray.cancel(ref, force=True)
+            if started:
+                ray.shutdown()
