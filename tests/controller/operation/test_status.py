@@ -1,0 +1,33 @@
+"""The operation layer's status built from its pieces: targets, achieved poses, reasons, the two twists (unit)."""
+
+import numpy as np
+
+from controller.operation.command_sum import CommandSum
+from controller.operation.point_targets import PointTargets
+from controller.operation.points import POINTS, Twist
+from controller.operation.status import operation_status
+from controller.operation.targets import GazeAngles
+from controller.operation.walk_point import WalkPoint
+
+
+def test_nothing_operated_reads_as_zero_twists_and_no_targets():
+    st = operation_status(True, False, CommandSum(), PointTargets(), WalkPoint())
+    assert not st.active and list(st.points) == list(POINTS)
+    assert all(ps.target is None and ps.motion == (0.0,) * 6 for ps in st.points.values())
+
+
+def test_the_points_twists_targets_and_reasons_are_reported():
+    commands, points, walk = CommandSum(), PointTargets(), WalkPoint()
+    commands.streamed.set("head", Twist.of(angular_rad_s=(0.0, 0.1, 0.0)), 0.0)
+    commands.set_behavior({"walk": Twist.of((0.1, 0.0, 0.0))})
+    total, _ = commands.take(0.0, 0.2, 0.1)
+    walk.command(total["walk"], None, 0.3, 0.5)
+    points.targets["head"], points.achieved["head"] = GazeAngles(0.2, 0.1), GazeAngles(0.15, 0.1)
+    points.limited = {"head": "joint_limit", "rhand": "reach"}  # a reason without a target is not reported
+    st = operation_status(True, True, commands, points, walk).to_dict()
+    head = st["points"]["head"]
+    assert st["active"] and st["motion_stopped"]
+    assert head["target"] == [0.2, 0.1] and head["achieved"] == [0.15, 0.1] and head["limited"] == "joint_limit"
+    assert np.allclose(head["motion"], (0, 0, 0, 0, 0.1, 0)) and st["points"]["rhand"]["limited"] is None
+    assert np.allclose(st["points"]["walk"]["target"], (0.1, 0.0, 0.0))
+    assert np.allclose(st["points"]["walk"]["behavior"], (0.1, 0, 0, 0, 0, 0))
