@@ -215,7 +215,7 @@ class OperationLayer(Layer):
         p_rel, R_rows = sub3(p_body.tolist(), anchor.tolist()), R_body.tolist()  # BODY in F, from the anchor
         targets = ik_targets(points.targets, points.neck_feet_m, p_rel, R_rows)
         if targets.active:
-            res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, targets)
+            res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, targets, lean=True)  # (poses and reasons only)
             q_out = np.where(_IS_UPPER, res.q_rad, ref.q_rad)  # the legs stay the reference's
             for point, r in res.points.items():
                 points.settle(point, achieved_pose(point, r.T_world, p_rel, R_rows), r.limited, stopped, stepped_from)
