@@ -62,7 +62,7 @@ class PointTargets:
                 targets[point] = seed(point)
             step = integrate_point(targets[point], twist, previous, limits.speed(params, point),
                                    limits.accel_steps(params, point, dt_s), dt_s)
-            if step.rate.is_zero:
+            if step.rate is None:
                 rates.pop(point, None)
             else:
                 rates[point] = step.rate
