@@ -11,7 +11,7 @@ from controller.core.types import read_only
 from controller.operation.integration import PointLimits, integrate_point
 from controller.operation.limits import HAND_STEP_LENGTH_M, JOINT_LIMIT, MOTION_STOP, REACH, VELOCITY, clamp_to_achieved
 from controller.operation.points import ZERO_TWIST, Twist
-from controller.operation.targets import HandPose, status_layout
+from controller.operation.targets import HandPose
 
 IK_POINTS = ("rhand", "lhand", "head", "waist")  # the points the IK realises ("walk" goes to the AutoBalancer)
 HANDS = ("rhand", "lhand")
@@ -102,9 +102,3 @@ class PointTargets:
                     store[point] = HandPose.of(store[point].p_feet_m - shift, store[point].R_feet_hand)
         if self.neck_feet_m is not None:
             self.neck_feet_m = self.neck_feet_m - shift
-
-    def status_of(self, point: str) -> tuple:
-        """(target, achieved, limited) of an IK point as the status gives them (in F, the anchor added back)."""
-        target = status_layout(self.targets.get(point), self.anchor)
-        achieved = status_layout(self.achieved.get(point), self.anchor)
-        return target, achieved, self.limited.get(point) if point in self.targets else None

@@ -3,12 +3,16 @@ two twists summed (Eq. 5)."""
 
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
+
+import numpy as np
 
 from controller.core.layer import Status, described, plain
 from controller.operation.command_sum import CommandSum
 from controller.operation.point_targets import PointTargets
 from controller.operation.points import POINTS, ZERO_TWIST, Twist
+from controller.operation.targets import status_layout
 from controller.operation.walk_point import WalkPoint
 
 
@@ -31,7 +35,7 @@ class PointStatus:
 class OperationStatus(Status):
     active: bool = field(metadata=described("some point holds a target: the IK runs"))
     motion_stopped: bool = field(metadata=described("the EmergencyStopper holds the motion: nothing integrates"))
-    points: dict[str, PointStatus] = field(metadata=described("per operational point (POINTS order)"))
+    points: Mapping[str, PointStatus] = field(metadata=described("per operational point (POINTS order)"))
 
     def to_dict(self) -> dict:
         return {"enabled": self.enabled, "active": self.active, "motion_stopped": self.motion_stopped,
@@ -46,18 +50,61 @@ def _six(t: Twist) -> tuple[float, ...]:
 _ZERO_SIX = _six(ZERO_TWIST)
 
 
-def operation_status(enabled: bool, stopped: bool, commands: CommandSum, points: PointTargets,
-                     walk: WalkPoint) -> OperationStatus:
-    """The status of the layer's state after a tick."""
+class PointsOfTick(Mapping):
+    """OperationStatus.points built on first read: the loop takes every layer's status each tick for its snapshot,
+    and most ticks nobody reads the operation's (the state is published at 50 Hz). `build` reads only what was
+    captured when the status was taken. Pickles as a plain dict."""
+
+    __slots__ = ("_build", "_points")
+
+    def __init__(self, build: Callable[[], dict[str, PointStatus]]) -> None:
+        self._build: Callable[[], dict[str, PointStatus]] | None = build
+        self._points: dict[str, PointStatus] | None = None
+
+    def _built(self) -> dict[str, PointStatus]:
+        if self._points is None:
+            self._points, self._build = self._build(), None
+        return self._points
+
+    def __getitem__(self, point: str) -> PointStatus:
+        return self._built()[point]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._built())
+
+    def __len__(self) -> int:
+        return len(self._built())
+
+    def __repr__(self) -> str:
+        return repr(self._built())
+
+    def __reduce__(self):
+        return dict, (dict(self._built()),)
+
+
+def _points_status(motion: dict, behavior: dict, targets: dict, achieved: dict, limited: dict, anchor: np.ndarray,
+                   walk_target: tuple | None) -> dict[str, PointStatus]:
     pts = {}
     for point in POINTS:
-        motion = commands.motion.get(point, ZERO_TWIST)
-        behavior = commands.behavior.get(point, ZERO_TWIST)
+        m = motion.get(point, ZERO_TWIST)
+        b = behavior.get(point, ZERO_TWIST)
         if point == "walk":
-            target, achieved, limited = walk.status_target(), None, None
+            target, achieved_pose, why = walk_target, None, None
         else:
-            target, achieved, limited = points.status_of(point)
-        pts[point] = PointStatus(target=target, achieved=achieved, limited=limited,
-                                 motion=_ZERO_SIX if motion is ZERO_TWIST else _six(motion),
-                                 behavior=_ZERO_SIX if behavior is ZERO_TWIST else _six(behavior))
-    return OperationStatus(enabled=enabled, active=bool(points.targets), motion_stopped=stopped, points=pts)
+            target = status_layout(targets.get(point), anchor)
+            achieved_pose = status_layout(achieved.get(point), anchor)
+            why = limited.get(point) if point in targets else None
+        pts[point] = PointStatus(target=target, achieved=achieved_pose, limited=why,
+                                 motion=_ZERO_SIX if m is ZERO_TWIST else _six(m),
+                                 behavior=_ZERO_SIX if b is ZERO_TWIST else _six(b))
+    return pts
+
+
+def operation_status(enabled: bool, stopped: bool, commands: CommandSum, points: PointTargets,
+                     walk: WalkPoint) -> OperationStatus:
+    """The status of the layer's state after a tick; its points are built when first read, from copies of the
+    state taken now (the targets' poses are immutable; the twists' dicts are replaced, never changed, by a take)."""
+    captured = (commands.motion, commands.behavior, dict(points.targets), dict(points.achieved), dict(points.limited),
+                points.anchor, walk.status_target())
+    return OperationStatus(enabled=enabled, active=bool(points.targets), motion_stopped=stopped,
+                           points=PointsOfTick(lambda: _points_status(*captured)))

@@ -31,3 +31,23 @@ def test_the_points_twists_targets_and_reasons_are_reported():
     assert np.allclose(head["motion"], (0, 0, 0, 0, 0.1, 0)) and st["points"]["rhand"]["limited"] is None
     assert np.allclose(st["points"]["walk"]["target"], (0.1, 0.0, 0.0))
     assert np.allclose(st["points"]["walk"]["behavior"], (0.1, 0, 0, 0, 0, 0))
+
+
+def test_the_points_are_built_when_read_from_the_state_as_it_was_when_the_status_was_taken():
+    import pickle
+
+    from controller.operation.targets import HandPose
+
+    commands, points = CommandSum(), PointTargets()
+    hand = HandPose.of((0.3, -0.2, 0.8), np.eye(3))
+    points.targets["rhand"] = points.achieved["rhand"] = hand
+    points.anchor = np.array((0.01, 0.0, 0.0))  # walking: the hands held relative to BODY
+    status = operation_status(True, False, commands, points, WalkPoint())
+    assert status.points._points is None  # not built yet
+    points.targets["rhand"] = HandPose.of((0.5, 0.0, 0.8), np.eye(3))  # the next tick
+    points.limited["rhand"], points.anchor = "reach", np.zeros(3)
+    rhand = status.points["rhand"]
+    assert np.allclose(rhand.target[:3], (0.31, -0.2, 0.8)) and rhand.limited is None  # the anchor added back
+    assert status.points["waist"].target is None and len(status.points) == len(POINTS)
+    copy = pickle.loads(pickle.dumps(status.points))
+    assert type(copy) is dict and copy == dict(status.points)
