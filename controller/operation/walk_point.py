@@ -24,14 +24,15 @@ class WalkPoint:
                 max_turn_rad_s: float) -> WalkCommand | None:
         """The command for this tick (None: publish nothing): (vx, vy [m/s], vtheta [rad/s]) of `twist` in F,
         one scale factor for the speed [m/s] and turn [rad/s] limits, with `steps`' stride and foot distance."""
-        if twist is None or twist.is_zero:
+        lin, ang = (None, None) if twist is None else (twist.linear_m_s.tolist(), twist.angular_rad_s.tolist())
+        if twist is None or not (any(lin) or any(ang)):  # (Twist.is_zero on the floats read once)
             if self.active:  # one zero command: the walk the operator drove stops
                 self.active = False
                 self.last = WalkCommand(0.0, 0.0, 0.0)
                 return self.last
             return None
-        vx, vy, _ = twist.linear_m_s.tolist()
-        vtheta = twist.angular_rad_s.tolist()[2]
+        vx, vy, _ = lin
+        vtheta = ang[2]
         key = (vx, vy, vtheta, steps, max_speed_m_s, max_turn_rad_s)
         if key == self._key and self.active:  # the same command as last tick (a held stick)
             return self.last
