@@ -3,8 +3,9 @@ two twists summed (Eq. 5)."""
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -31,11 +32,42 @@ class PointStatus:
     behavior: tuple[float, ...] = field(metadata=described("the behaviours' summed twist, same layout"))
 
 
-@dataclass(frozen=True, slots=True)
+class BuildLater:
+    """A value to be computed on first read (see BuiltWhenRead)."""
+
+    __slots__ = ("build",)
+
+    def __init__(self, build: Callable[[], Any]) -> None:
+        self.build = build
+
+
+class BuiltWhenRead:
+    """A dataclass field set either to its value or to a BuildLater, which is called on the field's first read
+    (and its value kept): readers only ever see the value. The field has no default."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self._key = f"_{name}_value"
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            raise AttributeError(self._key)  # (to dataclasses: no default)
+        value = obj.__dict__[self._key]
+        if type(value) is BuildLater:
+            value = obj.__dict__[self._key] = value.build()
+        return value
+
+    def __set__(self, obj, value) -> None:
+        obj.__dict__[self._key] = value
+
+
+@dataclass(frozen=True)  # (no slots: `points` is a descriptor)
 class OperationStatus(Status):
     active: bool = field(metadata=described("some point holds a target: the IK runs"))
     motion_stopped: bool = field(metadata=described("the EmergencyStopper holds the motion: nothing integrates"))
-    points: Mapping[str, PointStatus] = field(metadata=described("per operational point (POINTS order)"))
+    #: built when first read: the loop takes every layer's status each tick for its snapshot, and most ticks
+    #: nobody reads the operation's (the state is published at 50 Hz)
+    points: dict[str, PointStatus] = field(default=BuiltWhenRead(),
+                                           metadata=described("per operational point (POINTS order)"))
 
     def to_dict(self) -> dict:
         return {"enabled": self.enabled, "active": self.active, "motion_stopped": self.motion_stopped,
@@ -48,38 +80,6 @@ def _six(t: Twist) -> tuple[float, ...]:
 
 
 _ZERO_SIX = _six(ZERO_TWIST)
-
-
-class PointsOfTick(Mapping):
-    """OperationStatus.points built on first read: the loop takes every layer's status each tick for its snapshot,
-    and most ticks nobody reads the operation's (the state is published at 50 Hz). `build` reads only what was
-    captured when the status was taken. Pickles as a plain dict."""
-
-    __slots__ = ("_build", "_points")
-
-    def __init__(self, build: Callable[[], dict[str, PointStatus]]) -> None:
-        self._build: Callable[[], dict[str, PointStatus]] | None = build
-        self._points: dict[str, PointStatus] | None = None
-
-    def _built(self) -> dict[str, PointStatus]:
-        if self._points is None:
-            self._points, self._build = self._build(), None
-        return self._points
-
-    def __getitem__(self, point: str) -> PointStatus:
-        return self._built()[point]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._built())
-
-    def __len__(self) -> int:
-        return len(self._built())
-
-    def __repr__(self) -> str:
-        return repr(self._built())
-
-    def __reduce__(self):
-        return dict, (dict(self._built()),)
 
 
 def _points_status(motion: dict, behavior: dict, targets: dict, achieved: dict, limited: dict, anchor: np.ndarray,
@@ -107,4 +107,4 @@ def operation_status(enabled: bool, stopped: bool, commands: CommandSum, points:
     captured = (commands.motion, commands.behavior, dict(points.targets), dict(points.achieved), dict(points.limited),
                 points.anchor, walk.status_target())
     return OperationStatus(enabled=enabled, active=bool(points.targets), motion_stopped=stopped,
-                           points=PointsOfTick(lambda: _points_status(*captured)))
+                           points=BuildLater(lambda: _points_status(*captured)))

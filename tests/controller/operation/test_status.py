@@ -36,6 +36,7 @@ def test_the_points_twists_targets_and_reasons_are_reported():
 def test_the_points_are_built_when_read_from_the_state_as_it_was_when_the_status_was_taken():
     import pickle
 
+    from controller.core.layer import plain
     from controller.operation.targets import HandPose
 
     commands, points = CommandSum(), PointTargets()
@@ -43,11 +44,13 @@ def test_the_points_are_built_when_read_from_the_state_as_it_was_when_the_status
     points.targets["rhand"] = points.achieved["rhand"] = hand
     points.anchor = np.array((0.01, 0.0, 0.0))  # walking: the hands held relative to BODY
     status = operation_status(True, False, commands, points, WalkPoint())
-    assert status.points._points is None  # not built yet
+    assert type(status.__dict__["_points_value"]).__name__ == "BuildLater"  # not built yet
     points.targets["rhand"] = HandPose.of((0.5, 0.0, 0.8), np.eye(3))  # the next tick
     points.limited["rhand"], points.anchor = "reach", np.zeros(3)
     rhand = status.points["rhand"]
     assert np.allclose(rhand.target[:3], (0.31, -0.2, 0.8)) and rhand.limited is None  # the anchor added back
     assert status.points["waist"].target is None and len(status.points) == len(POINTS)
-    copy = pickle.loads(pickle.dumps(status.points))
-    assert type(copy) is dict and copy == dict(status.points)
+    assert type(status.points) is dict and status.points["rhand"] is rhand  # built once
+    copy = pickle.loads(pickle.dumps(status))
+    assert copy == status and type(copy.points) is dict
+    assert plain(status)["points"]["rhand"]["target"] == list(rhand.target)  # what the state document reads
