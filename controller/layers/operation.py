@@ -161,10 +161,11 @@ class OperationLayer(Layer):
         total, changed = self._commands.take(t, p.deadman_timeout_s, p.deadman_ramp_s)
         if changed:
             self._version += 1
-        walk = self._walk.command(total.get("walk"), self._commands.walk_steps(), p.walk_speed_m_s,
-                                  p.walk_turn_rad_s)
-        if walk is not None:
-            ctx.ports.walk_command = walk
+        walk_twist = total.get("walk")
+        if walk_twist is not None or self._walk.active:  # (else nothing to publish: no call on idle ticks)
+            walk = self._walk.command(walk_twist, self._commands.walk_steps(), p.walk_speed_m_s, p.walk_turn_rad_s)
+            if walk is not None:
+                ctx.ports.walk_command = walk
         if not self._points.targets and not stopped:
             for point in IK_POINTS:
                 twist = total.get(point)

@@ -33,7 +33,9 @@ class CommandSum:
         """(the summed twist per point at control time `time_s` [s], whether a source is or was non-empty: the
         status' twists may have changed); the behaviours' twists are used up."""
         motion = self.streamed.live(time_s, deadman_timeout_s, deadman_ramp_s)
-        behavior, self._behavior = self._behavior, {}
+        behavior = self._behavior
+        if behavior:
+            self._behavior = {}
         changed = bool(motion or behavior or self.motion or self.behavior)
         self.motion, self.behavior = motion, behavior
         return (sum_per_point(motion, behavior) if behavior else motion), changed

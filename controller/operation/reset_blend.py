@@ -17,22 +17,21 @@ class ResetBlend:
     """From the last output (joints, BODY position and rpy) to the upstream reference by a min-jerk weight over
     `duration_s`; `pending` while it runs."""
 
-    __slots__ = ("_weight", "_start")
+    __slots__ = ("_weight", "_start", "pending")
 
     def __init__(self) -> None:
         self._weight: Transition | None = None
         self._start: np.ndarray | None = None
-
-    @property
-    def pending(self) -> bool:
-        return self._weight is not None
+        self.pending = False  # (an attribute, not a property: read on every idle tick)
 
     def start(self, last_out: Reference, duration_s: float) -> None:
         self._weight, self._start = Transition(0.0, 1.0, duration_s, "min_jerk"), _packed(last_out)
+        self.pending = True
 
     def cancel(self) -> None:
         """A new motion during the blend: the output goes on from where the blend is."""
         self._weight = self._start = None
+        self.pending = False
 
     def step(self, ref: Reference, dt_s: float) -> Reference:
         """The blended output this tick (`ref` itself, and no longer pending, once the weight reaches 1)."""
