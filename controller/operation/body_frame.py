@@ -3,6 +3,8 @@ BODY (the frame the upper-body IK works in)."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from controller.core.types import Reference
@@ -66,7 +68,8 @@ def ik_targets(targets: dict, neck_feet_m: np.ndarray | None, p_body: list, R_bo
     gaze = targets.get("head")
     if gaze is not None:
         nx, ny, nz = neck_feet_m.tolist() if neck_feet_m is not None else (0.0, 0.0, 0.0)
-        dx, dy, dz = gaze.direction_feet().tolist()
+        cp = math.cos(gaze.pitch_rad)  # (GazeAngles.direction_feet on floats)
+        dx, dy, dz = cp * math.cos(gaze.yaw_rad), cp * math.sin(gaze.yaw_rad), -math.sin(gaze.pitch_rad)
         look = (nx + _LOOK_AT_DISTANCE_M * dx, ny + _LOOK_AT_DISTANCE_M * dy, nz + _LOOK_AT_DISTANCE_M * dz)
         kw["head"] = GazeTarget.trusted_look_at(np.array(rows_tmulv(R_body, sub3(look, p_body))))
     return OperationTargets(**kw)
