@@ -186,13 +186,14 @@ class OperationLayer(Layer):
         last, points = self._last, self._points
         gait = last.gait = ctx.last_ports.gait
         walking = last.walking = gait is not None and gait.walking
-        F, p_body, R_body = self._frames.of(ref, gait)
+        F, p_body, R_body = self._frames.of_rows(ref, gait)  # BODY in F: floats (arrays only where needed)
         if walking != points.anchored_walking:
             # standing the hands are held in F, walking relative to BODY (in F's axes), so that they go along
             # with the body instead of sweeping against its sway from sole to sole and its bobbing
-            points.re_anchor(walking, p_body if walking else -p_body)
+            shift = np.array(p_body)
+            points.re_anchor(walking, shift if walking else -shift)
             self._history.drop_entries()  # its targets are in the old anchor: a release restarts from the present
-        anchor = points.anchor = p_body if walking else _ZERO3
+        anchor = points.anchor = np.array(p_body) if walking else _ZERO3
         self._history.started(ctx.time_s)
         if stopped:
             points.rates.clear()  # held: a release starts from rest
@@ -204,7 +205,7 @@ class OperationLayer(Layer):
                 if not seeded:  # FK in F of the posture as balanced, the upper body as last operated
                     operated = last.ref_out if points.targets and last.ref_out is not None else None
                     q_seed = ref.q_rad if operated is None else np.where(_IS_UPPER, operated.q_rad, ref.q_rad)
-                    self.kin.update(p_body, R_body, q_seed)
+                    self.kin.update(np.array(p_body), np.array(R_body), q_seed)
                     seeded.append(True)
                 return self._seed(point, anchor, float(F.p[2]) - ground_z(gait, F))
             stepped_from = points.integrate(total, self.params, ctx.dt_s, seed)
@@ -213,7 +214,8 @@ class OperationLayer(Layer):
         q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
         if "waist" in points.targets:
             base_out, rpy_out = self._waist.realise(points, ref, gait, F, stopped)
-        p_rel, R_rows = sub3(p_body.tolist(), anchor.tolist()), R_body.tolist()  # BODY in F, from the anchor
+        p_rel = sub3(p_body, p_body if walking else (0.0, 0.0, 0.0))  # BODY in F, from the anchor
+        R_rows = R_body
         targets = ik_targets(points.targets, points.neck_feet_m, p_rel, R_rows)
         if targets.active:
             res = self.ik.solve(ref.q_rad, _ZERO3, _ZERO3, targets, lean=True)  # (poses and reasons only)

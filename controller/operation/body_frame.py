@@ -35,13 +35,16 @@ class BodyInFeet:
 
     def of(self, ref: Reference, gait) -> tuple[PlanarFrame, np.ndarray, np.ndarray]:
         """(F in the world, BODY position (3,) [m] and rotation (3, 3) in F)."""
+        F, p_body, R_body = self.of_rows(ref, gait)
+        return F, np.array(p_body), np.array(R_body)
+
+    def of_rows(self, ref: Reference, gait) -> tuple[PlanarFrame, tuple, tuple]:
+        """of() with BODY's pose as floats: position (3 floats [m]) and rotation rows."""
         if gait is not None and gait.base_pos_world is not None:
             F = PlanarFrame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
-            p_body, R_body = F.to_local_rpy(gait.base_pos_world, gait.base_rpy_rad)
-            return F, p_body, R_body
+            return F, *F.to_local_rpy_rows(gait.base_pos_world, gait.base_rpy_rad)
         F = self.reference_frame(ref)
-        p_body, R_body = F.to_local_rpy(ref.base_pos_world, ref.base_rpy_rad)
-        return F, p_body, R_body
+        return F, *F.to_local_rpy_rows(ref.base_pos_world, ref.base_rpy_rad)
 
     def reference_frame(self, ref: Reference) -> PlanarFrame:
         """F of the upstream reference (its own soles)."""
