@@ -270,7 +270,7 @@ class OperationIK:
 
     def solve(self, q_rad: np.ndarray, base_pos_world: np.ndarray, base_rpy_rad: np.ndarray,
               targets: OperationTargets, feet: FeetPoses | None = None,
-              com_xy_world: np.ndarray | None = None) -> OperationIKResult:
+              com_xy_world: np.ndarray | None = None, lean: bool = False) -> OperationIKResult:
         """One tick: the posture realising `targets` one step further, from the last solution.
 
         q_rad (30,), base pose: the upstream reference. It seeds the warm start after an idle tick; the
@@ -279,6 +279,8 @@ class OperationIK:
         had them when the points became active. com_xy_world (2,) [m]: where to hold the COM (e.g. the
         AutoBalancer's planned COG, so that its BODY correction downstream stays small); None: where it
         was when the points became active. Either is moved into the support polygon's margin if outside.
+        lean: the points' poses, scales and reasons only (their error_m, error_rad and the result's COM are
+        None), for a caller that reads nothing else (the operation layer, every tick); the same posture.
         """
         if not targets.active:  # idle: a pass-through; the next active tick seeds afresh
             self._seeded = False
@@ -325,7 +327,7 @@ class OperationIK:
             robot.state.q = q
             self._forward_kinematics()
         if self.upper_body:
-            return self._solve_upper_body(targets, q, q_ref, seeding, base_pos_world, base_rpy_rad)
+            return self._solve_upper_body(targets, q, q_ref, seeding, base_pos_world, base_rpy_rad, lean)
         if seeding:
             self._com_ref = tuple(self._com_now()[:2])
             if feet is None:  # the soles stay where the reference has them
@@ -373,7 +375,7 @@ class OperationIK:
             robot.state.q = q
         self._forward_kinematics()
         q_prev, self.q = q, robot.state.q.copy()  # the getter is a view on placo's state
-        points = self._results(targets, q_prev, step, ok)
+        points = self._results(targets, q_prev, step, ok, lean)
         com = self._com_now()
         x, y, z = self.q[:3].tolist()
         return OperationIKResult(
@@ -381,7 +383,8 @@ class OperationIK:
             base_rpy_rad=read_only(np.array(quat_xyzw_to_rpy(*self.q[3:7].tolist()))), points=MappingProxyType(points),
             active=True, ok=ok, com_world=read_only(np.array(com)), com_margin_m=self._polygon.margin(com[0], com[1]))
 
-    def _solve_upper_body(self, targets, q, q_ref, seeding, base_pos_world, base_rpy_rad) -> OperationIKResult:
+    def _solve_upper_body(self, targets, q, q_ref, seeding, base_pos_world, base_rpy_rad,
+                          lean: bool = False) -> OperationIKResult:
         """The rest of solve() with the base and legs fixed: the points, the torso posture, the COM guard."""
         p, robot = self.params, self.robot
         lower, upper = self._lower, self._upper
@@ -430,13 +433,16 @@ class OperationIK:
             robot.state.q = q
         self._forward_kinematics()
         q_prev, self.q = q, robot.state.q.copy()
-        points = self._results(targets, q_prev, step, ok)
-        com = self._com_now()
-        cx, cy, _ = self._com_in_base()
+        points = self._results(targets, q_prev, step, ok, lean)
         base = self._base_arrays
         if base[0] != self._base_key:  # the base arrays of the result, rebuilt when the base moves
             base = self._base_arrays = (self._base_key, read_only(np.array(self._base_key[:3])),
                                         read_only(np.array(self._base_key[3:])))
+        if lean:  # (the COM: a placo call and the guard's margin, read by no lean caller)
+            return OperationIKResult(q_rad=read_only(self.q[self.idx_q]), base_pos_world=base[1], base_rpy_rad=base[2],
+                                     points=MappingProxyType(points), active=True, ok=ok)
+        com = self._com_now()
+        cx, cy, _ = self._com_in_base()
         return OperationIKResult(
             q_rad=read_only(self.q[self.idx_q]), base_pos_world=base[1], base_rpy_rad=base[2],
             points=MappingProxyType(points), active=True, ok=ok, com_world=read_only(np.array(com)),
@@ -504,13 +510,13 @@ class OperationIK:
         elif hard != self._com_polygon_hard:
             self._configure_com_polygon(hard)
 
-    def _results(self, targets, q_prev, step, ok) -> dict[str, PointResult]:
+    def _results(self, targets, q_prev, step, ok, lean: bool = False) -> dict[str, PointResult]:
         p = self.params
         out: dict[str, PointResult] = {}
         lists = None
         for name in self._active:
             point = self._points[name]
-            T, error_m, error_rad, scale = point.result(self, getattr(targets, name))
+            T, error_m, error_rad, scale = point.result(self, getattr(targets, name), lean)
             limited = None
             if not ok:
                 scale, limited = 0.0, SOLVER

@@ -168,8 +168,8 @@ class PointResult(NamedTuple):
     """
 
     T_world: np.ndarray  # (4, 4) achieved frame pose (hands: rarm_end/larm_end, head: HEAD_LINK1, waist: BODY)
-    error_m: float  # |target - achieved| position [m] (head: 0; waist: height)
-    error_rad: float  # rotation angle from achieved to target [rad] (head: between the gaze axes)
+    error_m: float | None  # |target - achieved| position [m] (head: 0; waist: height); None: a lean solve
+    error_rad: float | None  # rotation angle from achieved to target [rad] (head: between the gaze axes)
     scale: float  # [0, 1]
     limited: str | None  # None, REACH, JOINT_LIMIT, VELOCITY or SOLVER
 

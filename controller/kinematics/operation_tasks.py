@@ -142,16 +142,17 @@ class HandFrameTask(PointTask):
         self.servo_key = (None if clipped_p else target, None if clipped_w else target)
         self.requested = (p0, R0, dp, w)
 
-    def result(self, ik: SolverView, target: HandTarget) -> tuple:
+    def result(self, ik: SolverView, target: HandTarget, lean: bool = False) -> tuple:
         T = self.T = ik.robot.get_T_world_frame(self.frame)
         rows = self.T_rows = T.tolist()
         self.T_fk = ik.fk_count
         p1, R1 = split_pose(rows)
         p0, R0, dp, w = self.requested
-        pt, Rt = target.rows
         scale = self.scale(0.0, 0.0, sub3(p1, p0), dp, rows_small_log3(rows_tmul(R0, R1)), w, ik.params)
-        error_m = math.dist(pt, p1)
-        return T, error_m, rows_angle_between(R1, Rt), scale
+        if lean:
+            return T, None, None, scale
+        pt, Rt = target.rows
+        return T, math.dist(pt, p1), rows_angle_between(R1, Rt), scale
 
 
 class GazeTask(PointTask):
@@ -191,11 +192,13 @@ class GazeTask(PointTask):
             self.goal = goal
         self.requested = (q_yaw, q_pitch, d_yaw, d_pitch, yaw, pitch)
 
-    def result(self, ik: SolverView, target: GazeTarget) -> tuple:
+    def result(self, ik: SolverView, target: GazeTarget, lean: bool = False) -> tuple:
         yaw1, pitch1 = ik.head_angles()
         q_yaw, q_pitch, d_yaw, d_pitch, yaw, pitch = self.requested
         scale = self.scale(0.0, 0.0, None, None, (yaw1 - q_yaw, pitch1 - q_pitch, 0.0), (d_yaw, d_pitch, 0.0),
                            ik.params)
+        if lean:
+            return ik.robot.get_T_world_frame(HEAD_FRAME), None, None, scale
         # the angle between the achieved and the wanted gaze axes
         c = (math.cos(yaw1 - yaw) * math.cos(pitch1) * math.cos(pitch) + math.sin(pitch1) * math.sin(pitch))
         return ik.robot.get_T_world_frame(HEAD_FRAME), 0.0, math.acos(max(-1.0, min(1.0, c))), scale
@@ -216,7 +219,7 @@ class WaistTask(PointTask):
         ik.body_R_task.R_world_frame = np.array(rows_mul(R0, rows_exp3(w)))
         self.requested = (z0, R0, dz, w)
 
-    def result(self, ik: SolverView, target: WaistTarget) -> tuple:
+    def result(self, ik: SolverView, target: WaistTarget, lean: bool = False) -> tuple:
         z1, R1 = ik.base_pose()
         z0, R0, dz, w = self.requested
         scale = self.scale(z1 - z0, dz, None, None, rows_small_log3(rows_tmul(R0, R1)), w, ik.params)

@@ -37,3 +37,34 @@ def live_twists(setpoints: dict[str, tuple[Twist, float]], time_s: float, timeou
             continue
         out[point] = twist if k == 1.0 else twist.scaled(k)
     return out
+
+
+class StreamedSetpoints:
+    """The operator's latest setpoint per point with the control time it arrived [s], and the walking point's
+    step parameters; `live(time_s, ...)` is what counts of them at that time under the dead-man."""
+
+    __slots__ = ("_setpoints", "walk_steps")
+
+    def __init__(self) -> None:
+        self._setpoints: dict[str, tuple[Twist, float]] = {}
+        self.walk_steps = None  # the walking point's step parameters (a WalkCommand), kept past a drop
+
+    def __bool__(self) -> bool:
+        return bool(self._setpoints)
+
+    def set(self, point: str, twist: Twist, time_s: float, walk_steps=None) -> None:
+        """`twist` (checked by the caller) for `point`, arrived at control time `time_s` [s]."""
+        self._setpoints[point] = (twist, float(time_s))
+        if point == "walk":
+            self.walk_steps = walk_steps
+
+    def clear(self) -> bool:
+        """Forget every setpoint; whether there was one."""
+        had = bool(self._setpoints)
+        self._setpoints.clear()
+        return had
+
+    def live(self, time_s: float, timeout_s: float = DEADMAN_TIMEOUT_S,
+             ramp_s: float = DEADMAN_RAMP_S) -> dict[str, Twist]:
+        """The setpoints as they count at `time_s` [s] (live_twists); the faded-out ones are forgotten."""
+        return live_twists(self._setpoints, time_s, timeout_s, ramp_s) if self._setpoints else {}

@@ -32,13 +32,19 @@ class PlanarFrame:
 
     def to_local_rpy(self, p_world: np.ndarray, rpy_world: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """to_local(p_world, rpy_to_matrix(rpy_world)) on floats (Rz^T: a planar turn), once per tick."""
+        p, R = self.to_local_rpy_rows(p_world, rpy_world)
+        return np.array(p), np.array(R)
+
+    def to_local_rpy_rows(self, p_world: np.ndarray, rpy_world: np.ndarray) -> tuple[tuple, tuple]:
+        """to_local_rpy as floats: the position (3 floats [m]) and the rotation's rows."""
         c, s = self.cos_sin
-        x, y, z = (np.asarray(p_world, dtype=float) - self.p).tolist()
+        (x, y, z), (fx, fy, fz) = np.asarray(p_world, dtype=float).tolist(), self.p.tolist()
+        x, y, z = x - fx, y - fy, z - fz
         r0, r1, r2 = rpy_to_rows(*np.asarray(rpy_world, dtype=float).tolist())
-        return (np.array((c * x + s * y, c * y - s * x, z)),
-                np.array(((c * r0[0] + s * r1[0], c * r0[1] + s * r1[1], c * r0[2] + s * r1[2]),
-                          (c * r1[0] - s * r0[0], c * r1[1] - s * r0[1], c * r1[2] - s * r0[2]),
-                          r2)))
+        return ((c * x + s * y, c * y - s * x, z),
+                ((c * r0[0] + s * r1[0], c * r0[1] + s * r1[1], c * r0[2] + s * r1[2]),
+                 (c * r1[0] - s * r0[0], c * r1[1] - s * r0[1], c * r1[2] - s * r0[2]),
+                 tuple(r2)))
 
     def to_local(self, p_world, R_world=None):
         p = self.R.T @ (np.asarray(p_world, dtype=float) - self.p)

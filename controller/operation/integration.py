@@ -3,28 +3,52 @@ the last tick's, and integrated into its target in the feet frame F."""
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
-from controller.operation.limits import limit_twist, ramp_twist
-from controller.operation.points import ZERO_TWIST, Twist
+from controller.core.errors import InvalidCommand
+from controller.operation.limits import speed_scale
+from controller.operation.points import Twist
+
+_ZERO_FLOATS = ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0))  # a point at rest
 
 
 class PointStep(NamedTuple):
-    """A point's tick: its new target, the twist it integrated (its rate, kept for the next tick's ramp) and
-    whether the speed limit scaled the asked twist down."""
+    """A point's tick: its new target, the twist it integrated (its rate, kept for the next tick's ramp; None when
+    it is zero: the point came to rest) and whether the speed limit scaled the asked twist down."""
 
     target: object  # HandPose | GazeAngles | WaistPose (controller.operation.targets), in F
-    rate: Twist
+    rate: Twist | None
     velocity_limited: bool
 
 
 def integrate_point(target, twist: Twist, previous: Twist | None, speed_limits: tuple[float, float],
                     accel_steps: tuple[float, float], dt_s: float) -> PointStep:
     """`target` moved by `twist` for dt_s [s]: at most `speed_limits` (linear [m/s], angular [rad/s]), changed
-    by at most `accel_steps` (linear [m/s], angular [rad/s] per tick) from `previous` (None: from rest)."""
-    limited = limit_twist(twist, *speed_limits)
-    ramped = ramp_twist(previous or ZERO_TWIST, limited.twist, *accel_steps)
-    return PointStep(target.integrated(ramped, dt_s), ramped, limited.scale < 1.0)
+    by at most `accel_steps` (linear [m/s], angular [rad/s] per tick) from `previous` (None: from rest).
+    limits.limit_twist then limits.ramp_twist, on the twists' floats read once (this runs per point and tick)."""
+    lin, ang = twist.linear_m_s.tolist(), twist.angular_rad_s.tolist()
+    scale = min(speed_scale(math.hypot(*lin), speed_limits[0]), speed_scale(math.hypot(*ang), speed_limits[1]))
+    if scale != 1.0:
+        twist = twist.scaled(scale)
+        lin, ang = twist.linear_m_s.tolist(), twist.angular_rad_s.tolist()
+    max_linear_step, max_angular_step = accel_steps
+    if not (max_linear_step > 0.0 and max_angular_step > 0.0):
+        raise InvalidCommand(f"ramp steps {max_linear_step!r}, {max_angular_step!r}: must be > 0")
+    if previous is None:
+        (a, b, c), (d, e, f) = _ZERO_FLOATS
+    else:
+        (a, b, c), (d, e, f) = previous.linear_m_s.tolist(), previous.angular_rad_s.tolist()
+    (g, h, i), (j, k, m) = lin, ang
+    dl, da = (g - a, h - b, i - c), (j - d, k - e, m - f)
+    ramp = min(speed_scale(math.hypot(*dl), max_linear_step), speed_scale(math.hypot(*da), max_angular_step))
+    if ramp == 1.0:  # the goal is within this tick's step
+        rate, at_rest = twist, not (g or h or i or j or k or m)
+    else:
+        lin = (a + ramp * dl[0], b + ramp * dl[1], c + ramp * dl[2])
+        ang = (d + ramp * da[0], e + ramp * da[1], f + ramp * da[2])
+        rate, at_rest = Twist.of(lin, ang), not (any(lin) or any(ang))
+    return PointStep(target.integrated(rate, dt_s), None if at_rest else rate, scale < 1.0)
 
 
 class PointLimits:

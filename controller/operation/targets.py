@@ -19,8 +19,8 @@ def feet_frame(p_rsole_world: np.ndarray, R_rsole_world: np.ndarray, p_lsole_wor
                R_lsole_world: np.ndarray) -> tuple[np.ndarray, float]:
     """The feet frame F (points.py): origin (3,) [m] midway between the soles, yaw [rad] their mean yaw
     (of the summed x axes, as the AutoBalancer turns BODY)."""
-    (r00, _, _), (r10, _, _), _ = np.asarray(R_rsole_world, dtype=float).tolist()
-    (l00, _, _), (l10, _, _), _ = np.asarray(R_lsole_world, dtype=float).tolist()
+    R_r, R_l = np.asarray(R_rsole_world, dtype=float), np.asarray(R_lsole_world, dtype=float)
+    r00, r10, l00, l10 = float(R_r[0, 0]), float(R_r[1, 0]), float(R_l[0, 0]), float(R_l[1, 0])  # (x axes only)
     xr, yr, zr = np.asarray(p_rsole_world, dtype=float).tolist()
     xl, yl, zl = np.asarray(p_lsole_world, dtype=float).tolist()
     return np.array((0.5 * (xr + xl), 0.5 * (yr + yl), 0.5 * (zr + zl))), math.atan2(r10 + l10, r00 + l00)

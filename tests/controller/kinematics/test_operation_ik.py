@@ -375,3 +375,19 @@ def test_upper_body_mode_guard_keeps_the_com_near_where_it_was_and_refuses_the_w
     assert results[-1].points["rhand"].limited is not None
     with pytest.raises(InvalidCommand, match="waist"):
         ik.solve(HALF_SITTING, BASE, RPY, OperationTargets(waist=WaistTarget(0.6, np.zeros(3))))
+
+
+def test_a_lean_solve_gives_the_same_posture_and_reasons_without_the_errors_and_the_com():
+    full, lean = OperationIK(upper_body=True), OperationIK(upper_body=True)
+    pr, Rr = reference_pose("rarm_end")
+    far = OperationTargets(rhand=HandTarget(pr + (0.6, 0.0, -0.3), Rr), head=GazeTarget(yaw_rad=0.3))
+    for _ in range(150):  # into the reach limit: reasons set
+        a = full.solve(HALF_SITTING, BASE, RPY, far)
+        b = lean.solve(HALF_SITTING, BASE, RPY, far, lean=True)
+        assert np.array_equal(a.q_rad, b.q_rad)
+        for name, r in a.points.items():
+            s = b.points[name]
+            assert np.array_equal(r.T_world, s.T_world) and (r.scale, r.limited) == (s.scale, s.limited)
+            assert s.error_m is None and s.error_rad is None
+    assert a.points["rhand"].limited is not None
+    assert b.com_world is None and b.com_margin_m is None and a.com_world is not None

@@ -241,11 +241,25 @@ def test_a_hand_taken_up_while_the_other_moved_the_torso_starts_where_the_view_s
     reference put the hand off by what the torso had moved (10 mm measured: take_can's first reach)."""
     op = layer(shared_ik)
     move = Twist.of((0.15, 0.15, 0.1))  # the left hand forward, out and up: the torso helps
-    run(op, 400, before=lambda k, t: op.set_motion("lhand", move, t))
-    torso = np.degrees(np.abs(op._last_out.q_rad[12:14]))
+    out = run(op, 400, before=lambda k, t: op.set_motion("lhand", move, t))
+    torso = np.degrees(np.abs(out.q_rad[12:14]))
     assert torso.max() > 2.0, torso  # the torso did move (chest yaw, pitch [deg])
     seen = np.array(op.view().points["rhand"].p_feet_m)
     nudge = Twist.of((1e-4, 0.0, 0.0))
     run(op, 1, t0=400 * DT, before=lambda k, t: op.set_motion("rhand", nudge, t))
     target = np.array(op.status().to_dict()["points"]["rhand"]["target"][:3])
     assert np.linalg.norm(target - seen) < 1e-4  # within the nudge's few um of the view
+
+
+def test_the_layer_keeps_its_state_in_a_few_pieces():
+    """Issue 28: the Eq. 5 sum, the dead-man, the integration, the limits, the status each in its own piece
+    (controller/operation/), the layer under 20 attributes of its own."""
+    import ast
+    import inspect
+
+    import controller.layers.operation as module
+
+    tree = ast.parse(inspect.getsource(module))
+    assigned = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)
+                and isinstance(node.ctx, ast.Store) and isinstance(node.value, ast.Name) and node.value.id == "self"}
+    assert len(assigned) <= 20, sorted(assigned)

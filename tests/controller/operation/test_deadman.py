@@ -41,3 +41,23 @@ def test_live_twists_weigh_each_setpoint_by_its_age_and_forget_the_expired():
     assert out["rhand"] is fresh  # under the timeout: the same object, not a copy
     assert out["lhand"].linear_m_s[0] == pytest.approx(0.1)  # 0.25 s old: half way down the ramp
     assert "waist" not in out and set(setpoints) == {"rhand", "lhand"}
+
+
+def test_streamed_setpoints_keep_the_latest_per_point_and_fade_out_under_the_dead_man():
+    from controller.core.types import WalkCommand
+    from controller.operation.deadman import StreamedSetpoints
+    from controller.operation.points import Twist
+
+    s = StreamedSetpoints()
+    assert not s and s.live(0.0) == {}
+    old, new = Twist.of((0.1, 0.0, 0.0)), Twist.of((0.2, 0.0, 0.0))
+    s.set("rhand", old, 0.0)
+    s.set("rhand", new, 0.1)  # the latest replaces the earlier
+    steps = WalkCommand(0.0, 0.0, 0.0, max_stride_m=0.15)
+    s.set("walk", Twist.of((0.1, 0.0, 0.0)), 0.1, steps)
+    assert s.live(0.2)["rhand"] is new and s.walk_steps is steps
+    assert s.live(0.35)["rhand"].linear_m_s[0] == pytest.approx(0.1)  # 0.25 s old: half way down
+    assert s.live(0.5) == {} and not s  # faded out: forgotten
+    assert s.walk_steps is steps  # the step parameters outlive the setpoint (the next walk takes them)
+    s.set("head", Twist.of(angular_rad_s=(0.0, 0.1, 0.0)), 1.0)
+    assert s.clear() is True and s.clear() is False

@@ -24,6 +24,8 @@ def test_to_local_rpy_on_floats_is_to_local_with_the_rotation_matrix():
     p, R = F.to_local_rpy(p_world, rpy)
     p_ref, R_ref = F.to_local(p_world, rpy_to_matrix(rpy))
     assert np.allclose(p, p_ref, atol=1e-15) and np.allclose(R, R_ref, atol=1e-15)
+    p_rows, R_rows = F.to_local_rpy_rows(p_world, rpy)  # the same floats, not in arrays
+    assert p_rows == tuple(p.tolist()) and R_rows == tuple(map(tuple, R.tolist()))
 
 
 def test_to_world_rows_on_floats_is_to_world_with_the_rotation_matrix():

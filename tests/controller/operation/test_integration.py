@@ -43,3 +43,22 @@ def test_the_limit_tables_follow_the_parameters_and_the_tick():
     faster = OperationParams(hand_speed_m_s=0.5)
     assert limits.speed(faster, "lhand")[0] == 0.5
     assert limits.accel_steps(faster, "lhand", 2 * DT)[0] == faster.hand_accel_m_s2 * 2 * DT
+
+
+def test_a_point_come_to_rest_has_no_rate_and_the_fused_step_is_limit_then_ramp_bit_for_bit():
+    from controller.operation.limits import limit_twist, ramp_twist
+
+    h = HandPose.of((0.3, -0.2, 0.8), np.eye(3))
+    assert integrate_point(h, Twist.of(), Twist.of((1e-4, 0.0, 0.0)), (0.3, 1.0), (0.01, 0.01), DT).rate is None
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        twist = Twist.of(rng.normal(0, 0.3, 3), rng.normal(0, 1.0, 3))
+        previous = None if rng.random() < 0.2 else Twist.of(rng.normal(0, 0.3, 3), rng.normal(0, 1.0, 3))
+        speed, accel = (0.3, 1.0), tuple(rng.uniform(0.001, 0.5, 2))
+        limited = limit_twist(twist, *speed)
+        ramped = ramp_twist(previous or Twist.of(), limited.twist, *accel)
+        step = integrate_point(h, twist, previous, speed, accel, DT)
+        assert np.array_equal(step.rate.linear_m_s, ramped.linear_m_s)
+        assert np.array_equal(step.rate.angular_rad_s, ramped.angular_rad_s)
+        assert step.velocity_limited == (limited.scale < 1.0)
+        assert np.array_equal(step.target.p_feet_m, h.integrated(ramped, DT).p_feet_m)
