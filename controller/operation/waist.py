@@ -15,7 +15,9 @@ from controller.operation.frame import PlanarFrame
 from controller.operation.limits import MOTION_STOP, REACH
 
 #: [rad] a waist target keeps the legs' joints this far inside their limits (campaign seeds 1017, 1018: a 19 deg
-#: roll put a hip roll at its limit, the sole tipped onto its edge and the robot fell walking)
+#: roll put a hip roll at its limit, the sole tipped onto its edge and the robot fell walking); walking, with the
+#: COG over either sole as well (seed 5010: rolled 8.5 deg and pitched 16 deg, the stance hip roll reached its limit
+#: on the right foot though 15 deg were left on the left one)
 WAIST_LEG_LIMIT_MARGIN_RAD = math.radians(3.0)
 
 
@@ -45,11 +47,14 @@ class WaistPoint:
         R_F = None
         if gait is not None and not stopped and target is not self._checked:
             R_F = rpy_to_matrix(target.rpy_rad)
-            res = self._legs.solve(ref.q_rad, float(F.p[2] + target.height_m), F.R @ R_F, gait.cog_world[:2],
-                                   (gait.p_rsole_world, gait.R_rsole_world), (gait.p_lsole_world, gait.R_lsole_world))
-            margin = WALK_LEG_LIMIT_MARGIN_RAD if getattr(gait, "walking", False) else WAIST_LEG_LIMIT_MARGIN_RAD
-            legs_ok = legs_within_limits(res.q_rad, self._lower_rad, self._upper_rad, margin)
-            if not (res.reachable and legs_ok) and "waist" in points.achieved:
+            walking = getattr(gait, "walking", False)
+            legs_ok = self._carried(ref, float(F.p[2] + target.height_m), F.R @ R_F, gait, gait.cog_world[:2],
+                                    WALK_LEG_LIMIT_MARGIN_RAD if walking else WAIST_LEG_LIMIT_MARGIN_RAD)
+            if walking and legs_ok:  # and on either foot alone, where the stance hip rolls most (seed 5010)
+                legs_ok = all(self._carried(ref, float(F.p[2] + target.height_m), F.R @ R_F, gait, sole[:2],
+                                            WAIST_LEG_LIMIT_MARGIN_RAD)
+                              for sole in (gait.p_rsole_world, gait.p_lsole_world))
+            if not legs_ok and "waist" in points.achieved:
                 target = points.targets["waist"] = points.achieved["waist"]
                 points.limited["waist"] = REACH
                 R_F = None
@@ -64,3 +69,11 @@ class WaistPoint:
         base = np.array(ref.base_pos_world, dtype=float)
         base[2] = ground_z(gait, F) + target.height_m
         return base, rpy
+
+    def _carried(self, ref: Reference, base_z_m: float, R_world_body: np.ndarray, gait, cog_xy, margin_rad: float
+                 ) -> bool:
+        """The AutoBalancer's legs reach BODY at `base_z_m`, `R_world_body` with the COG over `cog_xy` [m], every
+        leg joint at least `margin_rad` inside its limits."""
+        res = self._legs.solve(ref.q_rad, base_z_m, R_world_body, cog_xy, (gait.p_rsole_world, gait.R_rsole_world),
+                               (gait.p_lsole_world, gait.R_lsole_world))
+        return res.reachable and legs_within_limits(res.q_rad, self._lower_rad, self._upper_rad, margin_rad)

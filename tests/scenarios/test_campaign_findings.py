@@ -24,25 +24,27 @@ WALK_STICK = Setpoint("walk", (-0.0952, 0.1181, 0.0), (0.0, 0.0, math.radians(19
 
 
 def replay(actions, until_s: float):
-    """Run the (session time [s], verb or (setpoint, held [s])) list; the observation at the end or the fall."""
+    """Run the (session time [s], verb or (setpoint, held [s])) list; the observation at the end or the fall. Sticks
+    on different points are held at once (one per point, as the page streams them)."""
     robot = LocalRobot("default")
     robot.run_for(2.5)
     t0 = robot.step().time_s
-    pending, stick = sorted(actions, key=lambda a: a[0]), None
+    pending, sticks = sorted(actions, key=lambda a: a[0]), {}
     for k in range(int(round(until_s / 0.005))):
         obs = robot.step()
         t = obs.time_s - t0
         while pending and t >= pending[0][0]:
             _, action = pending.pop(0)
             if isinstance(action, tuple):
-                stick = (action[0], t + action[1])
+                sticks[action[0].point] = (action[0], t + action[1])
             else:
                 robot.submit(action).result()
-        if stick is not None and k % STICK_PERIOD_TICKS == 0:
-            if t < stick[1]:
-                robot.put_setpoint(stick[0])
-            else:
-                stick = None
+        if k % STICK_PERIOD_TICKS == 0:
+            for point, (setpoint, until) in list(sticks.items()):
+                if t < until:
+                    robot.put_setpoint(setpoint)
+                else:
+                    del sticks[point]
         assert obs.safety.fault is None, f"controller fault at {t:.3f} s: {obs.safety.fault}"
         if obs.fallen:
             return obs
@@ -238,3 +240,20 @@ def test_seed_1004_a_stance_no_step_can_leave_is_refused_naming_why():
     robot = widened(0.45)
     with pytest.raises(Refused, match=r"0\.450 m apart across; it closes 0\.34-0\.43 m .* hip roll reaches its limit"):
         stand_from(robot)
+
+
+WAIST_TILT_STICK = Setpoint("waist", (0.0, 0.0, -0.0028), tuple(math.radians(w) for w in (-2.94, 5.59, 1.68)))
+RHAND_STICK = Setpoint("rhand", (-0.0854, -0.0021, -0.0107), tuple(math.radians(w) for w in (12.49, -17.1, -13.82)))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("walk_after_s", [0.5, 0.955, 1.6])
+def test_seed_5010_a_waist_tilted_while_walking_keeps_the_stance_hip_off_its_limit_on_either_foot(walk_after_s):
+    # the waist stick rolled BODY -8.5 deg and pitched it 16 deg through a backward turning goPos: checked only at
+    # the walk's instant, the target left 15 deg on the left foot, and on the right one the stance hip roll reached
+    # its limit, the flag rose and the robot fell. Now a walking waist target must leave 3 deg with the COG over
+    # either sole (measured: held near -3.4 deg roll, 6.4 deg pitch; the least hip roll margin 6.3 deg)
+    actions = [(0.0, (WAIST_TILT_STICK, 2.93)), (0.47, (RHAND_STICK, 1.15)),
+               (walk_after_s, GoPos(-0.9103, -0.2039, math.radians(32.7)))]
+    obs = replay(actions, 14.0)
+    assert not obs.fallen
