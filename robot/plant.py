@@ -193,9 +193,10 @@ class MujocoPlant:
         if self._nan_next_step:
             self._nan_next_step = False
             d.qvel[self._dof_adr[0]] = np.nan
+        model, sensordata, step = self._model, d.sensordata, mujoco.mj_step  # (one view: MjData keeps its buffers)
         for _ in range(n):
-            mujoco.mj_step(self._model, d)
-            total += d.sensordata
+            step(model, d)
+            total += sensordata
             if self._push_end_s:  # (most ticks push nothing)
                 self._end_pushes()
         # (MuJoCo resets the data at a bad state and counts a warning: checked once per call)
