@@ -21,6 +21,12 @@ def frozen_array(values, shape: tuple[int, ...] | None = None) -> np.ndarray:
     return a
 
 
+def frozen_in_place(a: np.ndarray) -> np.ndarray:
+    """`a`, a float64 array just built that nobody else holds, made read-only without the copy frozen_array makes."""
+    a.setflags(write=False)
+    return a
+
+
 @dataclass(frozen=True, slots=True)
 class Sensors:
     """One reading of the robot's own sensors.

@@ -50,14 +50,27 @@ class RobotKinematics:
                              for sensor, link in FORCE_SENSORS.items()}
         self.q = pin.neutral(self.model)
         self._neutral = pin.neutral(self.model)
+        self._quat_key: bytes | None = None  # the rotation matrix (bytes) _quaternion last converted, and its result
+        self._quat = np.zeros(4)
 
     # ---- configuration ------------------------------------------------------------------------
     def configuration(self, base_pos_world, base_R_world, q_rad) -> np.ndarray:
         q = self._neutral.copy()
         q[:3] = base_pos_world
-        q[3:7] = pin.Quaternion(np.asarray(base_R_world)).coeffs()  # x, y, z, w
+        q[3:7] = self._quaternion(np.asarray(base_R_world))  # x, y, z, w
         q[self.idx_q] = q_rad
         return q
+
+    def _quaternion(self, R: np.ndarray) -> np.ndarray:
+        """pin.Quaternion(R).coeffs() (x, y, z, w), kept for the last float64 R: the AutoBalancer's IK asks for the
+        same BODY rotation tick after tick (2 us a conversion, 0.1 us the comparison)."""
+        if R.dtype != np.float64:
+            return pin.Quaternion(R).coeffs()
+        key = R.tobytes()
+        if key != self._quat_key:
+            self._quat = pin.Quaternion(R).coeffs().copy()
+            self._quat_key = key
+        return self._quat
 
     def update(self, base_pos_world, base_R_world, q_rad) -> None:
         """Forward kinematics, frame placements and COM for this configuration."""

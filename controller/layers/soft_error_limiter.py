@@ -76,6 +76,7 @@ class SoftErrorLimiter(Layer):
         self.limited = _NOTHING_LIMITED
         self.limited_ticks = 0
         self.limited_now = False
+        self._range_cache: tuple | None = None  # ((params, lower, upper), lo, hi) of _range
 
     def set_params(self, params: SoftErrorLimiterParams) -> None:
         self.params = params
@@ -86,7 +87,7 @@ class SoftErrorLimiter(Layer):
             self.q_prev = np.array(q_in, dtype=float)
             return ref
         p = self.params
-        lo, hi = self.lower + p.position_margin_rad, self.upper - p.position_margin_rad
+        lo, hi = self._range(p)
         q_meas = ctx.sensors.q_rad
         max_step = p.velocity_limit_rad_s * ctx.dt_s
         if ctx.ports.emergency_step:  # the AutoBalancer steps this tick: the legs at their emergency limit
@@ -109,6 +110,14 @@ class SoftErrorLimiter(Layer):
         self.limited_now = True
         self.limited_ticks += 1
         return ref.with_(q_rad=q)
+
+    def _range(self, p: SoftErrorLimiterParams) -> tuple[np.ndarray, np.ndarray]:
+        """The joint range less the margin, kept until the parameters or the limits change (2 arrays a tick less)."""
+        key = (p, self.lower, self.upper)
+        cached = self._range_cache
+        if cached is None or any(a is not b for a, b in zip(cached[0], key, strict=True)):
+            cached = self._range_cache = (key, self.lower + p.position_margin_rad, self.upper - p.position_margin_rad)
+        return cached[1], cached[2]
 
     def status(self) -> SoftErrorLimiterStatus:
         return SoftErrorLimiterStatus(enabled=self.enabled, limited=self.limited, limited_ticks=self.limited_ticks)

@@ -113,6 +113,7 @@ class GaitGenerator(GaitEdits):
         self._velocity_step: tuple[float | None, float | None] = (None, None)  # (max stride, foot distance) [m]
         self._plan_params: GaitParams | None = None  # the plan's own timing (an emergency step's), else params
         self._swing_end: tuple[np.ndarray, int, int] | None = None  # swing_samples_left's last search
+        self._idle_preview: tuple | None = None  # (idle ZMP, n, its broadcast view): zmp_preview while standing
         self._idle = self._idle_sample()
 
     def __repr__(self) -> str:
@@ -443,8 +444,12 @@ class GaitGenerator(GaitEdits):
         """
         if n is None:
             n = int(round(self.params.preview_time_s / self.dt_s))
-        if not self._walking:
-            return np.broadcast_to(self._idle.zmp_world, (n, 3))
+        if not self._walking:  # the idle ZMP repeated: one broadcast view per idle sample (np.broadcast_to costs ~4 us)
+            zmp_idle = self._idle.zmp_world
+            cached = self._idle_preview
+            if cached is None or cached[0] is not zmp_idle or cached[1] != n:
+                cached = self._idle_preview = (zmp_idle, n, np.broadcast_to(zmp_idle, (n, 3)))
+            return cached[2]
         j = self._tick - self._origin
         zmp = self._arrays["zmp"]
         if j + n <= len(zmp):

@@ -81,6 +81,35 @@ def test_read_arrays_are_read_only_and_in_joint_order(stood):
         sensors.q_rad[0] = 1.0
 
 
+def test_read_gives_the_mean_sensor_values_in_the_hardware_convention(stood):
+    plant = stood["plant"]
+    data = plant._sensor_mean
+    sensors = plant.read()
+    for i, name in enumerate(("rfsensor", "lfsensor", "rhsensor", "lhsensor")):
+        force, torque = plant.model.sensor(f"{name}_force"), plant.model.sensor(f"{name}_torque")
+        raw = np.concatenate((data[force.adr[0]:force.adr[0] + 3], data[torque.adr[0]:torque.adr[0] + 3]))
+        assert np.array_equal(sensors.wrenches[i], -raw)
+    assert np.array_equal(sensors.q_rad, plant.data.qpos[plant._qpos_adr])
+    for a in (sensors.q_rad, sensors.dq_rad_s, sensors.wrenches, sensors.gyro_rad_s, sensors.accel_m_s2):
+        assert not a.flags.writeable and a.dtype == np.float64
+
+
+def test_ground_truth_is_a_read_only_copy_of_the_simulation_state(stood):
+    plant = stood["plant"]
+    truth = plant.ground_truth()
+    d = plant.data
+    assert np.array_equal(truth.qpos, d.qpos) and truth.qpos is not d.qpos
+    assert np.array_equal(truth.base_pos_world, d.qpos[:3]) and np.array_equal(truth.base_quat_wxyz, d.qpos[3:7])
+    assert np.array_equal(truth.body_pos_world, d.xpos) and np.array_equal(truth.com_world, d.subtree_com[1])
+    for name in ("base_pos_world", "base_quat_wxyz", "base_linvel_world", "base_angvel_world", "com_world",
+                 "body_pos_world", "body_quat_wxyz", "qpos", "mocap_pos", "mocap_quat"):
+        a = getattr(truth, name)
+        assert not a.flags.writeable, name
+        assert not np.shares_memory(a, d.qpos) and not np.shares_memory(a, d.xpos), name
+    plant.step(5)  # later steps leave an earlier truth as it was
+    assert not np.array_equal(truth.qpos, d.qpos)
+
+
 def test_push_on_body_changes_the_base_velocity():
     plant = MujocoPlant()
     plant.step(200)

@@ -50,3 +50,18 @@ def test_the_joint_below_a_sensor_carries_the_mass_below_it():
         M = kin.data.oMi[j]  # pinocchio's subtree COM is in the joint's frame; mass_below gives it in the world
         assert mass > 0.0 and float(kin.data.mass[j]) == mass
         np.testing.assert_allclose(com, M.rotation @ kin.data.com[j] + M.translation, atol=1e-12)
+
+
+def test_the_configuration_quaternion_is_pinocchios_for_every_rotation_also_when_kept():
+    import pinocchio as pin
+
+    from controller.kinematics.rotations import rpy_to_matrix
+
+    kin = RobotKinematics()
+    for rpy in ((0.0, 0.0, 0.0), (0.1, -0.2, 0.3), (0.1, -0.2, 0.3), (0.0, 0.0, 3.0), (0.0, 0.0, 0.0)):
+        R = rpy_to_matrix(np.array(rpy))
+        q = kin.configuration((0.1, 0.2, 0.6), R, HALF)
+        assert np.array_equal(q[3:7], pin.Quaternion(R).coeffs())  # bit for bit, kept or converted
+        assert np.array_equal(q[kin.idx_q], HALF)
+    ints = kin.configuration((0.0, 0.0, 0.0), np.eye(3, dtype=int), HALF)  # another dtype: converted, not kept
+    assert np.array_equal(ints[3:7], [0.0, 0.0, 0.0, 1.0])

@@ -70,3 +70,13 @@ def test_while_the_auto_balancer_takes_an_emergency_step_the_legs_have_their_own
         assert np.allclose(out.q_rad[:12], legs_rad_s * dt)  # RLEG, LLEG
         assert np.allclose(out.q_rad[12:], 3.5 * dt)  # the torso, head and arms keep the everyday limit
         assert len(el.status().limited.velocity) == N
+
+
+def test_new_parameters_move_the_position_margin_at_once():
+    hi = float(HI[0])
+    el = SoftErrorLimiter(LO, HI, np.full(N, hi), SoftErrorLimiterParams(error_limit_rad=3.0))
+    ref = Reference.from_arrays(np.full(N, hi))
+    assert el.tick(make_ctx(q=np.full(N, hi)), ref) is ref  # at the limit, no margin: unchanged
+    el.set_params(SoftErrorLimiterParams(error_limit_rad=3.0, position_margin_rad=0.01))
+    out = el.tick(make_ctx(q=np.full(N, hi)), ref)
+    assert out.q_rad[0] == hi - 0.01

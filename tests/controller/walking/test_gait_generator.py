@@ -161,6 +161,20 @@ def test_the_zmp_preview_is_the_future_of_the_per_tick_zmp():
     assert gg.zmp_preview().shape == (320, 3)
 
 
+def test_standing_the_zmp_preview_is_one_view_of_the_idle_zmp_until_it_or_n_changes():
+    gg = GaitGenerator(dt_s=DT)
+    first = gg.zmp_preview(320)
+    assert gg.zmp_preview(320) is first  # kept: no new broadcast per tick
+    assert np.array_equal(first, np.broadcast_to(gg.tick().zmp_world, (320, 3)))
+    assert gg.zmp_preview(100).shape == (100, 3)
+    gg.go_pos(0.1, 0.0, 0.0)
+    while gg.walking:
+        gg.tick()
+    after = gg.zmp_preview(320)  # the idle sample of the new stance: a new view of its ZMP
+    assert after is not first
+    assert np.array_equal(after, np.broadcast_to(gg.tick().zmp_world, (320, 3)))
+
+
 def test_the_average_tick_with_preview_costs_under_0_1_ms():
     gg = GaitGenerator(dt_s=DT)
     gg.go_velocity(0.1, 0.0, 0.0)
