@@ -14,6 +14,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
 from app.console.schemas import CommandRecord, OperatorLockState
+from app.console.viewer_plots import support_edge_mm  # no viser in it: the support polygon's geometry only
 from app.service.host import Published
 from controller.core.layer import Status, plain
 from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
@@ -57,6 +58,12 @@ def _xy(v) -> list[float]:
     return [round(float(c), 6) for c in (v if v is not None else (0.0, 0.0))[:2]]
 
 
+def _support_edge_m(snap) -> float | None:
+    """How far [m] the reference CP is inside the planned support polygon (the 3D view's plot computes it so)."""
+    edge = support_edge_mm(snap)
+    return None if edge is None else round(edge / 1e3, 6)
+
+
 def state_document(pub: Published) -> dict[str, Any]:
     """The GET /api/state contract (see StateDocument for every field, its unit and meaning), in plain Python
     types already (floats from tolist, statuses through `plain`): `state_json` encodes it without a walk over
@@ -94,6 +101,7 @@ def state_document(pub: Published) -> dict[str, Any]:
                           "error": _xy(getattr(st, "cp_error", None)),
                           "error_norm": round(float(getattr(st, "cp_error_norm", 0.0)), 6),
                           "cp_threshold_m": cp_threshold_m,
+                          "support_edge_m": _support_edge_m(snap),
                           "threshold": cp_threshold_m},  # deprecated name of cp_threshold_m
         "emergency": {
             "hard_stop": safety.hard_stop, "hard_stop_reason": safety.hard_stop_reason,
@@ -237,6 +245,9 @@ def state_model() -> type[BaseModel]:
                       error=(list[float], Field(description="ref - act [m]")),
                       error_norm=(float, Field(description="|ref - act| [m]")),
                       cp_threshold_m=(float, Field(description="the emergency flag's threshold on error_norm [m]")),
+                      support_edge_m=(float | None, Field(description=(
+                          "distance from the reference capture point to the edge of the planned support polygon: "
+                          "the error at which the actual one leaves the support; null without a gait reference [m]"))),
                       threshold=(float, Field(description="deprecated name of cp_threshold_m [m]", deprecated=True)))
     opt_float = float | None
     emergency = create_model(
