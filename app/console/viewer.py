@@ -40,6 +40,7 @@ __all__ = ["MAX_FOOTSTEPS", "PLOT_RANGE_MM", "PLOT_RATE_HZ", "CameraFollower", "
 
 log = logging.getLogger(__name__)
 
+STOP_PANEL_WIDTH_PX = 200  # the 3D view's own E-STOP panel: narrow, in a corner of the view
 WAKE_PERIOD_S = 0.5  # [s] how often a viser sender that missed its wake-up is looked for (app/console/viser_wakeup.py)
 
 
@@ -124,9 +125,15 @@ class Viewer:
     # ---- GUI ----------------------------------------------------------------------------------
     def _build_gui(self) -> None:
         gui = self.server.gui
-        gui.add_markdown("**HRP-2 No.10**: operator e-stop")
-        self._estop = gui.add_button("E-STOP", color="red", icon=None, hint="Freeze the joint command now")
-        self._release = gui.add_button("Release", color="gray", hint="Release the hard e-stop")
+        # the 3D view unobstructed: the main panel (status, CP plot, corrections) starts as a bar, one click away
+        gui.main_panel.minimize()
+        # its E-STOP stays in sight, in a small panel of its own in the view's top right corner
+        stop_panel = gui.add_panel()
+        with stop_panel.add_tab("E-STOP"):
+            self._estop = gui.add_button("E-STOP", color="red", icon=None, hint="Freeze the joint command now")
+            self._release = gui.add_button("Release", color="gray", hint="Release the hard e-stop")
+        stop_panel.float(x=-10, y=10, width=STOP_PANEL_WIDTH_PX)
+        gui.add_markdown("**HRP-2 No.10**: status (the page's plots panel has the CP error too)")
         self._follow = gui.add_checkbox("follow the robot", True, hint="keep the view on the robot (BODY) as it "
                                         "walks; your orbit and zoom are kept")
 
