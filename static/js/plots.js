@@ -1,5 +1,6 @@
-// Plots from the telemetry: ZMP and COG x / y, the feet's vertical forces (>= 20 Hz, last 10 s), redrawn once per
-// animation frame when a sample came.
+// Plots from the telemetry: ZMP and COG x / y, the feet's vertical forces and the capture-point error (>= 20 Hz,
+// last 10 s), redrawn once per animation frame when a sample came.
+import {CpPlot, fitCanvas} from "./cp_plot.js";
 import {$, el, fmt, setText} from "./dom.js";
 
 const PLOT_WINDOW_S = 10;
@@ -10,8 +11,9 @@ class TimePlot {
     this.draws = 0;  // redraws (the browser test reads it)
     this.samples = 0;  // samples received
   }
+  clear() { this.t = []; this.v = this.series.map(() => []); this.dirty = true; }
   push(t, values) {
-    if (this.t.length && t < this.t[this.t.length - 1]) { this.t = []; this.v = this.series.map(() => []); }  // a reset
+    if (this.t.length && t < this.t[this.t.length - 1]) this.clear();  // a reset
     if (this.t.length && t === this.t[this.t.length - 1]) return;
     this.t.push(t);
     this.samples += 1;
@@ -20,6 +22,7 @@ class TimePlot {
     this.dirty = true;
   }
   draw() {
+    if (fitCanvas(this.canvas)) this.dirty = true;
     if (!this.dirty) return;
     this.dirty = false;
     this.draws += 1;
@@ -63,13 +66,18 @@ const PLOTS = {
   x: new TimePlot($("plot-x"), $("legend-x"), [{label: "ZMP x", color: "#1f9e3a"}, {label: "COG x", color: "#e07b00"}], "m", 3),
   y: new TimePlot($("plot-y"), $("legend-y"), [{label: "ZMP y", color: "#1f9e3a"}, {label: "COG y", color: "#e07b00"}], "m", 3),
   f: new TimePlot($("plot-f"), $("legend-f"), [{label: "right foot Fz", color: "#c8102e"}, {label: "left foot Fz", color: "#1c6fd1"}], "N", 0),
+  cp: new CpPlot($("plot-cp"), $("legend-cp")),
 };
 window.hrp2Plots = PLOTS;
+let lastRun = null;  // the tick and scene of the last state: a reset starts every plot's history again
 export function plotSample(s) {
+  if (lastRun && (s.tick < lastRun.tick || s.scene !== lastRun.scene)) for (const p of Object.values(PLOTS)) p.clear();
+  lastRun = {tick: s.tick, scene: s.scene};
   const zmp = s.zmp || [], cog = s.cog || [], f = s.foot_forces_n || {};
   PLOTS.x.push(s.time, [zmp[0], cog[0]]);
   PLOTS.y.push(s.time, [zmp[1], cog[1]]);
   PLOTS.f.push(s.time, [f.rleg, f.lleg]);
+  PLOTS.cp.push(s.time, s.capture_point, (s.emergency || {}).flag);
 }
 function drawPlots() {
   for (const p of Object.values(PLOTS)) p.draw();
