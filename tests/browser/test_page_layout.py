@@ -27,8 +27,9 @@ PANELS = ("#view iframe", "#camera", "#plot-x", "#plot-y", "#plot-f", "#plot-cp-
 _BOXES = """(sels) => sels.map((s) => { const e = s.startsWith('#plot-') && !s.endsWith('-box')
     ? document.querySelector(s).parentElement : document.querySelector(s);
     const r = e.getBoundingClientRect(); return [s, r.left, r.top, r.right, r.bottom]; })"""
-#: [Hz] the CP panel's redraws, measured over CP_WINDOW_S: 20-25 Hz idle, 14-19 Hz on this 2-core machine with the
-#: console, Chromium drawing the 3D view in software and other work beside them; asserted at the issue's 10 Hz
+#: [Hz] the CP panel's redraws over CP_WINDOW_S: measured 8.9-12.5 Hz (4 runs) on this 2-core machine at load 6-12
+#: with the 3D view drawn in software; the frames set the pace. Measured minus a margin is under the issue's 10 Hz,
+#: so asserted at 10 Hz: a heavily loaded machine can fail it (docs/operator-page.md)
 CP_PANEL_MIN_HZ = 10.0
 CP_WINDOW_S = 5.0
 
@@ -79,8 +80,8 @@ def test_no_panel_overlaps_the_3d_view_or_another_and_none_is_cut(page, artifact
 
 
 def save_doc_screenshot(page, frame) -> None:
-    """docs/img/operator_page_layout.png: the page as laid out, viser's software-WebGL notice closed, in 64 colours
-    (a small file for the repository)."""
+    """docs/img/operator_page_layout.png: the page as laid out, viser's software-WebGL notice closed, in 128
+    colours (a small file for the repository)."""
     from PIL import Image
 
     try:
@@ -90,7 +91,8 @@ def save_doc_screenshot(page, frame) -> None:
         pass
     DOC_SCREENSHOT.parent.mkdir(parents=True, exist_ok=True)
     page.screenshot(path=str(DOC_SCREENSHOT))
-    Image.open(DOC_SCREENSHOT).convert("RGB").quantize(64).save(DOC_SCREENSHOT, optimize=True)
+    img = Image.open(DOC_SCREENSHOT).convert("RGB")
+    img.quantize(128, method=Image.Quantize.FASTOCTREE).save(DOC_SCREENSHOT, optimize=True)
 
 
 def cp_counts(page) -> dict:
