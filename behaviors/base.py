@@ -91,8 +91,9 @@ class Commands(Protocol):
         """Whether the SequencePlayer still interpolates."""
         ...
 
-    def reset_operation_targets(self) -> None:
-        """The operation layer's targets back onto the current reference (nothing offset any more)."""
+    def reset_operation_targets(self) -> float:
+        """The operation layer's targets back onto the current reference (nothing offset any more); returns how
+        long its output takes to blend there [s]."""
         ...
 
     def joint(self, name: str) -> JointReading:

@@ -46,8 +46,9 @@ class StandParams(BehaviorParams):
 class Stand(Behavior):
     name = "stand"
     Params = StandParams
-    _walk_s = 0.0  # [s] the aligning steps' planned duration
+    _walk_s = 0.0  # [s] the operation targets' reset and the aligning steps' planned durations
     _posture_from_s: float | None = None  # [s] run time the posture's interpolation started (None: not yet)
+    _walk_at_s: float | None = None  # [s] run time the aligning walk is asked (None: asked, or none needed)
     _asked_s = 0.0  # [s] run time the last walk was asked
     _closing = False  # the walk under way closes a stance too wide to walk from
     summary = "Back to half-sitting (feet side by side first, operation targets reset, joints interpolated)"
@@ -62,15 +63,18 @@ class Stand(Behavior):
         view = ctx.require_view()
         if view.walking:
             raise InvalidState("stand refused: the robot is walking; stop it first")
-        self._walk_s, self._posture_from_s, self._walked, self._asked_s = 0.0, None, False, ctx.elapsed_s
-        self._closing = False
+        self._walk_s, self._posture_from_s, self._walked, self._closing = 0.0, None, False, False
         if feet_side_by_side(view.lsole_from_rsole):
             self._to_half_sitting(ctx)
-        elif across_m(view.lsole_from_rsole) > WALK_STANCE_MAX_WIDTH_M:  # too wide to walk from: one step first
-            self._closing = True
-            self._walk_s = ctx.commands.close_stance()
-        else:
-            self._walk_s = ctx.commands.go_pos(0.0, 0.0, 0.0)  # the aligning steps
+            return
+        # the operated targets back first: a tilted waist leaves the legs no range to walk (campaign seed 6017)
+        self._walk_s = ctx.commands.reset_operation_targets()
+        self._walk_at_s = ctx.elapsed_s + self._walk_s
+
+    def _walk(self, ctx: Context, lsole_from_rsole) -> None:
+        self._walk_at_s, self._walked, self._asked_s = None, False, ctx.elapsed_s
+        self._closing = across_m(lsole_from_rsole) > WALK_STANCE_MAX_WIDTH_M  # too wide to walk from: one step first
+        self._walk_s += ctx.commands.close_stance() if self._closing else ctx.commands.go_pos(0.0, 0.0, 0.0)
 
     def _to_half_sitting(self, ctx: Context) -> None:
         ctx.commands.reset_operation_targets()
@@ -78,6 +82,10 @@ class Stand(Behavior):
         self._posture_from_s = ctx.elapsed_s
 
     def step(self, ctx: Context) -> Output:
+        if self._walk_at_s is not None:
+            if ctx.elapsed_s >= self._walk_at_s:
+                self._walk(ctx, ctx.require_view().lsole_from_rsole)
+            return NOTHING
         if self._posture_from_s is None:
             view = ctx.require_view()
             self._walked = self._walked or view.walking
@@ -86,8 +94,7 @@ class Stand(Behavior):
             if view.walking or not self._walked:  # the view is the last tick's: the walk shows from the next one
                 return NOTHING
             if self._closing and not feet_side_by_side(view.lsole_from_rsole):  # closed: then the aligning steps
-                self._closing, self._walked, self._asked_s = False, False, ctx.elapsed_s
-                self._walk_s += ctx.commands.go_pos(0.0, 0.0, 0.0)
+                self._walk(ctx, view.lsole_from_rsole)
                 return NOTHING
             if not feet_side_by_side(view.lsole_from_rsole):
                 x, y, yaw = view.lsole_from_rsole

@@ -68,8 +68,9 @@ class HostCommands:
     def is_interpolating(self) -> bool:
         return bool(self._apply(SequenceStatus()))
 
-    def reset_operation_targets(self) -> None:
+    def reset_operation_targets(self) -> float:
         self._apply(ResetOperationTargets())
+        return float(self.host.layer("op").params.reset_time_s)
 
     def joint(self, name: str) -> JointReading:
         i = joint_index(name)

@@ -1,5 +1,6 @@
 """CollisionDetector layer: self-collision check of the commanded posture; on collision it outputs the
-last collision-free posture, and blends back to the input once the input is free again ([MLC] III)."""
+last collision-free posture of the upper body (the legs stay the balancer's), and blends back to the input once the
+input is free again ([MLC] III)."""
 
 from __future__ import annotations
 
@@ -70,15 +71,22 @@ class SelfCollisionChecker:
 
 @dataclass(frozen=True, slots=True)
 class CollisionDetectorStatus(Status):
-    collision: bool = field(metadata=described("the command would collide: the last collision-free posture is held"))
+    collision: bool = field(metadata=described(
+        "the command would collide: the upper body's last collision-free posture is held (the legs balance on)"))
     pairs: tuple[tuple[str, str], ...] = field(metadata=described("colliding body pairs (at most four)"))
     recovering: bool = field(metadata=described("blending back to the live command after a collision"))
     collision_ticks: int = field(metadata=described("ticks spent holding since the start"))
 
 
+#: the joints a collision never holds: the legs keep following the AutoBalancer and the Stabilizer (campaign seed
+#: 6003: an elbow against the chest froze the legs as a foot was about to lift, the COM stayed over the other foot,
+#: the capture-point flag rose and stayed up)
+BALANCING_JOINTS = np.array(["LEG_JOINT" in n for n in JOINT_NAMES])
+
+
 class CollisionDetector(Layer):
     name = "co"
-    description = "CollisionDetector: holds the last collision-free posture"
+    description = "CollisionDetector: holds the upper body's last collision-free posture"
 
     def __init__(self, q0_rad: np.ndarray, params: CollisionDetectorParams | None = None,
                  checker: SelfCollisionChecker | None = None) -> None:
@@ -102,6 +110,8 @@ class CollisionDetector(Layer):
         if self.in_collision and self.blend is None:
             self.blend = RecoverBlend(self.q_safe, self.params.recover_time_s)
         candidate = self.blend.step(ref.q_rad, ctx.dt_s) if self.blend is not None else np.asarray(ref.q_rad)
+        if self.blend is not None:
+            candidate = np.where(BALANCING_JOINTS, ref.q_rad, candidate)
         pairs = self.checker.colliding_pairs(candidate)
         if pairs:
             self.pairs = pairs
@@ -109,7 +119,7 @@ class CollisionDetector(Layer):
             self.blend = None
             self.collision_ticks += 1
             ctx.ports.collision_pairs = tuple(tuple(p) for p in pairs[:4])
-            return ref.with_(q_rad=self.q_safe)
+            return ref.with_(q_rad=np.where(BALANCING_JOINTS, ref.q_rad, self.q_safe))
         self.in_collision = False
         self.pairs = []
         self.q_safe = np.array(candidate, dtype=float)

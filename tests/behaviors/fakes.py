@@ -91,6 +91,7 @@ class FakeCommands:
         self.refuse: str | None = None
         self.now = 0.0
         self.walk_s = 0.0
+        self.reset_time_s = 1.0  # [s] the operation layer's reset blend (its default reset_time_s)
         self.walk_gain = 1.0  # the fake's steps take the goal this many times (a real walk lands a little long)
 
     def _check(self) -> None:
@@ -128,9 +129,10 @@ class FakeCommands:
     def is_interpolating(self) -> bool:
         return any(self.now < t0 + T for _, _, t0, T in self.moves.values())
 
-    def reset_operation_targets(self) -> None:
+    def reset_operation_targets(self) -> float:
         self._check()
         self.log.append(("reset_operation_targets",))
+        return self.reset_time_s
 
     def joint(self, name: str) -> JointReading:
         lo, hi = self.limits.get(name, (-math.pi, math.pi))
