@@ -411,7 +411,7 @@ class AutoBalancer(Layer):
         if self.estep.active:
             if self.estep.tick(ctx, self.params, self.preview, self.last_gait, prepared):
                 self._disarm_walk_point()  # a stick held through the step must be released before it walks again
-        elif self.params.emergency_step and not self.gait.walking and self._blend is None:
+        elif self.params.emergency_step.enabled and not self.gait.walking and self._blend is None:
             if self.estep.check_standing(ctx, self.last_gait, self.params, self.preview):
                 self._walking_stop_requested = False
                 self._disarm_walk_point()
@@ -508,7 +508,7 @@ class AutoBalancer(Layer):
 
     # ---- the capture-point emergency step ---------------------------------------------------------------
     def _can_catch_while_walking(self, ctx: TickContext) -> bool:
-        return (self.params.walking_capture_step and self.params.emergency_step and self._blend is None
+        return (self.params.walking_capture_step and self.params.emergency_step.enabled and self._blend is None
                 and not self.gait.stopping_from_rest and ctx.last_ports.balance is not None
                 and not ctx.last_ports.landing)
 
@@ -539,10 +539,10 @@ class AutoBalancer(Layer):
         return low
 
     def _lower_base(self, dt_s: float) -> float:
-        """BODY's lowering [m] this tick: toward emergency_step_base_lowering_m while an emergency step is taken,
+        """BODY's lowering [m] this tick: toward emergency_step.base_lowering_m while an emergency step is taken,
         back to zero once the robot stands (rate-limited, both ways)."""
-        target = self.params.emergency_step_base_lowering_m if self.estep.active else 0.0
-        rate = self.params.emergency_step_base_lowering_m / BASE_LOWERING_TIME_S * (1.0 if target else 0.25)
+        target = self.params.emergency_step.base_lowering_m if self.estep.active else 0.0
+        rate = self.params.emergency_step.base_lowering_m / BASE_LOWERING_TIME_S * (1.0 if target else 0.25)
         step = max(rate, 1e-6) * dt_s
         low = self._base_lowering_m
         low = min(low + step, target) if target > low else max(low - step, target)
