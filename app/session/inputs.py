@@ -1,6 +1,7 @@
 """A session's inputs as JSON and back: the operator service's verbs (every field, floats exact), the streamed
 setpoints and the e-stop. Only known classes are rebuilt (the verbs, Footstep, StepParams, Setpoint), through
-their own constructors and checks, so a session file cannot make a replay run anything else.
+their own constructors and checks, so a session file cannot make a replay run anything else (a Setpoint's ranges
+are checked where it is applied: the operation layer acknowledges one out of them "invalid").
 
 Tagged JSON: a tuple is an array; a list {"$list": [...]}; a dict {"$dict": [[key, value], ...]}; a dataclass
 {"$type": name, "fields": {...}}; a non-finite float {"$float": "nan" | "inf" | "-inf"}."""
