@@ -17,9 +17,14 @@ _JSON_TYPES = {float: "number", int: "integer", bool: "boolean", str: "string"}
 
 
 def field_json_schema(cls: type[Params], name: str) -> dict[str, Any]:
-    """The JSON schema of one Params field: its type, range, choices, unit and default."""
+    """The JSON schema of one Params field: its type, range, choices, unit and default; a nested Params field is
+    an object of some of its own fields."""
     f = next(f for f in dataclasses.fields(cls) if f.name == name)
     meta = f.metadata
+    if isinstance(f.default, Params):
+        inner = type(f.default)
+        return {**params_changes_schema(inner), "description": f"{cls.__name__}.{name}: some {inner.__name__} fields",
+                "default": jsonable(f.default.to_dict())}
     out: dict[str, Any] = {"type": _JSON_TYPES.get(type(f.default), "string")}
     if meta.get("choices") is not None:
         out["enum"] = list(meta["choices"])
@@ -39,9 +44,14 @@ def changes_json_schema(fields: dict[str, tuple[type[Params], str]], title: str)
             "properties": {name: field_json_schema(cls, field) for name, (cls, field) in fields.items()}}
 
 
+def params_changes_schema(cls: type[Params]) -> dict[str, Any]:
+    """The JSON schema of some fields of `cls` (a PUT's body, an owner's part of the params document)."""
+    return changes_json_schema({f.name: (cls, f.name) for f in dataclasses.fields(cls)}, f"{cls.__name__}Changes")
+
+
 def params_changes_body(cls: type[Params]) -> dict[str, Any]:
     """OpenAPI `openapi_extra` declaring the body of a PUT of some fields of `cls`."""
-    schema = changes_json_schema({f.name: (cls, f.name) for f in dataclasses.fields(cls)}, f"{cls.__name__}Changes")
+    schema = params_changes_schema(cls)
     return {"requestBody": {"required": True, "content": {"application/json": {"schema": schema}}}}
 
 

@@ -344,8 +344,9 @@ def ack_model() -> type[BaseModel]:
             tick=(int, Field(description="the control tick it was applied before")),
             time_s=(float, Field(description="that tick's control time: the dead-man's stamp [s]")),
             ignored=(str | None, Field(default=None, description="why it was not applied: 'hard_stop' (the hard "
-                                                                 "e-stop was engaged) or 'before_release' (sent "
-                                                                 "before the e-stop's release); null: applied")))
+                                                                 "e-stop was engaged), 'before_release' (sent "
+                                                                 "before the e-stop's release) or 'invalid' (out "
+                                                                 "of the point's ranges); null: applied")))
     return _NAMED["SetpointAckState"]
 
 

@@ -111,7 +111,7 @@ def plot_push_before_after(out: Path) -> None:
 
 #: the emergency step of issue 13.3 as first delivered: a 0.45 s step reaching 0.45 m forward, the legs at the
 #: everyday 3.5 rad/s (the 2x forward push fell with it)
-FIRST_EMERGENCY_STEP = {"abc": {"emergency_step_time_s": 0.45, "emergency_step_max_forward_m": 0.45},
+FIRST_EMERGENCY_STEP = {"abc": {"emergency_step": {"step_time_s": 0.45, "max_forward_m": 0.45}},
                         "el": {"emergency_step_velocity_limit_rad_s": 3.5}}
 
 
@@ -126,7 +126,7 @@ def record_emergency_step(impulse_ns: float = 56.0, step: bool = True, seconds: 
     robot = LocalRobot()
     loop = robot.loop
     if not step:
-        OperatorService(robot).set_params({"abc": {"emergency_step": False}})
+        OperatorService(robot).set_params({"abc": {"emergency_step": {"enabled": False}}})
     if overrides:
         OperatorService(robot).set_params(overrides)
     robot.run_for(2.5)

@@ -214,8 +214,7 @@ class RobotHost:
             elif sp.seq and sp.seq <= self.release_barrier_seq:
                 ignored = "before_release"
             else:
-                ignored = None
-                op.set_motion(point, sp.twist(), time_s, sp.walk())
+                ignored = _applied(op, point, sp, time_s)
             self.setpoint_acks[point] = ack = SetpointAck(point, sp.seq, tick, time_s, ignored)
             acks.append(ack)
         recorder = self.recorder
@@ -583,3 +582,13 @@ class RobotHost:
         if self._runs_cache[0] != version:
             self._runs_cache = (version, self.runner.runs())
         return self._runs_cache[1]
+
+
+def _applied(op, point: str, sp: Setpoint, time_s: float) -> str | None:
+    """Hand `sp` to the operation layer: None, or "invalid" when its last guard refused it (out of the point's
+    ranges: the schemas and the door let none through, an edited session file might), so the loop goes on."""
+    try:
+        op.set_motion(point, sp.twist(), time_s, sp.walk())
+    except (InvalidCommand, TypeError, ValueError):
+        return "invalid"
+    return None

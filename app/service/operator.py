@@ -17,7 +17,7 @@ from app.service.errors import NotFound, Refused, Superseded, Unavailable
 from app.service.estop import EstopAck, EstopRequest
 from app.service.estop import request_of as estop_request_of
 from app.service.host import Observation, Published
-from app.service.setpoints import STREAM_STALE_S, PointClaims, Sender, Setpoint, SetpointAck
+from app.service.setpoints import STREAM_STALE_S, PointClaims, Sender, Setpoint, SetpointAck, checked
 from app.service.verbs import (
     CancelRun,
     ChainTiming,
@@ -240,6 +240,8 @@ class OperatorService:
         returns it numbered. `sender`: the client it comes from; PointTaken when another client streams to the
         point (unless `override`: the operator lock's holder); None (the console's own scripts) is not checked.
         `setpoint_outcome` tells when it reached the loop and whether it was applied."""
+        if sender is None:  # the console's own (scripts, the viewer's sticks): no request schema checked it
+            checked(setpoint)
         now_s = self._refuse_setpoint()
         with self._claims_lock:
             self._claims.stale_s = self._stream_stale_s()
@@ -518,6 +520,8 @@ def ignored_message(reason: str) -> str:
         return "setpoint ignored: the hard e-stop is engaged; release it first"
     if reason == "before_release":
         return "setpoint ignored: it was sent before the hard e-stop's release (nothing runs that was sent before)"
+    if reason == "invalid":
+        return "setpoint ignored: outside the point's ranges (the operation layer's check; see GET /api/config)"
     return f"setpoint ignored ({reason})"
 
 

@@ -16,8 +16,8 @@ from app.service.board import Board
 from app.service.errors import InvalidArgument, PointTaken
 from controller.core.errors import InvalidCommand
 from controller.core.types import WalkCommand
-from controller.operation.points import POINTS, Twist, check_twist
-from controller.operation.ranges import SPEED_BOUNDS, WALK_FOOT_DISTANCE_RANGE_M, WALK_MAX_STRIDE_RANGE_M
+from controller.operation.points import POINTS, Twist
+from controller.operation.ranges import check_setpoint
 
 BOARD_BYTES = 1 << 14
 STREAM_STALE_S = 0.3  # [s] of control time: a point's stream has stopped this long after its last setpoint (the
@@ -27,8 +27,9 @@ REMEMBERED_SEQS = 512  # per point: whose the newest setpoints were (10 s of two
 
 @dataclass(frozen=True, slots=True)
 class Setpoint:
-    """The operator's velocity for one point, in the feet frame F (controller.operation.points), within the
-    point's ranges (controller.operation.ranges)."""
+    """The operator's velocity for one point, in the feet frame F (controller.operation.points). Not checked here:
+    a client's request by its schema (app/schemas.py), the console's own scripts' at the door (`checked`), and
+    every setpoint once more by the operation layer before it moves anything (controller.operation.ranges)."""
 
     point: str
     linear_m_s: tuple[float, float, float]
@@ -36,35 +37,6 @@ class Setpoint:
     max_stride_m: float | None = None  # walk only: step length limit
     foot_distance_m: float | None = None  # walk only: lateral distance between the feet's centres
     seq: int = 0  # given by the console's table
-
-    def __post_init__(self) -> None:
-        if self.point not in POINTS:
-            raise InvalidArgument("point", f"unknown operational point {self.point!r}; valid: {list(POINTS)}")
-        max_linear_m_s, max_angular_rad_s = SPEED_BOUNDS[self.point]
-        for part, values, limit, unit, shown in (
-                ("linear", self.linear_m_s, max_linear_m_s, "m/s", float),
-                ("angular", self.angular_rad_s, max_angular_rad_s, "deg/s", math.degrees)):
-            if len(values) != 3:
-                raise InvalidArgument(part, f"give 3 components (got {len(values)})")
-            for axis, v in zip("xyz", values, strict=True):
-                if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
-                    raise InvalidArgument(f"{part}.{axis}", f"must be a finite number (got {v!r})")
-                if abs(v) > limit + 1e-12:
-                    raise InvalidArgument(f"{part}.{axis}", f"{shown(v):g} {unit} is outside the allowed range "
-                                                            f"[{-shown(limit):g}, {shown(limit):g}] {unit}")
-        try:
-            check_twist(self.point, self.twist())
-        except InvalidCommand as exc:
-            field, _, message = str(exc).partition(": ")
-            raise InvalidArgument(field.split(".", 1)[-1] if "." in field else field, message) from None
-        for name, value, (lo, hi) in (("max_stride", self.max_stride_m, WALK_MAX_STRIDE_RANGE_M),
-                                      ("foot_distance", self.foot_distance_m, WALK_FOOT_DISTANCE_RANGE_M)):
-            if value is None:
-                continue
-            if self.point != "walk":
-                raise InvalidArgument(name, "is a parameter of the walking point only (point 'walk')")
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not lo <= value <= hi:
-                raise InvalidArgument(name, f"{value!r} m is outside the allowed range [{lo:g}, {hi:g}] m")
 
     def twist(self) -> Twist:
         return Twist.of(self.linear_m_s, self.angular_rad_s)
@@ -80,10 +52,31 @@ class Setpoint:
                            self.max_stride_m, self.foot_distance_m)
 
 
+def checked(sp: Setpoint) -> Setpoint:
+    """`sp` if `sp.point` takes it (controller.operation.ranges.check_setpoint), else InvalidArgument naming the
+    field ("linear.x", "max_stride", ...) and the allowed range: the door's check of a setpoint made without the
+    request schemas (the console's scripts, the viewer's sticks)."""
+    if sp.point not in POINTS:
+        raise InvalidArgument("point", f"unknown operational point {sp.point!r}; valid: {list(POINTS)}")
+    for part, values in (("linear", sp.linear_m_s), ("angular", sp.angular_rad_s)):
+        if len(values) != 3:
+            raise InvalidArgument(part, f"give 3 components (got {len(values)})")
+        for axis, v in zip("xyz", values, strict=True):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise InvalidArgument(f"{part}.{axis}", f"must be a finite number (got {v!r})")
+    try:
+        check_setpoint(sp.point, sp.twist(), sp.max_stride_m, sp.foot_distance_m)
+    except InvalidCommand as exc:
+        field, _, message = str(exc).partition(": ")
+        raise InvalidArgument(field.split(".", 1)[-1], message) from None
+    return sp
+
+
 @dataclass(frozen=True, slots=True)
 class SetpointAck:
     """A setpoint reached the robot: its sequence number, the tick it was applied before, that tick's time;
-    `ignored` says why it was not applied ("hard_stop": the hard e-stop was engaged; "before_release": it was
+    `ignored` says why it was not applied ("hard_stop": the hard e-stop was engaged; "invalid": out of the point's
+    ranges, refused by the operation layer's last guard; "before_release": it was
     sent before the e-stop's release)."""
 
     point: str
@@ -187,6 +180,7 @@ class SetpointTable:
     def put(self, sp: Setpoint) -> Setpoint:
         with self._lock:
             self._seq += 1
+            # numbered, the components as floats (not checked again: see Setpoint)
             numbered = Setpoint(sp.point, tuple(map(float, sp.linear_m_s)), tuple(map(float, sp.angular_rad_s)),
                                 sp.max_stride_m, sp.foot_distance_m, self._seq)
             self._table[sp.point] = numbered

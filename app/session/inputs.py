@@ -1,6 +1,7 @@
 """A session's inputs as JSON and back: the operator service's verbs (every field, floats exact), the streamed
 setpoints and the e-stop. Only known classes are rebuilt (the verbs, Footstep, StepParams, Setpoint), through
-their own constructors and checks, so a session file cannot make a replay run anything else.
+their own constructors and checks, so a session file cannot make a replay run anything else (a Setpoint's ranges
+are checked where it is applied: the operation layer acknowledges one out of them "invalid").
 
 Tagged JSON: a tuple is an array; a list {"$list": [...]}; a dict {"$dict": [[key, value], ...]}; a dataclass
 {"$type": name, "fields": {...}}; a non-finite float {"$float": "nan" | "inf" | "-inf"}."""
@@ -118,7 +119,7 @@ def same_outcome(recorded: Mapping, replayed: Mapping) -> bool:
 # ---- streamed setpoints as numbers: the recorder packs them into an array (a pickle of tuples cost the loop's
 # thread ~80 us a batch when the operator streams four points every tick) and the writer makes their JSON
 SETPOINT_POINTS = ("rhand", "lhand", "head", "waist", "walk")  # controller.operation.points.POINTS
-IGNORED = (None, "hard_stop", "before_release")  # SetpointAck.ignored
+IGNORED = (None, "hard_stop", "before_release", "invalid")  # SetpointAck.ignored (append only: recorded by index)
 PHASES = ("boundary", "hook")
 #: one row per setpoint: `order` numbers the recorder's events (the setpoints of one table share it)
 SETPOINT_COLUMNS = ("order", "tick", "phase", "time_s", "point", "lx", "ly", "lz", "ax", "ay", "az", "max_stride",

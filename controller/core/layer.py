@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
@@ -25,6 +25,8 @@ class Params:
     def validate(self) -> None:
         for f in dataclasses.fields(self):
             value = getattr(self, f.name)
+            if isinstance(f.default, Params) and not isinstance(value, type(f.default)):
+                raise InvalidCommand(f"{type(self).__name__}.{f.name} must be a {type(f.default).__name__}")
             lo, hi = f.metadata.get("min"), f.metadata.get("max")
             choices = f.metadata.get("choices")
             if choices is not None and value not in choices:
@@ -40,22 +42,46 @@ class Params:
                 )
 
     def replaced(self, **changes: Any):
-        """A validated copy with `changes`; unknown names are rejected with the valid ones listed."""
-        names = {f.name for f in dataclasses.fields(self)}
-        unknown = sorted(set(changes) - names)
+        """A validated copy with `changes`; unknown names are rejected with the valid ones listed. A nested Params
+        field takes a Params, a mapping of some of its fields, or its fields as dotted names ("emergency_step.
+        step_time_s"); the names of before are read as `current_names` says."""
+        fields = {f.name: f for f in dataclasses.fields(self)}
+        flat: dict[str, Any] = {}
+        nested: dict[str, dict[str, Any]] = {}
+        for name, value in self.current_names(changes).items():
+            head, dot, rest = name.partition(".")
+            if head in fields and isinstance(getattr(self, head), Params) and (dot or isinstance(value, Mapping)):
+                nested.setdefault(head, {}).update({rest: value} if dot else value)
+            else:
+                flat[name] = value
+        unknown = sorted(set(flat) - set(fields))
         if unknown:
-            raise InvalidCommand(f"unknown parameter(s) {unknown} for {type(self).__name__}; valid: {sorted(names)}")
-        return dataclasses.replace(self, **changes)
+            raise InvalidCommand(f"unknown parameter(s) {unknown} for {type(self).__name__}; valid: {sorted(fields)}")
+        for head, sub in nested.items():
+            if head in flat:
+                raise InvalidCommand(f"{type(self).__name__}.{head} given whole and by field: give one of them")
+            flat[head] = getattr(self, head).replaced(**sub)
+        return dataclasses.replace(self, **flat)
+
+    @classmethod
+    def current_names(cls, changes: Mapping[str, Any]) -> dict[str, Any]:
+        """`changes` in the current field names (a subclass that renamed fields maps the old names here, once)."""
+        return dict(changes)
 
     def to_dict(self) -> dict[str, Any]:
         return dataclasses.asdict(self)
 
     @classmethod
     def describe(cls) -> list[dict[str, Any]]:
-        """Field name, default, unit, range: what a GUI or schema needs to render the parameters."""
+        """Field name, default, unit, range: what a GUI or schema needs to render the parameters. A nested Params
+        field gives its default as a dict and its own fields' descriptions in "params"."""
         out = []
         for f in dataclasses.fields(cls):
-            out.append({"name": f.name, "default": f.default, **dict(f.metadata)})
+            if isinstance(f.default, Params):
+                out.append({"name": f.name, "default": f.default.to_dict(), **dict(f.metadata),
+                            "params": type(f.default).describe()})
+            else:
+                out.append({"name": f.name, "default": f.default, **dict(f.metadata)})
         return out
 
 

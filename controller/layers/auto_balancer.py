@@ -20,6 +20,7 @@ from controller.core.errors import InvalidState
 from controller.core.layer import Layer
 from controller.core.types import GaitState, Ports, Reference, StepInProgress, TickContext, WalkCommand, read_only
 from controller.interpolation.blend import Transition
+from controller.interpolation.rate_limit import approach
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, nearest_leg_limit
 from controller.kinematics.model import RobotKinematics
 from controller.kinematics.rotations import homogeneous, rpy_to_rows
@@ -411,7 +412,7 @@ class AutoBalancer(Layer):
         if self.estep.active:
             if self.estep.tick(ctx, self.params, self.preview, self.last_gait, prepared):
                 self._disarm_walk_point()  # a stick held through the step must be released before it walks again
-        elif self.params.emergency_step and not self.gait.walking and self._blend is None:
+        elif self.params.emergency_step.enabled and not self.gait.walking and self._blend is None:
             if self.estep.check_standing(ctx, self.last_gait, self.params, self.preview):
                 self._walking_stop_requested = False
                 self._disarm_walk_point()
@@ -508,7 +509,7 @@ class AutoBalancer(Layer):
 
     # ---- the capture-point emergency step ---------------------------------------------------------------
     def _can_catch_while_walking(self, ctx: TickContext) -> bool:
-        return (self.params.walking_capture_step and self.params.emergency_step and self._blend is None
+        return (self.params.walking_capture_step and self.params.emergency_step.enabled and self._blend is None
                 and not self.gait.stopping_from_rest and ctx.last_ports.balance is not None
                 and not ctx.last_ports.landing)
 
@@ -533,20 +534,15 @@ class AutoBalancer(Layer):
         self._closing_stance = self._closing_stance and walking
         target = max(0.0, base_z_m - self._walk_base_z_m - WALK_HEIGHT_SLACK_M) if walking else 0.0
         target += CLOSE_STANCE_LOWERING_M if self._closing_stance else 0.0
-        step = WALK_HEIGHT_RATE_M_S * dt_s
-        low = self._walk_lowering_m
-        self._walk_lowering_m = low = min(low + step, target) if target > low else max(low - step, target)
+        self._walk_lowering_m = low = approach(self._walk_lowering_m, target, WALK_HEIGHT_RATE_M_S * dt_s)
         return low
 
     def _lower_base(self, dt_s: float) -> float:
-        """BODY's lowering [m] this tick: toward emergency_step_base_lowering_m while an emergency step is taken,
+        """BODY's lowering [m] this tick: toward emergency_step.base_lowering_m while an emergency step is taken,
         back to zero once the robot stands (rate-limited, both ways)."""
-        target = self.params.emergency_step_base_lowering_m if self.estep.active else 0.0
-        rate = self.params.emergency_step_base_lowering_m / BASE_LOWERING_TIME_S * (1.0 if target else 0.25)
-        step = max(rate, 1e-6) * dt_s
-        low = self._base_lowering_m
-        low = min(low + step, target) if target > low else max(low - step, target)
-        self._base_lowering_m = low
+        target = self.params.emergency_step.base_lowering_m if self.estep.active else 0.0
+        rate = self.params.emergency_step.base_lowering_m / BASE_LOWERING_TIME_S * (1.0 if target else 0.25)
+        self._base_lowering_m = low = approach(self._base_lowering_m, target, max(rate, 1e-6) * dt_s)
         return low
 
     def _resume(self, ctx: TickContext) -> None:

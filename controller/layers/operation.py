@@ -23,6 +23,7 @@ from controller.operation.command_sum import CommandSum
 from controller.operation.frame import sub3
 from controller.operation.point_targets import HANDS, IK_POINTS, PointTargets
 from controller.operation.points import OperationView, Twist, check_twist
+from controller.operation.ranges import check_setpoint
 from controller.operation.release import ReleaseHistory
 from controller.operation.reset_blend import ResetBlend
 from controller.operation.status import OperationStatus, PointStatus, operation_status
@@ -105,8 +106,9 @@ class OperationLayer(Layer):
 
     def set_motion(self, point: str, twist: Twist, time_s: float, walk: WalkCommand | None = None) -> None:
         """The operator's latest setpoint for `point` (F frame, see controller.operation.points), arrived at
-        control time `time_s` [s]; for "walk", `walk` may carry the step parameters."""
-        check_twist(point, twist)
+        control time `time_s` [s]; for "walk", `walk` may carry the step parameters. The last guard: nothing out of
+        the point's ranges reaches the loop, however it was sent (InvalidCommand naming the field and the range)."""
+        check_setpoint(point, twist, *((walk.max_stride_m, walk.foot_distance_m) if walk is not None else ()))
         if not math.isfinite(time_s):
             raise InvalidCommand(f"time_s must be a finite control time [s], got {time_s!r}")
         if walk is not None and point != "walk":

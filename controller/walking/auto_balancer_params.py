@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 
@@ -98,47 +99,32 @@ class AutoBalancerParams(Params):
     # will be (the emergency step below, from the swing in progress), both feet down stand; false: hrpsys'
     # emergencyStop, steps in place after the committed ones
     walking_capture_step: bool = field(default=True, metadata={"unit": "-"})
-    # the capture-point emergency step (issue 13.3): standing, when the measured capture point is farther than
-    # emergency_step_cp_margin_m outside the support polygon (the ankles cannot bring it back), one step where it
-    # will be (controller/walking/emergency_step.py); the EmergencyStopper holds the motion, the robot ends
-    # standing with its feet apart. The other fields are EmergencyStepParams' (units and ranges the same)
-    emergency_step: bool = field(default=True, metadata={"unit": "-"})
-    emergency_step_cp_margin_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
-    emergency_step_zmp_margin_m: float = field(default=0.015, metadata={"unit": "m", "min": 0.0, "max": 0.05})
-    emergency_step_initial_double_support_s: float = field(default=0.05, metadata={"unit": "s", "min": 0.005,
-                                                                                   "max": 0.5})
-    emergency_step_time_s: float = field(default=0.3, metadata={"unit": "s", "min": 0.2, "max": 1.5})
-    emergency_step_double_support_ratio: float = field(default=0.2, metadata={"unit": "-", "min": 0.05, "max": 0.5})
-    emergency_step_final_double_support_s: float = field(default=1.5, metadata={"unit": "s", "min": 0.2, "max": 5.0})
-    emergency_step_height_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.01, "max": 0.1})
-    emergency_step_max_forward_m: float = field(default=0.55, metadata={"unit": "m", "min": 0.0, "max": 0.7})
-    emergency_step_max_backward_m: float = field(default=0.4, metadata={"unit": "m", "min": 0.0, "max": 0.7})
-    emergency_step_min_width_m: float = field(default=0.16, metadata={"unit": "m", "min": 0.14, "max": 0.4})
-    emergency_step_max_width_m: float = field(default=0.45, metadata={"unit": "m", "min": 0.16, "max": 0.7})
-    emergency_step_landing_offset_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
-    emergency_step_replan_until_s: float = field(default=0.1, metadata={"unit": "s", "min": 0.0, "max": 0.5})
-    emergency_step_zmp_shift_s: float = field(default=0.03, metadata={"unit": "s", "min": 0.005, "max": 0.3})
-    # BODY is lowered by this while the emergency step is taken (the legs reach farther), and raised again once
-    # the robot stands
-    emergency_step_base_lowering_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.0, "max": 0.1})
+    # the capture-point emergency step (issue 13.3; controller/walking/emergency_step.py): its switch, when it
+    # steps and how, each field's unit and range declared once on EmergencyStepParams
+    emergency_step: EmergencyStepParams = field(default=EmergencyStepParams(), metadata={
+        "doc": "the capture-point emergency step (EmergencyStepParams)"})
 
-    def validate(self) -> None:
-        super().validate()
-        if self.emergency_step_min_width_m > self.emergency_step_max_width_m:
-            raise InvalidCommand(f"AutoBalancerParams.emergency_step_min_width_m={self.emergency_step_min_width_m} "
-                                 f"> emergency_step_max_width_m={self.emergency_step_max_width_m}; "
-                                 "the lateral range must not be empty")
+    #: the flat names of before the nested emergency_step (sessions and parameter documents recorded then) -> now
+    RENAMED: ClassVar[dict[str, str]] = {
+        "emergency_step_" + old: "emergency_step." + new for old, new in (
+            ("cp_margin_m", "cp_margin_m"), ("zmp_margin_m", "zmp_margin_m"),
+            ("initial_double_support_s", "initial_double_support_s"), ("time_s", "step_time_s"),
+            ("double_support_ratio", "double_support_ratio"), ("final_double_support_s", "final_double_support_s"),
+            ("height_m", "step_height_m"), ("max_forward_m", "max_forward_m"), ("max_backward_m", "max_backward_m"),
+            ("min_width_m", "min_width_m"), ("max_width_m", "max_width_m"), ("landing_offset_m", "landing_offset_m"),
+            ("replan_until_s", "replan_until_s"), ("zmp_shift_s", "zmp_shift_s"),
+            ("base_lowering_m", "base_lowering_m"))}
 
-    def emergency_step_params(self) -> EmergencyStepParams:
-        return EmergencyStepParams(
-            cp_margin_m=self.emergency_step_cp_margin_m, zmp_margin_m=self.emergency_step_zmp_margin_m,
-            initial_double_support_s=self.emergency_step_initial_double_support_s,
-            step_time_s=self.emergency_step_time_s, double_support_ratio=self.emergency_step_double_support_ratio,
-            final_double_support_s=self.emergency_step_final_double_support_s,
-            step_height_m=self.emergency_step_height_m, max_forward_m=self.emergency_step_max_forward_m,
-            max_backward_m=self.emergency_step_max_backward_m, min_width_m=self.emergency_step_min_width_m,
-            max_width_m=self.emergency_step_max_width_m, landing_offset_m=self.emergency_step_landing_offset_m,
-            replan_until_s=self.emergency_step_replan_until_s, zmp_shift_s=self.emergency_step_zmp_shift_s)
+    @classmethod
+    def current_names(cls, changes):
+        """`changes` with the old flat names as the nested fields they became; the old switch `emergency_step`
+        (a boolean, where now the nested parameters are) is `emergency_step.enabled`."""
+        out = {}
+        for name, value in changes.items():
+            if name == "emergency_step" and isinstance(value, bool):
+                name = "emergency_step.enabled"
+            out[cls.RENAMED.get(name, name)] = value
+        return out
 
     def gait_params(self, base: GaitParams | None = None) -> GaitParams:
         return (base or GaitParams()).replaced(double_support_ratio_before=self.double_support_ratio_before,

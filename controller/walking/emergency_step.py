@@ -38,8 +38,13 @@ SOLES: dict[str, FootRectangle] = {"rleg": HRP2_RIGHT_SOLE, "lleg": HRP2_LEFT_SO
 
 @dataclass(frozen=True)
 class EmergencyStepParams(Params):
-    """When to step and how (the AutoBalancer's `emergency_step_*` parameters; see AutoBalancerParams)."""
+    """When to step and how: the AutoBalancer's `emergency_step` parameters (AutoBalancerParams.emergency_step),
+    each unit and range declared here once."""
 
+    # standing, when the measured capture point is farther than cp_margin_m outside the support polygon (the
+    # ankles cannot bring it back), one step where it will be; the EmergencyStopper holds the motion, the robot
+    # ends standing with its feet apart (issue 13.3). False: no step (the walking capture step neither)
+    enabled: bool = field(default=True, metadata={"unit": "-"})
     # the step is taken when the measured capture point is farther than this outside the support polygon of the
     # soles (negative: still inside); the LIP's CP cannot come back from outside whatever the ankles do
     cp_margin_m: float = field(default=0.0, metadata={"unit": "m", "min": -0.05, "max": 0.1})
@@ -65,6 +70,9 @@ class EmergencyStepParams(Params):
     zmp_shift_s: float = field(default=0.03, metadata={"unit": "s", "min": 0.005, "max": 0.3})
     # the landing follows the measured capture point until this long before the planned touchdown
     replan_until_s: float = field(default=0.1, metadata={"unit": "s", "min": 0.0, "max": 0.5})
+    # BODY is lowered by this while the step is taken (the legs reach farther), and raised again once the robot
+    # stands
+    base_lowering_m: float = field(default=0.04, metadata={"unit": "m", "min": 0.0, "max": 0.1})
 
     def validate(self) -> None:
         super().validate()

@@ -90,7 +90,7 @@ class EmergencyStepping:
         loads = self._loads_if_outside(ctx, bal, support[1], params)
         if loads is None:
             return False
-        self._start(ctx, bal, *loads, params.emergency_step_params(), preview)
+        self._start(ctx, bal, *loads, params.emergency_step, preview)
         return True
 
     def _loads_if_outside(self, ctx: TickContext, bal: BalanceEstimate, region: SupportRegion,
@@ -98,7 +98,7 @@ class EmergencyStepping:
         """The feet's vertical forces (right, left) [N] when the capture point is farther than the margin outside
         `region` and the feet carry the robot (a step is called for); None otherwise."""
         cx, cy = bal.cp_world_xy.tolist()
-        if region.outside_m(cx, cy) <= params.emergency_step_cp_margin_m:
+        if region.outside_m(cx, cy) <= params.emergency_step.cp_margin_m:
             return None
         rows = ctx.estimate.wrenches_ext.tolist()
         fz_r, fz_l = rows[FEET[0]][2], rows[FEET[1]][2]
@@ -120,7 +120,7 @@ class EmergencyStepping:
         swing_leg = "lleg" if support == "rleg" else "rleg"
         T_swing = self.gait.T_world_lfoot if swing_leg == "lleg" else self.gait.T_world_rfoot
         T_stance = self.gait.T_world_rfoot if swing_leg == "lleg" else self.gait.T_world_lfoot
-        p = params.emergency_step_params()
+        p = params.emergency_step
         lo, hi = CATCH_SWING_S
         swing_s = min(max(swing_left * self.dt_s, lo), hi)
         height = float(T_swing[2, 3] - T_stance[2, 3])  # the foot is this high already: the arc adds the rest
@@ -267,7 +267,7 @@ class EmergencyStepping:
         g = last_gait
         rfoot = Footstep.from_T("rleg", homogeneous(g.p_rsole_world, g.R_rsole_world))
         lfoot = Footstep.from_T("lleg", homogeneous(g.p_lsole_world, g.R_lsole_world))
-        again = min((self._plan(bal, rfoot, lfoot, leg, params.emergency_step_params())
+        again = min((self._plan(bal, rfoot, lfoot, leg, params.emergency_step)
                      for leg in (plan.stance.leg, plan.swing.leg)),
                     key=lambda c: SupportRegion(c.support_polygon_after()).outside_m(*c.cp_touchdown_xy.tolist()))
         self._update_record(plan, landed=True)

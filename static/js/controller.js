@@ -30,9 +30,10 @@ export async function buildController(openapi, cfg) {
   for (const [owner, ownerSchema] of Object.entries(schema.properties || {})) {
     if (!current[owner]) continue;
     const grid = el("form", {class: "grid", "data-owner": owner});
-    for (const [name, fs] of Object.entries(ownerSchema.properties || {})) {
+    const fields = leaves(ownerSchema);
+    for (const [name, fs] of fields) {
       const id = `pp-${owner}-${name}`;
-      const value = current[owner][name];
+      const value = at(current[owner], name);
       let input;
       if (fs.enum) {
         input = el("select", {id, name});
@@ -52,22 +53,33 @@ export async function buildController(openapi, cfg) {
     grid.addEventListener("submit", (e) => {
       e.preventDefault();
       const changes = {};
-      for (const [name, fs] of Object.entries(ownerSchema.properties || {})) {
+      for (const [name, fs] of fields) {
         const input = $(`pp-${owner}-${name}`);
         let v;
         if (fs.type === "boolean") v = input.checked;
         else if (fs.enum) v = fs.enum.find((c) => String(c) === input.value);
         else if (fs.type === "number" || fs.type === "integer") { if (input.value === "") continue; v = Number(input.value); }
         else { try { v = JSON.parse(input.value); } catch (err) { v = input.value; } }
-        if (JSON.stringify(v) !== JSON.stringify(current[owner][name])) changes[name] = v;
+        if (JSON.stringify(v) !== JSON.stringify(at(current[owner], name))) changes[name] = v;
       }
       if (!Object.keys(changes).length) { say(`${owner}: nothing changed`); return; }
+      // dotted names ("emergency_step.step_time_s") are a nested parameter's fields: the API takes them as they are
       api("PUT", "/api/params", {[owner]: changes}).then((d) => {
-        if (d) { Object.assign(current[owner], changes); log(`${owner} parameters set: ${JSON.stringify(changes)}`, "ok"); }
+        if (d) { current[owner] = d[owner]; log(`${owner} parameters set: ${JSON.stringify(changes)}`, "ok"); }
       });
     });
     panels.append(el("details", {}, el("summary", {text: `${owner} parameters`}), grid));
   }
+}
+
+// the fields of a params schema as [dotted name, field schema], a nested object's fields one row each
+function leaves(schema, prefix = "") {
+  return Object.entries(schema.properties || {}).flatMap(([name, fs]) =>
+    fs.type === "object" && fs.properties ? leaves(fs, `${prefix}${name}.`) : [[prefix + name, fs]]);
+}
+// the value at a dotted name in the current parameters
+function at(values, name) {
+  return name.split(".").reduce((v, key) => (v == null ? undefined : v[key]), values);
 }
 
 $("reset-form").addEventListener("submit", (e) => {

@@ -73,6 +73,12 @@ PARAM_ERRORS = [
     ("auto-balancer", {"double_support_ratio_before": 0.5}, ["double_support_ratio_before", "[0, 0.45]"]),
     ("auto-balancer", {"toe_angle_rad": "steep"}, ["toe_angle_rad", "number"]),
     ("auto-balancer", {"foot_distance_m": 0.1}, ["foot_distance_m", "[0.14, 0.3] m"]),
+    ("auto-balancer", {"emergency_step": {"step_time_s": 3.0}}, ["emergency_step.step_time_s", "[0.2, 1.5] s"]),
+    ("auto-balancer", {"emergency_step.step_time_s": 3.0}, ["emergency_step.step_time_s", "[0.2, 1.5] s"]),
+    ("auto-balancer", {"emergency_step": {"bogus": 1}}, ["emergency_step.bogus", "max_forward_m"]),
+    ("auto-balancer", {"emergency_step": 0.3}, ["emergency_step", "EmergencyStepParams"]),
+    ("auto-balancer", {"emergency_step": {"min_width_m": 0.3, "max_width_m": 0.2}},
+     ["emergency_step", "min_width_m", "lateral range"]),
 ]
 
 
@@ -144,6 +150,23 @@ def test_the_auto_balancer_does_not_stop_while_walking_nor_away_from_its_referen
     assert r.status_code == 200, r.text
     runtime.loop.run_for(3.0)
     assert not client.get("/api/state").json()["fallen"]
+
+
+def test_the_emergency_step_is_one_nested_object_in_the_values_the_schema_and_a_change(client, runtime):
+    body = client.get("/api/auto-balancer/params").json()
+    assert body["params"]["emergency_step"]["step_time_s"] == 0.3 and body["params"]["emergency_step"]["enabled"]
+    (declared,) = [f for f in body["schema"] if f["name"] == "emergency_step"]
+    inner = {f["name"]: f for f in declared["params"]}
+    assert (inner["step_time_s"]["unit"], inner["step_time_s"]["min"], inner["step_time_s"]["max"]) == ("s", 0.2, 1.5)
+    put = client.get("/openapi.json").json()["paths"]["/api/auto-balancer/params"]["put"]
+    nested = put["requestBody"]["content"]["application/json"]["schema"]["properties"]["emergency_step"]
+    assert nested["type"] == "object" and not nested["additionalProperties"]
+    assert (nested["properties"]["max_width_m"]["minimum"], nested["properties"]["max_width_m"]["maximum"]) == (
+        0.16, 0.7)
+    r = client.put("/api/auto-balancer/params", json={"emergency_step": {"step_time_s": 0.4, "enabled": False}})
+    assert r.status_code == 200, r.text
+    es = runtime.loop.chain["abc"].params.emergency_step
+    assert (es.step_time_s, es.enabled, es.max_forward_m) == (0.4, False, 0.55)  # the others kept
 
 
 def test_the_layer_endpoints_are_documented(client):

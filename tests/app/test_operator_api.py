@@ -118,12 +118,21 @@ def test_the_config_gives_each_points_ranges_and_the_door_refuses_just_beyond_th
     ({"linear_m_s": (0.1, 0.0, 0.0), "angular_rad_s": (0.0,) * 3, "max_stride_m": 0.4}, "max_stride", "[0, 0.3] m"),
     ({"linear_m_s": (0.1, 0.0, 0.0), "angular_rad_s": (0.0,) * 3, "foot_distance_m": 0.4}, "foot_distance",
      "[0.14, 0.3] m")])
-def test_a_walk_setpoint_made_without_the_schemas_is_held_to_the_same_ranges(setpoint, field, words):
-    """The console's own scripts make Setpoints directly: the walking point's bounds are the AutoBalancer's there
-    too (a vtheta of 60 deg/s passed the 90 deg/s of the other points and was then ignored)."""
+def test_a_walk_setpoint_made_without_the_schemas_is_held_to_the_same_ranges_at_the_door(service, setpoint, field,
+                                                                                         words):
+    """The console's own scripts make Setpoints directly: the door holds them to the walking point's bounds, the
+    AutoBalancer's (a vtheta of 60 deg/s passed the 90 deg/s of the other points and was then ignored)."""
     with pytest.raises(InvalidArgument) as exc:
-        Setpoint("walk", **setpoint)
+        service.put_setpoint(Setpoint("walk", **setpoint))
     assert exc.value.field == field and words in exc.value.message, exc.value
+
+
+def test_a_setpoint_past_the_door_out_of_range_is_acknowledged_invalid_and_moves_nothing(client, runtime):
+    runtime.run_for(0.1)
+    runtime._setpoints.put(Setpoint("rhand", (0.9, 0.0, 0.0), (0.0, 0.0, 0.0)))  # on the board: no door, no schema
+    runtime.run_for(0.01)
+    assert client.get("/api/state").json()["operator_acks"]["rhand"]["ignored"] == "invalid"
+    assert client.get("/api/state").json()["operation"]["points"]["rhand"]["motion"] == [0.0] * 6
 
 
 def test_setpoints_are_refused_under_the_hard_estop(client, runtime):

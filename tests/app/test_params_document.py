@@ -42,3 +42,13 @@ def test_the_cli_params_file_is_what_the_robot_starts_with(tmp_path):
         assert (p["st"].cp_threshold_m, p["es"].t1_s) == (0.05, 0.8)
     finally:
         robot.stop()
+
+
+def test_a_document_of_before_the_nested_emergency_step_loads_its_flat_names(client):
+    r = client.put("/api/params", json={"abc": {"emergency_step": False, "emergency_step_time_s": 0.5,
+                                                "emergency_step_height_m": 0.05}})
+    assert r.status_code == 200, r.text
+    es = client.get("/api/params").json()["abc"]["emergency_step"]
+    assert (es["enabled"], es["step_time_s"], es["step_height_m"]) == (False, 0.5, 0.05)
+    r = client.put("/api/params", json={"abc": {"emergency_step_time_s": 9.0}})
+    assert r.status_code == 422 and "abc.emergency_step.step_time_s" in r.json()["detail"], r.text

@@ -73,3 +73,25 @@ def test_setpoints_packed_as_numbers_come_back_as_they_were():
     assert list(decode(json.loads(json.dumps(m1["input"])))) == sps
     assert m1["outcome"]["acks"] == [["walk", 41, None], ["head", 42, "hard_stop"]]
     assert SetpointAck("head", 42, 100, 0.505, "hard_stop").ignored == m1["outcome"]["acks"][1][2]
+
+
+def test_a_parameter_change_recorded_before_the_nested_emergency_step_replays_as_the_nested_fields():
+    from controller.layers.auto_balancer import AutoBalancerParams
+
+    recorded = {"$type": "SetParams", "fields": {"changes": [
+        ["abc", [["emergency_step", False], ["emergency_step_time_s", 0.5], ["step_time_s", 0.8]]]]}}
+
+    class Host:
+        def __init__(self):
+            self.set = {}
+
+        def params(self, owner):
+            return AutoBalancerParams()
+
+        def set_params(self, owner, params):
+            self.set[owner] = params
+
+    host = Host()
+    decode(json.loads(json.dumps(recorded))).run(host)
+    p = host.set["abc"]
+    assert (p.emergency_step.enabled, p.emergency_step.step_time_s, p.step_time_s) == (False, 0.5, 0.8)

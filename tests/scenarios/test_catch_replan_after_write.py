@@ -37,7 +37,7 @@ def _catch(interrupt: bool) -> tuple[str, int]:
             h.update(np.ascontiguousarray(a).tobytes())
         catching += abc.emergency_step
         if interrupt and catching == 20:  # mid-swing: the next tick's re-plan is prepared by now
-            robot.submit(SetParams((("abc", (("emergency_step_cp_margin_m", 0.01), ("step_time_s", 0.8))),))).result()
+            robot.submit(SetParams((("abc", (("emergency_step.cp_margin_m", 0.01), ("step_time_s", 0.8))),))).result()
         if interrupt and catching == 30:
             robot.estop()
     return h.hexdigest(), catching

@@ -63,7 +63,7 @@ def push(impulse_ns, step: bool = True) -> Outcome:
     loop = system.loop
     abc = system.chain["abc"]
     if not step:
-        loop.call(lambda: abc.set_params(abc.params.replaced(emergency_step=False)))
+        loop.call(lambda: abc.set_params(abc.params.replaced(**{"emergency_step.enabled": False})))
     loop.run_for(SETTLE_S)
     loop.call(lambda: loop.plant.push("BODY", np.asarray(impulse_ns, dtype=float) / PUSH_S, PUSH_S))
     snaps = []

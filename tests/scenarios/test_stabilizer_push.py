@@ -17,7 +17,7 @@ def push_and_watch(impulse_ns: np.ndarray, stabilizer: bool = True, seconds: flo
     loop = system.loop
     if not emergency_step:
         abc = loop.chain["abc"]
-        loop.call(lambda: abc.set_params(abc.params.replaced(emergency_step=False)))
+        loop.call(lambda: abc.set_params(abc.params.replaced(**{"emergency_step.enabled": False})))
     if not stabilizer:
         loop.call(lambda: loop.chain["st"].stop())
     loop.run_for(3.0)

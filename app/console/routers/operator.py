@@ -37,7 +37,7 @@ LOCK_TOKEN_DOC = ("the operator lock's lease token (POST /api/operator/lock answ
 
 
 def setpoint_of(req: OperatorVelocityRequest) -> Setpoint:
-    """The request in SI units (deg/s -> rad/s), checked once more by Setpoint itself."""
+    """The request in SI units (deg/s -> rad/s); its schema checked it (the operation layer checks it last)."""
     return Setpoint(req.point, tuple(float(v) for v in req.linear), tuple(math.radians(v) for v in req.angular),
                     getattr(req, "max_stride", None), getattr(req, "foot_distance", None))
 

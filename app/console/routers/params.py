@@ -4,14 +4,13 @@ app.console.params_http, so a new parameter appears here without code."""
 
 from __future__ import annotations
 
-import dataclasses
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body
 
 from app.console.deps import ServiceDep
 from app.console.errors import errors
-from app.console.params_http import changes_json_schema
+from app.console.params_http import params_changes_schema
 from app.console.state import jsonable
 from app.service import InvalidArgument
 from controller.core.layer import Params
@@ -39,9 +38,7 @@ def _document_schema() -> dict[str, Any]:
     owners = _all_owners()
     return {"requestBody": {"required": True, "content": {"application/json": {"schema": {
         "title": "ParamsDocument", "type": "object", "minProperties": 1, "additionalProperties": False,
-        "properties": {owner: changes_json_schema({f.name: (cls, f.name) for f in dataclasses.fields(cls)},
-                                                  f"{cls.__name__}Changes")
-                       for owner, cls in owners.items()}}}}}}
+        "properties": {owner: params_changes_schema(cls) for owner, cls in owners.items()}}}}}}
 
 
 @router.put("/params", responses=errors(404, 422), openapi_extra=_document_schema(),

@@ -18,7 +18,7 @@ class SetOperatorVelocity(Verb):
 
     name = "set_operator_velocity"
     motion = True
-    setpoint: Any  # app.service.setpoints.Setpoint, checked where it was made
+    setpoint: Any  # app.service.setpoints.Setpoint; out of its ranges the operation layer acknowledges it "invalid"
 
     def run(self, host: Host):
         return host.apply_setpoints({self.setpoint.point: self.setpoint})[0]

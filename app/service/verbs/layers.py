@@ -82,11 +82,14 @@ def _check_limb(info: RobotInfo, limb: str) -> None:
 def typed_changes(params: Params, changes: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
     """`changes` checked against the Params dataclass of `params`: known names, the field's type (no string
     or boolean for a number, no fraction for an integer), finite, inside the declared range and choices.
-    Each rejection names the field (after `prefix`) and what is allowed."""
+    Each rejection names the field (after `prefix`) and what is allowed. A nested Params field takes an object of
+    some of its fields (or dotted names, "emergency_step.step_time_s"), checked the same way; the result names them
+    dotted, flat (what SetParams records)."""
     cls = type(params)
     fields = {f.name: f for f in dataclasses.fields(cls)}
     if not changes:
         raise InvalidArgument(prefix.rstrip(".") or "body", f"give at least one parameter; valid: {sorted(fields)}")
+    changes = _grouped(params, cls.current_names(changes))
     unknown = sorted(set(changes) - set(fields))
     if unknown:
         raise InvalidArgument(prefix + unknown[0], f"unknown parameter(s) {unknown} of {cls.__name__}; "
@@ -96,6 +99,11 @@ def typed_changes(params: Params, changes: Mapping[str, Any], prefix: str = "") 
         name = prefix + key
         kind = type(getattr(params, key))
         meta = fields[key].metadata
+        if issubclass(kind, Params):
+            if not isinstance(value, Mapping):
+                raise InvalidArgument(name, f"must be an object of some {kind.__name__} fields (got {_short(value)})")
+            out.update({f"{key}.{k}": v for k, v in typed_changes(getattr(params, key), value, name + ".").items()})
+            continue
         if kind is bool:
             if not isinstance(value, bool):
                 raise InvalidArgument(name, f"must be true or false (got {value!r})")
@@ -127,6 +135,19 @@ def typed_changes(params: Params, changes: Mapping[str, Any], prefix: str = "") 
         params.replaced(**out)  # the dataclass's own invariants (cross-field checks)
     except InvalidCommand as exc:
         raise InvalidArgument(prefix.rstrip(".") or "body", str(exc)) from exc
+    return out
+
+
+def _grouped(params: Params, changes: Mapping[str, Any]) -> dict[str, Any]:
+    """`changes` with the dotted names of a nested Params field ("emergency_step.step_time_s") gathered into one
+    object per field, merged with an object given for it."""
+    out: dict[str, Any] = {}
+    for name, value in changes.items():
+        head, dot, rest = name.partition(".")
+        if dot and isinstance(getattr(params, head, None), Params):
+            name, value = head, {rest: value}
+        merge = isinstance(out.get(name), Mapping) and isinstance(value, Mapping)
+        out[name] = {**out[name], **value} if merge else value
     return out
 
 

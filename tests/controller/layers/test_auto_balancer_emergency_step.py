@@ -10,6 +10,7 @@ from controller.core.types import BalanceEstimate, Ports, WalkCommand
 from controller.kinematics.model import RobotKinematics
 from controller.layers.auto_balancer import AutoBalancer, AutoBalancerParams
 from controller.system import initial_reference
+from controller.walking.emergency_step import EmergencyStepParams
 from robot.generate import half_sitting_deg
 from robot.names import FORCE_SENSOR_NAMES
 from tests.controller.fakes import make_ctx
@@ -76,13 +77,13 @@ def test_a_capture_point_past_the_toes_starts_a_step_forward_with_the_less_loade
     assert record.leg == "lleg" and not record.landed
     assert record.cp_at_trigger == pytest.approx((TOE_X + 0.03, 0.0))
     # ahead, on its side: at least the minimum width left of the right sole (y -0.095), the soles never overlap
-    min_width = AutoBalancerParams().emergency_step_min_width_m
+    min_width = AutoBalancerParams().emergency_step.min_width_m
     assert record.landing[0] > TOE_X + 0.03 and record.landing[1] >= -0.095 + min_width - 1e-9
 
 
 @pytest.mark.parametrize("why", ["off", "unloaded", "walking"])
 def test_no_step_when_switched_off_when_the_feet_carry_nothing_or_while_walking(why):
-    t = Ticker(AutoBalancerParams(emergency_step=False) if why == "off" else None)
+    t = Ticker(AutoBalancerParams(emergency_step=EmergencyStepParams(enabled=False)) if why == "off" else None)
     if why == "walking":
         t.abc.go_velocity(0.1, 0.0, 0.0)
     st = t.run(0.2, cp_xy=(TOE_X + 0.05, 0.0), fz=(0.0, 0.0) if why == "unloaded" else (300.0, 270.0))
@@ -123,9 +124,9 @@ def test_a_foot_that_touches_down_early_lands_where_the_kinematics_put_it():
     pos[RF] = (0.0, -0.095, -0.55)
     pos[LF] = (0.25, 0.125, -0.55)
     p = AutoBalancerParams()
-    swing_s = (1.0 - p.emergency_step_double_support_ratio) * p.emergency_step_time_s
+    swing_s = (1.0 - p.emergency_step.double_support_ratio) * p.emergency_step.step_time_s
     # in the air, late in the swing (75 %: early touchdowns count past 60 %)
-    t.run(p.emergency_step_initial_double_support_s + 0.75 * swing_s - DT, cp_xy=None, fz=(560.0, 0.0),
+    t.run(p.emergency_step.initial_double_support_s + 0.75 * swing_s - DT, cp_xy=None, fz=(560.0, 0.0),
           sensor_pos=pos)
     st = t.run(DT, cp_xy=None, fz=(300.0, 260.0), sensor_pos=pos)
     record = st.emergency_steps[-1]
@@ -151,11 +152,18 @@ def test_body_is_lowered_while_stepping():
 
 
 def test_the_emergency_step_parameters_are_the_autobalancers_and_refuse_an_empty_lateral_range():
-    p = AutoBalancerParams(emergency_step_time_s=0.5, emergency_step_max_forward_m=0.4)
-    es = p.emergency_step_params()
+    p = AutoBalancerParams().replaced(**{"emergency_step.step_time_s": 0.5}, emergency_step={"max_forward_m": 0.4})
+    es = p.emergency_step
     assert (es.step_time_s, es.max_forward_m, es.cp_margin_m) == (0.5, 0.4, 0.0)
-    with pytest.raises(InvalidCommand, match="emergency_step_min_width_m"):
-        AutoBalancerParams(emergency_step_min_width_m=0.3, emergency_step_max_width_m=0.2)
+    with pytest.raises(InvalidCommand, match="min_width_m"):
+        AutoBalancerParams().replaced(emergency_step={"min_width_m": 0.3, "max_width_m": 0.2})
+
+
+def test_the_flat_names_of_before_are_read_as_the_nested_fields():
+    p = AutoBalancerParams().replaced(emergency_step=False, emergency_step_time_s=0.5, emergency_step_height_m=0.05)
+    assert (p.emergency_step.enabled, p.emergency_step.step_time_s, p.emergency_step.step_height_m) == (
+        False, 0.5, 0.05)
+    assert AutoBalancerParams.RENAMED["emergency_step_base_lowering_m"] == "emergency_step.base_lowering_m"
 
 
 def test_the_step_port_says_when_the_emergency_steps_foot_touches_down_until_the_step_ends():
@@ -165,11 +173,11 @@ def test_the_step_port_says_when_the_emergency_steps_foot_touches_down_until_the
     t0 = t.tick_no * DT
     t.run(DT, cp_xy=(TOE_X + 0.03, 0.0))
     p = AutoBalancerParams()
-    swing_s = (1.0 - p.emergency_step_double_support_ratio) * p.emergency_step_time_s
+    swing_s = (1.0 - p.emergency_step.double_support_ratio) * p.emergency_step.step_time_s
     step = t.ports.step
     assert step.catching
     # the touchdown as planned: after the initial double support and the swing (whole ticks, one tick's margin)
-    assert step.touchdown_time_s - t0 == pytest.approx(p.emergency_step_initial_double_support_s + swing_s, abs=DT)
+    assert step.touchdown_time_s - t0 == pytest.approx(p.emergency_step.initial_double_support_s + swing_s, abs=DT)
     t.run(0.5, cp_xy=None)
     assert t.ports.step == step  # down, the step goes on: the same touchdown
     t.run(3.0, cp_xy=None)

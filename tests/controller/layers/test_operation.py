@@ -110,15 +110,15 @@ def test_the_hand_target_moves_at_the_commanded_speed_in_F_and_a_too_fast_one_is
     run(op, 100, t0=62 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.1, 0, 0)), t))
     x3 = op.status().to_dict()["points"]["rhand"]["target"][0]
     assert x3 - x2 == pytest.approx(0.1 * 100 * DT, abs=1e-9)  # at the commanded speed once ramped up
-    run(op, 1, t0=162 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
+    run(op, 1, t0=162 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.5, 0, 0)), t))
     assert op.status().to_dict()["points"]["rhand"]["limited"] == "velocity"
     x4 = op.status().to_dict()["points"]["rhand"]["target"][0]
     assert x4 - x3 == pytest.approx((0.1 + accel * DT) * DT, abs=1e-9)  # toward the 0.3 m/s limit, ramping
-    run(op, 100, t0=163 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
+    run(op, 100, t0=163 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.5, 0, 0)), t))
     x5 = op.status().to_dict()["points"]["rhand"]["target"][0]
-    run(op, 1, t0=263 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((1.0, 0, 0)), t))
+    run(op, 1, t0=263 * DT, before=lambda k, t: op.set_motion("rhand", Twist.of((0.5, 0, 0)), t))
     x6 = op.status().to_dict()["points"]["rhand"]["target"][0]
-    assert x6 - x5 == pytest.approx(0.3 * DT, abs=1e-9)  # at the limit (1 m/s asked, 0.3 m/s allowed)
+    assert x6 - x5 == pytest.approx(0.3 * DT, abs=1e-9)  # at the limit (0.5 m/s asked, the range's bound; 0.3 allowed)
 
 
 def test_the_walk_point_is_published_and_stops_with_one_zero_command(shared_ik):
@@ -147,6 +147,17 @@ def test_bad_setpoints_are_refused_naming_the_field():
         OperationLayer.set_motion(op, "rhand", Twist.of(), float("nan"))
     with pytest.raises(InvalidCommand, match="walk"):
         OperationLayer.set_motion(op, "rhand", Twist.of(), 0.0, WalkCommand(0.1, 0, 0))
+
+
+@pytest.mark.parametrize(("point", "twist", "walk", "words"), [
+    ("rhand", Twist.of((0.6, 0, 0)), None, r"rhand\.linear\.x: 0\.6 m/s is outside the allowed range \[-0\.5, 0\.5\]"),
+    ("walk", Twist.of((0.1, 0, 0), (0, 0, 0.9)), None, r"walk\.angular\.z: .* \[-45, 45\] deg/s"),
+    ("walk", Twist.of((0.1, 0, 0)), WalkCommand(0.1, 0, 0, 0.4), r"walk\.max_stride: 0\.4 m .* \[0, 0\.3\] m"),
+    ("head", Twist.of((0, 0, 0), (0, float("inf"), 0)), None, r"head\.angular: must be finite")])
+def test_the_last_guard_refuses_a_setpoint_out_of_the_points_ranges_however_it_came(point, twist, walk, words):
+    op = OperationLayer.__new__(OperationLayer)  # the checks need no IK
+    with pytest.raises(InvalidCommand, match=words):
+        OperationLayer.set_motion(op, point, twist, 0.0, walk)
 
 
 def test_while_the_motion_is_stopped_nothing_integrates(shared_ik):
