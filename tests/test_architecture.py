@@ -410,3 +410,14 @@ def test_the_lab_sits_on_top_of_the_console_the_service_and_the_sessions():
     edges = {(m, i) for m, imports in graph.items() for i in imports
              if any(in_room(m, room) for room in ROOMS if room != "lab") and in_room(i, "lab")}
     assert edges == LAB_IMPORTS_ALLOWED
+
+
+#: [lines] a module longer than this is several things (issue 28): split it by concern
+MAX_MODULE_LINES = 600
+
+
+def test_no_module_outside_the_tests_is_longer_than_the_limit():
+    long = {str(p.relative_to(ROOT)): n for package in ("app", "controller", "robot", "behaviors", "static")
+            for p in sorted((ROOT / package).rglob("*")) if p.suffix in (".py", ".js", ".html", ".css")
+            and (n := len(p.read_text().splitlines())) > MAX_MODULE_LINES}
+    assert long == {}

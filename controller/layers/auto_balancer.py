@@ -10,12 +10,10 @@ import math
 from concurrent.futures import Future, ThreadPoolExecutor
 
 import numpy as np
-import pinocchio as pin
 
 from controller.balance.capture_point import HRP2_RIGHT_SOLE
-from controller.balance.hand_force_cog_offset import cog_offset_against_hand_forces
+from controller.balance.hand_forces import HandForceOffset
 from controller.balance.tilt_anchor import TiltAnchor
-from controller.core.constants import GRAVITY_M_S2
 from controller.core.errors import InvalidState
 from controller.core.layer import Layer
 from controller.core.types import GaitState, Ports, Reference, StepInProgress, TickContext, WalkCommand, read_only
@@ -39,9 +37,8 @@ from controller.walking.gait_generator import GaitGenerator
 from controller.walking.preview_control import PreviewController, PreviewControlParams
 from controller.walking.stop_from_rest import levelling_time_s, rest_zmp_xy, tilted, tipped
 from controller.walking.toe_heel import ToeHeelParams
-from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
+from robot.names import JOINT_NAMES
 
-HANDS = (FORCE_SENSOR_NAMES.index("rhsensor"), FORCE_SENSOR_NAMES.index("lhsensor"))
 #: the AutoBalancer stops only this close to where its input reference places BODY (x, y [m]; yaw [rad]):
 #: stopped, it passes that reference on, and the Stabilizer then balances the robot toward that place (a stop
 #: 0.3 m from it after a walk tipped the robot over). Standing where it started, BODY is 3 mm from it.
@@ -94,9 +91,7 @@ class AutoBalancer(Layer):
         self._gains_pool: ThreadPoolExecutor | None = None
         self._pending_preview: Future[PreviewController] | None = None  # new gains being computed
         self._pending_ticks = 0  # ticks to wait before the pending gains may be swapped in
-        self._hand_pos = np.zeros((2, 3))
-        self._hand_pos_stale = False  # True once a solve has moved the hands
-        self._hand_frame_ids = [self.kin.model.getFrameId(n) for n in ("rarm_end", "larm_end")]
+        self._hands = HandForceOffset(self.kin, self.total_mass)  # Eq. 6
         # blend between the plain plan (0) and the balanced posture (1)
         self.active = False
         self._weight = 0.0
@@ -362,25 +357,7 @@ class AutoBalancer(Layer):
 
     # ---- pieces ----------------------------------------------------------------------------------
     def _hand_force_offset(self, ref: Reference, cog_pc_xy: np.ndarray, zmp_z: float) -> np.ndarray:
-        if not self.params.use_hand_force_offset:
-            return cog_pc_xy
-        rows = ref.wrenches.tolist()
-        if not any(v for i in HANDS for v in rows[i][:3]):
-            return cog_pc_xy
-        f = ref.wrenches[list(HANDS), :3]
-        return cog_offset_against_hand_forces(cog_pc_xy, self.total_mass, self._hand_positions(), f, zmp_z,
-                                              GRAVITY_M_S2)
-
-    def _hand_positions(self) -> np.ndarray:
-        """World hand positions (2, 3) [m] in the last whole-body IK solution (zeros before the first).
-
-        Read when needed, before this tick's solve: until then the kinematic data is the last solve's."""
-        if self._hand_pos_stale:
-            model, data = self.kin.model, self.kin.data
-            for i, fid in enumerate(self._hand_frame_ids):
-                self._hand_pos[i] = pin.updateFramePlacement(model, data, fid).translation
-            self._hand_pos_stale = False
-        return self._hand_pos
+        return self._hands.cog_xy(ref, cog_pc_xy, zmp_z) if self.params.use_hand_force_offset else cog_pc_xy
 
     # ---- tick ------------------------------------------------------------------------------------
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
@@ -457,7 +434,7 @@ class AutoBalancer(Layer):
             base_z -= self._lower_base(ctx.dt_s)
         res = self.ik.solve(ref.q_rad, base_z, R_body, cog_abc_xy, rsole, lsole)
         self.has_ik_failed = not res.reachable
-        self._hand_pos_stale = True  # the hands moved with the solve: _hand_positions() reads them if needed
+        self._hands.stale = True  # the hands moved with the solve: read again if a force needs them
         com_z = float(res.com_world[2])
         cog_abc = cog_abc_xy.tolist() if isinstance(cog_abc_xy, np.ndarray) else cog_abc_xy
         cog_pc = cog_xy.tolist() if isinstance(cog_xy, np.ndarray) else cog_xy
