@@ -9,6 +9,7 @@ import {buildController, setJoints} from "./js/controller.js";
 import {$, el} from "./js/dom.js";
 import {estopKey, openDoor} from "./js/estop.js";
 import {updateLock} from "./js/lock.js";
+import {watchLink} from "./js/link.js";
 import {plotSample} from "./js/plots.js";
 import {readState, startTelemetry, updateCommands} from "./js/state.js";
 import {connectOperator, onKeyDown, onKeyUp, setPoints, showLimited} from "./js/sticks.js";
@@ -63,6 +64,7 @@ async function start() {
 }
 
 startTelemetry();
+watchLink();
 connectOperator();
 startCamera();
 start().catch((e) => say(`start-up: ${e}`, true));

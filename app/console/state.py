@@ -305,7 +305,8 @@ def state_model() -> type[BaseModel]:
         operation=(dict[str, Any] | None, Field(
             description="the operation layer per operational point (rhand, lhand, head, waist, walk): target, "
                         "achieved, limited (null, 'reach', 'joint_limit', 'velocity' or 'motion_stop'), the "
-                        "operator's (motion) and the behaviours' twists, feet frame F; null without the layer")),
+                        "operator's (motion) and the behaviours' twists, feet frame F, the dead-man's state of the "
+                        "operator's stream (deadman: 'streaming', 'ramping' or 'stopped'); null without the layer")),
         runs=(list[run_model()], Field(description="the behaviour runs kept, oldest first")),
         operator_acks=(dict[str, ack_model()], Field(
             description="per operational point, the operator's newest setpoint the robot applied")),

@@ -1,7 +1,8 @@
 """The console's WebSockets, shared by the routers that serve them: the message size limit, the `?client=<id>`
 check (a display name), the operator lock's lease token (`?lock_token=`), receiving a text message, and a stream
 at a rate its client chooses (`?rate_hz=N`, then {"rate_hz": N} messages: the opening checks, the operator lock
-kept by its holder's `?lock_token=`, the sends under one lock, and the reader that answers rate messages). The
+kept by its holder's `?lock_token=`, the sends under one lock, and the reader that answers rate messages and
+{"ping": X} ones with {"pong": X}, the page's round trip on its own stream). The
 telemetry and the camera streams are built on it; each says only what it sends."""
 
 from __future__ import annotations
@@ -65,6 +66,8 @@ def check_rate(value: object, range_hz: tuple[float, float]) -> float:
             value = float(value)
         except ValueError:
             raise ValueError(f"rate_hz: {value!r} is not a number; give {lo:g} to {hi:g} [Hz]") from None
+    if isinstance(value, int) and not isinstance(value, bool) and not lo <= value <= hi:  # (one too big for a float)
+        raise ValueError(f"rate_hz: {str(value)[:20]} Hz is outside the allowed range [{lo:g}, {hi:g}] Hz")
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ValueError(f"rate_hz: {value!r} is not a number; give {lo:g} to {hi:g} [Hz]")
     if not lo <= value <= hi:
@@ -72,22 +75,32 @@ def check_rate(value: object, range_hz: tuple[float, float]) -> float:
     return float(value)
 
 
-def rate_message(text: str, range_hz: tuple[float, float]) -> float:
-    """The rate of a {"rate_hz": N} message, or ValueError naming the field."""
+PING_MAX = 1e15  # [any unit] a ping's value is the client's (a clock reading): bounded so its echo stays short
+
+
+def client_message(text: str, range_hz: tuple[float, float]) -> tuple[str, float]:
+    """("rate_hz", N) for a {"rate_hz": N} message, ("ping", X) for a {"ping": X} one (X a finite number the
+    client chooses, echoed as {"pong": X}: its round trip on this socket), or ValueError naming the field."""
     if not text:
-        raise ValueError("body: send {\"rate_hz\": N} as a JSON text message")
+        raise ValueError("body: send {\"rate_hz\": N} or {\"ping\": X} as a JSON text message")
     try:
         msg = json.loads(text)
     except ValueError as exc:
         raise ValueError(f"body: invalid JSON ({exc})") from None
     if not isinstance(msg, dict):
-        raise ValueError("body: send a JSON object {\"rate_hz\": N}")
-    unknown = sorted(set(msg) - {"rate_hz"})
+        raise ValueError("body: send a JSON object {\"rate_hz\": N} or {\"ping\": X}")
+    unknown = sorted(set(msg) - {"rate_hz", "ping"})
     if unknown:
-        raise ValueError(f"{unknown[0]}: unknown field; the only one is rate_hz")
-    if "rate_hz" not in msg:
-        raise ValueError("rate_hz: field required")
-    return check_rate(msg["rate_hz"], range_hz)
+        raise ValueError(f"{unknown[0]}: unknown field; the fields are rate_hz and ping")
+    if len(msg) != 1:
+        raise ValueError("body: send one field, rate_hz or ping" if msg else "rate_hz: field required")
+    if "ping" in msg:
+        value = msg["ping"]
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not abs(value) <= PING_MAX:  # (NaN)
+            raise ValueError(f"ping: {str(value)[:40]!r} is not allowed; give a finite number within "
+                             f"+-{PING_MAX:g} (it is echoed as pong)")
+        return "ping", value
+    return "rate_hz", check_rate(msg["rate_hz"], range_hz)
 
 
 def _field(exc: ValueError) -> str:
@@ -145,10 +158,14 @@ class RateStream:
                                            "body"))
                 continue
             try:
-                self.period_s = 1.0 / rate_message(text, self.range_hz)
+                kind, value = client_message(text, self.range_hz)
             except ValueError as exc:
                 await self.send(error_text(str(exc), field=_field(exc)))
                 continue
+            if kind == "ping":
+                await self.send(json.dumps({"pong": value}))
+                continue
+            self.period_s = 1.0 / value
             await self.send(json.dumps({"ok": True, "rate_hz": round(1.0 / self.period_s, 6)}))
 
     def close(self) -> None:

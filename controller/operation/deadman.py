@@ -23,9 +23,10 @@ def deadman_factor(age_s: float, timeout_s: float = DEADMAN_TIMEOUT_S, ramp_s: f
 
 
 def live_twists(setpoints: dict[str, tuple[Twist, float]], time_s: float, timeout_s: float = DEADMAN_TIMEOUT_S,
-                ramp_s: float = DEADMAN_RAMP_S) -> dict[str, Twist]:
+                ramp_s: float = DEADMAN_RAMP_S, ramping: set[str] | None = None) -> dict[str, Twist]:
     """The streamed setpoints {point: (twist, control time it arrived [s])} as they count at `time_s` [s]: each
-    twist weighted by deadman_factor of its age; a setpoint whose weight reached 0 is removed from `setpoints`."""
+    twist weighted by deadman_factor of its age; a setpoint whose weight reached 0 is removed from `setpoints`.
+    The points past the timeout but not faded out yet are added to `ramping` (when given)."""
     out = {}
     for point, (twist, t0) in list(setpoints.items()):
         if time_s - t0 <= timeout_s and timeout_s >= 0.0 and ramp_s >= 0.0:  # fresh
@@ -36,6 +37,8 @@ def live_twists(setpoints: dict[str, tuple[Twist, float]], time_s: float, timeou
             del setpoints[point]
             continue
         out[point] = twist if k == 1.0 else twist.scaled(k)
+        if ramping is not None and k < 1.0:
+            ramping.add(point)
     return out
 
 
@@ -43,11 +46,14 @@ class StreamedSetpoints:
     """The operator's latest setpoint per point with the control time it arrived [s], and the walking point's
     step parameters; `live(time_s, ...)` is what counts of them at that time under the dead-man."""
 
-    __slots__ = ("_setpoints", "walk_steps")
+    __slots__ = ("_setpoints", "walk_steps", "ramping")
 
     def __init__(self) -> None:
         self._setpoints: dict[str, tuple[Twist, float]] = {}
         self.walk_steps = None  # the walking point's step parameters (a WalkCommand), kept past a drop
+        #: the points the last `live` found past the dead-man's timeout, fading out (replaced, never changed: a
+        #: status may hold it)
+        self.ramping: frozenset[str] = frozenset()
 
     def __bool__(self) -> bool:
         return bool(self._setpoints)
@@ -67,4 +73,13 @@ class StreamedSetpoints:
     def live(self, time_s: float, timeout_s: float = DEADMAN_TIMEOUT_S,
              ramp_s: float = DEADMAN_RAMP_S) -> dict[str, Twist]:
         """The setpoints as they count at `time_s` [s] (live_twists); the faded-out ones are forgotten."""
-        return live_twists(self._setpoints, time_s, timeout_s, ramp_s) if self._setpoints else {}
+        if not self._setpoints:
+            self.ramping = _NONE
+            return {}
+        ramping: set[str] = set()
+        out = live_twists(self._setpoints, time_s, timeout_s, ramp_s, ramping)
+        self.ramping = frozenset(ramping) if ramping else _NONE
+        return out
+
+
+_NONE: frozenset[str] = frozenset()

@@ -30,6 +30,10 @@ class PointStatus:
     motion: tuple[float, ...] = field(metadata=described(
         "operator twist after the dead-man (vx, vy, vz [m/s], wx, wy, wz [rad/s]) in F"))
     behavior: tuple[float, ...] = field(metadata=described("the behaviours' summed twist, same layout"))
+    deadman: str = field(default="stopped", metadata=described(
+        "the operator's stream at this point under the dead-man: 'streaming' (its setpoint counts in full), "
+        "'ramping' (older than deadman_timeout_s [s], fading to zero over deadman_ramp_s [s]) or 'stopped' "
+        "(no streamed setpoint counts)"))
 
 
 class BuildLater:
@@ -83,7 +87,7 @@ _ZERO_SIX = _six(ZERO_TWIST)
 
 
 def _points_status(motion: dict, behavior: dict, targets: dict, achieved: dict, limited: dict, anchor: np.ndarray,
-                   walk_target: tuple | None) -> dict[str, PointStatus]:
+                   walk_target: tuple | None, ramping: frozenset[str]) -> dict[str, PointStatus]:
     pts = {}
     for point in POINTS:
         m = motion.get(point, ZERO_TWIST)
@@ -96,8 +100,15 @@ def _points_status(motion: dict, behavior: dict, targets: dict, achieved: dict, 
             why = limited.get(point) if point in targets else None
         pts[point] = PointStatus(target=target, achieved=achieved_pose, limited=why,
                                  motion=_ZERO_SIX if m is ZERO_TWIST else _six(m),
-                                 behavior=_ZERO_SIX if b is ZERO_TWIST else _six(b))
+                                 behavior=_ZERO_SIX if b is ZERO_TWIST else _six(b),
+                                 deadman=_deadman(point, motion, ramping))
     return pts
+
+
+def _deadman(point: str, motion: dict, ramping: frozenset[str]) -> str:
+    if point not in motion:  # (the last take's streamed twists: a faded-out setpoint is not in it)
+        return "stopped"
+    return "ramping" if point in ramping else "streaming"
 
 
 def operation_status(enabled: bool, stopped: bool, commands: CommandSum, points: PointTargets,
@@ -105,6 +116,6 @@ def operation_status(enabled: bool, stopped: bool, commands: CommandSum, points:
     """The status of the layer's state after a tick; its points are built when first read, from copies of the
     state taken now (the targets' poses are immutable; the twists' dicts are replaced, never changed, by a take)."""
     captured = (commands.motion, commands.behavior, dict(points.targets), dict(points.achieved), dict(points.limited),
-                points.anchor, walk.status_target())
+                points.anchor, walk.status_target(), commands.streamed.ramping)
     return OperationStatus(enabled=enabled, active=bool(points.targets), motion_stopped=stopped,
                            points=BuildLater(lambda: _points_status(*captured)))

@@ -14,9 +14,10 @@ $("st-start").addEventListener("click", () => postLogged("/api/stabilizer/start"
 
 // ---- telemetry: WS /ws/telemetry when the console has it, else GET /api/state at 25 Hz; staleness watch -------
 const RATE_HZ = 25;  // asked of the telemetry: a little over the 20 Hz the plots must be updated at
-const STALE_MS = 1000;
+export const STALE_MS = 1000;
 let lastFreshAt = performance.now();
-let telemetryMode = "connecting";
+export let telemetryMode = "connecting";
+export let pollRoundTripMs = null;  // the last state poll's round trip [ms] (the link indicator's, when polling)
 
 export let telemetryWs = null;
 export function startTelemetry() {
@@ -45,7 +46,7 @@ async function pollState() {
     const timer = setTimeout(() => ctl.abort(), STALE_MS);
     const r = await fetch("/api/state", {headers: headers(false), signal: ctl.signal, cache: "no-store"});
     clearTimeout(timer);
-    if (r.ok) onState(await r.json());
+    if (r.ok) { pollRoundTripMs = performance.now() - t0; onState(await r.json()); }
   } catch (e) { /* the staleness watch says so */ }
   setTimeout(pollState, Math.max(0, 1000 / RATE_HZ - (performance.now() - t0)));
 }

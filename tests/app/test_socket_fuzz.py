@@ -108,10 +108,16 @@ near_setpoints = st.fixed_dictionaries({
     "point": st.sampled_from(["rhand", "lhand", "head", "walk", "nope", "", "RHAND"]),
     "linear": st.sampled_from([[1e9, 0, 0], ["x", 0, 0], [0, 0], [float("nan"), 0, 0], None, "fast"]),
 }).map(lambda d: json.dumps(d).encode())
+near_pings = st.one_of(  # the streams' {"ping": X} (echoed as {"pong": X}) with what X must not be
+    st.builds(lambda v: json.dumps({"ping": v}).encode(), json_values),
+    st.sampled_from([b'{"ping": 1e999}', b'{"ping": NaN}', b'{"ping": 1' + b"0" * 400 + b"}",
+                     b'{"rate_hz": 1' + b"0" * 400 + b"}", b'{"ping": 1, "rate_hz": 5}']),
+)
 payloads = st.one_of(
     st.binary(max_size=80),
     json_values.map(lambda v: json.dumps(v).encode()),
     near_setpoints,
+    near_pings,
     st.sampled_from([b'{"estop": false}', b'{"estop": "true"}', b'{"estop": 1}', b"[" * 5000, b'{"a":' * 300,
                      b"\xff" * 50, b"{}", b"null"]),
     st.integers(4000, 70000).map(lambda n: b"x" * n),  # over every limit

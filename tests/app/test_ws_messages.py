@@ -150,6 +150,28 @@ def test_telemetry_streams_the_state_document_and_takes_a_new_rate(client, runti
         assert ticks[0] > tick0 and ticks == sorted(ticks) and ticks[-1] == runtime.loop.tick_count, ticks
 
 
+def test_a_ping_on_the_telemetry_is_echoed_and_a_bad_one_named(client, runtime):
+    """{"ping": X} -> {"pong": X}: the page's round trip on its own stream (the link indicator)."""
+    runtime.run_for(0.05)
+    with client.websocket_connect("/ws/telemetry?rate_hz=1") as ws:
+        ws.receive_json()
+        ws.send_text('{"ping": 1234.5}')
+        assert ws.receive_json() == {"pong": 1234.5}
+        big = "1" + "0" * 400  # an int too large for a float, in either field
+        for message, field, words in (('{"ping": "now"}', "ping", "give a finite number"),
+                                      ('{"ping": true}', "ping", "give a finite number"),
+                                      ('{"ping": 1e999}', "ping", "give a finite number"),
+                                      ('{"ping": ' + big + '}', "ping", "give a finite number"),
+                                      ('{"rate_hz": ' + big + '}', "rate_hz", "outside the allowed range"),
+                                      ('{"ping": 1, "rate_hz": 5}', "body", "one field"),
+                                      ('{"pong": 1}', "pong", "the fields are rate_hz and ping")):
+            ws.send_text(message)
+            err = ws.receive_json()
+            assert err == {"ok": False, "field": field, "detail": err["detail"]} and words in err["detail"], err
+        ws.send_text('{"ping": -7}')
+        assert ws.receive_json() == {"pong": -7}  # the stream goes on
+
+
 @pytest.mark.parametrize(("query", "words"), [("rate_hz=0", "outside the allowed range [1, 50] Hz"),
                                               ("rate_hz=51", "outside the allowed range"),
                                               ("rate_hz=nan", "not a number"), ("rate_hz=x", "not a number")])

@@ -57,8 +57,8 @@ async def camera_stream(ws: WebSocket) -> None:
     {"ok": true, "camera", "seq", "time_s", "width", "height", "recognitions": [...]} (each recognition with its
     image box "box_px" [u0, v0, u1, v1] in this view, null when out of view) and then the JPEG as a binary
     message. The console renders while at least one client watches, at the highest rate asked. `?client=<id>`
-    keeps its operator lock. Client messages: {"rate_hz": N}; an invalid one is answered with an error naming
-    the field."""
+    keeps its operator lock. Client messages: {"rate_hz": N} or {"ping": X} (answered {"pong": X}); an invalid
+    one is answered with an error naming the field."""
     stream = await RateStream.open(ws, STREAM_RATE_HZ, DEFAULT_STREAM_RATE_HZ)
     if stream is None:
         return

@@ -1,6 +1,6 @@
 """WS /ws/telemetry: the /api/state document pushed at a rate the client chooses (1-50 Hz), for the page and
-for scripts. A message {"rate_hz": N} changes the rate; an invalid one is answered with an error naming the
-field, and the stream goes on."""
+for scripts. A message {"rate_hz": N} changes the rate, {"ping": X} is echoed {"pong": X}; an invalid one is
+answered with an error naming the field, and the stream goes on."""
 
 from __future__ import annotations
 
@@ -33,8 +33,8 @@ async def telemetry_stream(ws: WebSocket) -> None:
     """`?rate_hz=N` (1-50, default 10): the /api/state document as a JSON text message N times a second
     (a new one each time the robot has published since; none while it has not). `?client=<id>`: this
     connection keeps its client's operator lock. While the robot process is down: {"ok": false, "detail"}
-    twice a second. Client messages: {"rate_hz": N}; an invalid one is answered {"ok": false, "detail",
-    "field"} and the stream goes on."""
+    twice a second. Client messages: {"rate_hz": N}, or {"ping": X} (a finite number) answered {"pong": X} (the
+    page's round trip); an invalid one is answered {"ok": false, "detail", "field"} and the stream goes on."""
     stream = await RateStream.open(ws, RATE_RANGE_HZ, DEFAULT_RATE_HZ)
     if stream is None:
         return

@@ -54,3 +54,18 @@ def test_the_points_are_built_when_read_from_the_state_as_it_was_when_the_status
     copy = pickle.loads(pickle.dumps(status))
     assert copy == status and type(copy.points) is dict
     assert plain(status)["points"]["rhand"]["target"] == list(rhand.target)  # what the state document reads
+
+
+def test_each_points_dead_man_state_is_reported_streaming_ramping_then_stopped():
+    commands = CommandSum()
+    commands.streamed.set("rhand", Twist.of((0.05, 0.0, 0.0)), 0.0)
+
+    def deadman_at(t: float) -> dict:
+        commands.take(t, 0.2, 0.1)
+        pts = operation_status(True, False, commands, PointTargets(), WalkPoint()).to_dict()["points"]
+        return {p: pts[p]["deadman"] for p in ("rhand", "head")}
+
+    assert deadman_at(0.1) == {"rhand": "streaming", "head": "stopped"}  # fresh (never streamed: stopped)
+    ramping = deadman_at(0.25)  # past the 0.2 s timeout, fading over 0.1 s
+    assert ramping == {"rhand": "ramping", "head": "stopped"}
+    assert deadman_at(0.31) == {"rhand": "stopped", "head": "stopped"}  # faded out
