@@ -18,7 +18,10 @@ def test_state_has_walking_support_capture_point_and_the_emergency_flag(client, 
     assert s["walking"] is False
     assert s["support"] in ("rleg", "lleg", "both") and s["support"] == "both"
     cp = s["capture_point"]
-    assert set(cp) == {"ref", "act", "error", "error_norm", "cp_threshold_m", "threshold"}  # threshold: deprecated
+    assert set(cp) == {"ref", "act", "error", "error_norm", "cp_threshold_m", "threshold",  # threshold: deprecated
+                       "support_edge_m"}
+    # standing still, the capture point sits inside the two soles: the support edge is positive, under a sole's size
+    assert cp["support_edge_m"] is not None and 0.0 < cp["support_edge_m"] < 0.2
     for key in ("ref", "act", "error"):
         assert len(cp[key]) == 2 and all(isinstance(v, float) for v in cp[key])
     assert isinstance(cp["error_norm"], float) and cp["error_norm"] >= 0.0
