@@ -23,8 +23,12 @@ def field_json_schema(cls: type[Params], name: str) -> dict[str, Any]:
     meta = f.metadata
     if isinstance(f.default, Params):
         inner = type(f.default)
-        return {**params_changes_schema(inner), "description": f"{cls.__name__}.{name}: some {inner.__name__} fields",
-                "default": jsonable(f.default.to_dict())}
+        whole = {**params_changes_schema(inner), "description": f"{cls.__name__}.{name}: some {inner.__name__} fields"}
+        switch = getattr(cls, "SWITCHES", {}).get(name)
+        if switch is not None:  # a boolean is its switch alone, as parameter documents of before the nesting say
+            whole = {"anyOf": [whole, {"type": "boolean", "description": f"{cls.__name__}.{name}.{switch} alone"}],
+                     "description": whole["description"] + f", or true/false for {name}.{switch}"}
+        return {**whole, "default": jsonable(f.default.to_dict())}
     out: dict[str, Any] = {"type": _JSON_TYPES.get(type(f.default), "string")}
     if meta.get("choices") is not None:
         out["enum"] = list(meta["choices"])

@@ -115,14 +115,17 @@ class AutoBalancerParams(Params):
             ("replan_until_s", "replan_until_s"), ("zmp_shift_s", "zmp_shift_s"),
             ("base_lowering_m", "base_lowering_m"))}
 
+    #: nested fields that also take a boolean, their switch alone (the flat switch of before: `emergency_step: false`)
+    SWITCHES: ClassVar[dict[str, str]] = {"emergency_step": "enabled"}
+
     @classmethod
     def current_names(cls, changes):
         """`changes` with the old flat names as the nested fields they became; the old switch `emergency_step`
         (a boolean, where now the nested parameters are) is `emergency_step.enabled`."""
         out = {}
         for name, value in changes.items():
-            if name == "emergency_step" and isinstance(value, bool):
-                name = "emergency_step.enabled"
+            if name in cls.SWITCHES and isinstance(value, bool):
+                name = f"{name}.{cls.SWITCHES[name]}"
             out[cls.RENAMED.get(name, name)] = value
         return out
 

@@ -162,14 +162,20 @@ def test_the_emergency_step_is_one_nested_object_in_the_values_the_schema_and_a_
     inner = {f["name"]: f for f in declared["params"]}
     assert (inner["step_time_s"]["unit"], inner["step_time_s"]["min"], inner["step_time_s"]["max"]) == ("s", 0.2, 1.5)
     put = client.get("/openapi.json").json()["paths"]["/api/auto-balancer/params"]["put"]
-    nested = put["requestBody"]["content"]["application/json"]["schema"]["properties"]["emergency_step"]
+    body_schema = put["requestBody"]["content"]["application/json"]["schema"]
+    nested, switch = body_schema["properties"]["emergency_step"]["anyOf"]
     assert nested["type"] == "object" and not nested["additionalProperties"]
+    assert switch["type"] == "boolean"  # the switch alone, as parameter documents of before the nesting give it
     assert (nested["properties"]["max_width_m"]["minimum"], nested["properties"]["max_width_m"]["maximum"]) == (
         0.16, 0.7)
     r = client.put("/api/auto-balancer/params", json={"emergency_step": {"step_time_s": 0.4, "enabled": False}})
     assert r.status_code == 200, r.text
     es = runtime.loop.chain["abc"].params.emergency_step
     assert (es.step_time_s, es.enabled, es.max_forward_m) == (0.4, False, 0.55)  # the others kept
+    r = client.put("/api/auto-balancer/params", json={"emergency_step": True})
+    assert r.status_code == 200, r.text
+    assert runtime.loop.chain["abc"].params.emergency_step.enabled
+    assert runtime.loop.chain["abc"].params.emergency_step.step_time_s == 0.4
 
 
 def test_the_layer_endpoints_are_documented(client):
