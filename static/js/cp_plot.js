@@ -13,7 +13,7 @@ const COLORS = {x: "#e6194b", y: "#3c78d8", norm: "#1b1f24", thr: "#888", edge: 
 // after the ResizeObserver said it changed (a read each frame would make the browser lay the page out for it).
 const observed = new WeakSet(), resized = new WeakSet();
 const observer = new ResizeObserver((entries) => { for (const e of entries) resized.add(e.target); });
-export function fitCanvas(c) {
+function fitCanvas(c) {
   if (!observed.has(c)) { observed.add(c); observer.observe(c); resized.add(c); }
   if (!resized.has(c)) return false;
   resized.delete(c);
@@ -21,6 +21,18 @@ export function fitCanvas(c) {
   if (c.width === w && c.height === h) return false;
   c.width = w; c.height = h;
   return true;
+}
+
+// A plot's redraw prelude, shared by every plot of the page: refit the canvas, skip when nothing changed, count the
+// redraw, clear. The 2D context to draw on, or null when there is nothing to redraw.
+export function beginDraw(plot) {
+  if (fitCanvas(plot.canvas)) plot.dirty = true;
+  if (!plot.dirty) return null;
+  plot.dirty = false;
+  plot.draws += 1;
+  const c = plot.canvas, g = c.getContext("2d");
+  g.clearRect(0, 0, c.width, c.height);
+  return g;
 }
 
 export class CpPlot {
@@ -48,12 +60,9 @@ export class CpPlot {
     this.dirty = true;
   }
   draw() {
-    if (fitCanvas(this.canvas)) this.dirty = true;
-    if (!this.dirty) return;
-    this.dirty = false;
-    this.draws += 1;
-    const c = this.canvas, g = c.getContext("2d"), W = c.width, H = c.height, pad = 4, plotH = H - AXIS_PX;
-    g.clearRect(0, 0, W, H);
+    const g = beginDraw(this);
+    if (!g) return;
+    const c = this.canvas, W = c.width, H = c.height, pad = 4, plotH = H - AXIS_PX;
     if (!this.t.length) { this.axis = {t0: 0, t1: 0, ticks: []}; return; }
     let range = RANGE_MM;  // wider when the error leaves it (a push): nothing drawn off the canvas
     for (const r of this.v) range = Math.max(range, 1.1 * Math.abs(r[0]), 1.1 * Math.abs(r[1]), 1.1 * r[2]);

@@ -1,6 +1,6 @@
 // Plots from the telemetry: ZMP and COG x / y, the feet's vertical forces and the capture-point error (>= 20 Hz,
 // last 10 s), redrawn once per animation frame when a sample came.
-import {CpPlot, fitCanvas} from "./cp_plot.js";
+import {beginDraw, CpPlot} from "./cp_plot.js";
 import {$, el, fmt, setText} from "./dom.js";
 
 const PLOT_WINDOW_S = 10;
@@ -22,12 +22,9 @@ class TimePlot {
     this.dirty = true;
   }
   draw() {
-    if (fitCanvas(this.canvas)) this.dirty = true;
-    if (!this.dirty) return;
-    this.dirty = false;
-    this.draws += 1;
-    const c = this.canvas, g = c.getContext("2d"), W = c.width, H = c.height, pad = 4;
-    g.clearRect(0, 0, W, H);
+    const g = beginDraw(this);
+    if (!g) return;
+    const c = this.canvas, W = c.width, H = c.height, pad = 4;
     if (this.t.length < 2) return;
     let lo = Infinity, hi = -Infinity;
     for (const a of this.v) for (const x of a) if (Number.isFinite(x)) { lo = Math.min(lo, x); hi = Math.max(hi, x); }
