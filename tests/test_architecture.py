@@ -416,6 +416,15 @@ def test_the_lab_sits_on_top_of_the_console_the_service_and_the_sessions():
 MAX_MODULE_LINES = 600
 
 
+def test_the_robot_process_and_the_sessions_do_not_need_the_console():
+    """The service (the robot process and its doors) and the sessions sit under the web console: the console
+    imports them, never the reverse (the e-stop door and the state document once reached up into it)."""
+    graph = import_graph(("app",))
+    up = {(m, i) for m, imports in graph.items() for i in imports
+          if (in_room(m, "service") or in_room(m, "session")) and in_room(i, "console")}
+    assert up == set()
+
+
 def test_no_module_outside_the_tests_is_longer_than_the_limit():
     long = {str(p.relative_to(ROOT)): n for package in ("app", "controller", "robot", "behaviors", "static")
             for p in sorted((ROOT / package).rglob("*")) if p.suffix in (".py", ".js", ".html", ".css")

@@ -9,33 +9,11 @@ from collections import deque
 
 import numpy as np
 
-from app.console.viewer_markers import yaw_of
-from controller.balance.capture_point import (
-    HRP2_LEFT_SOLE,
-    HRP2_RIGHT_SOLE,
-    distance_to_polygon_edge,
-    support_polygon,
-)
+from app.service.state_document import support_edge_mm
 
 PLOT_WINDOW_S = 10.0  # [s] of simulated time shown by the capture-point error plot
 PLOT_RATE_HZ = 25.0  # plot samples and redraws per second (wall time): the issue asks >= 20
 PLOT_RANGE_MM = 100.0  # the plot's fixed y range +-[mm]: the default 40 mm threshold stays readable
-
-
-def support_edge_mm(snap) -> float | None:
-    """Distance [mm] from the reference capture point to the edge of the support polygon of the soles in contact
-    (the planned ones): the error at which the actual capture point would leave the support, in the worst
-    direction. None without a gait reference or a Stabilizer."""
-    gait = getattr(getattr(snap, "reference", None), "gait", None)
-    st = snap.layers.get("st")
-    if gait is None or st is None or getattr(st, "cp_ref", None) is None:
-        return None
-    feet = [((p[0], p[1], yaw_of(R)), rect) for p, R, rect, on in (
-        (gait.p_rsole_world, gait.R_rsole_world, HRP2_RIGHT_SOLE, gait.contact[0]),
-        (gait.p_lsole_world, gait.R_lsole_world, HRP2_LEFT_SOLE, gait.contact[1])) if on]
-    if not feet:
-        return None
-    return 1e3 * max(0.0, distance_to_polygon_edge(st.cp_ref, support_polygon(feet)))
 
 
 class CpErrorHistory:

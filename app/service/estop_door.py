@@ -9,7 +9,7 @@ MAX_CLIENTS connections, messages of at most MAX_MESSAGE_BYTES, a handshake with
 tick at most READS_PER_TICK socket operations (an accept, or a read of at most RECV_BYTES): a client flooding it
 (four of them sent 25,000 messages a second) made the loop's ticks up to 38 ms late before; the rest waits in the
 sockets for the next tick. The same Host, Origin and token rules as the console's own door
-(app.console.security.origin_allowed); one message, `{"estop": true}` or `{"estop": true, "press": "<id>"}` in any JSON
+(app.service.web_origin); one message, `{"estop": true}` or `{"estop": true, "press": "<id>"}` in any JSON
 spelling, with the one semantics of every way in (app.service.estop), answered as POST /api/estop is. The
 WebSocket protocol is websockets' sans-I/O implementation; no thread, no event loop: the loop's select() waits
 on these sockets too. Whatever a client sends, an error in handling it drops that client only.
@@ -33,8 +33,8 @@ from websockets.http11 import Request
 from websockets.protocol import State
 from websockets.server import ServerProtocol
 
-from app.console.security import host_name, origin_allowed, repeated_header
 from app.service import estop
+from app.service.web_origin import host_name, origin_allowed, repeated_header
 
 log = logging.getLogger(__name__)
 
@@ -47,9 +47,9 @@ READS_PER_TICK = 4
 
 @dataclass(frozen=True)
 class EstopDoorConfig:
-    """Where the door listens and whom it lets in: `allowed_hosts` as app.console.security.allowed_hosts_for (None: any
+    """Where the door listens and whom it lets in: `allowed_hosts` as the console's allowed_hosts_for (None: any
     Host, the page's Origin then the host it talks to); `token`: required as `?token=` or a Bearer header; a
-    browser's Origin must be the console's page (app.console.security.origin_allowed with `page_ports`)."""
+    browser's Origin must be the console's page (app.service.web_origin.origin_allowed with `page_ports`)."""
 
     host: str = "127.0.0.1"
     port: int = 0  # 0: a free port, chosen at start (the page reads it from GET /api/config)

@@ -18,6 +18,7 @@ from app.service.estop import EstopAck, EstopRequest
 from app.service.estop import request_of as estop_request_of
 from app.service.host import Observation, Published
 from app.service.setpoints import STREAM_STALE_S, PointClaims, Sender, Setpoint, SetpointAck, checked
+from app.service.state_document import state_json
 from app.service.verbs import (
     CancelRun,
     ChainTiming,
@@ -487,8 +488,6 @@ class OperatorService:
         return self._state()[1]
 
     def _state(self) -> tuple[dict, bytes]:
-        from app.console.state import state_json
-
         pub = self.published()
         key = (pub.generation, pub.seq)
         cache = self._state_cache
