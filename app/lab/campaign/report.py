@@ -29,6 +29,8 @@ def render(results: Sequence[Mapping[str, Any]], args: Mapping[str, Any], wall_s
         counts.update(r["counts"])
     total = sum(counts.values()) or 1
     sim_s = sum(r["simulated_s"] for r in results)
+    run_sim_s = args.get("run_simulated_s", sim_s)  # this run's sessions: the rest were kept from earlier runs
+    resumed = int(args.get("resumed") or 0)
     by_inv: Counter = Counter(v["invariant"] for r in results for v in r["violations"])
     lines = [
         "# Random-operator campaign",
@@ -37,8 +39,10 @@ def render(results: Sequence[Mapping[str, Any]], args: Mapping[str, Any], wall_s
         "",
         f"- sessions: {len(results)} of {args.get('seconds')} s simulated each (seeds {args.get('seed')}.."
         f"{int(args.get('seed', 0)) + len(results) - 1})",
-        f"- simulated: {sim_s:.0f} s ({sim_s / 3600:.3f} h, with the warm-ups and the end's checks), wall "
-        f"{wall_s:.0f} s on {args.get('workers')} worker(s) ({sim_s / max(wall_s, 1e-9):.1f}x real time)",
+        f"- simulated: {sim_s:.0f} s ({sim_s / 3600:.3f} h, with the warm-ups and the end's checks); this run: "
+        f"{len(results) - resumed} sessions, {run_sim_s:.0f} s simulated in {wall_s:.0f} s of wall time on "
+        f"{args.get('workers')} worker(s) ({run_sim_s / max(wall_s, 1e-9):.1f}x real time)"
+        + (f"; {resumed} kept from earlier runs (sessions.jsonl)" if resumed else ""),
         f"- sessions with a violation: {sum(1 for r in results if r['violations'])}",
         "",
         "## Actions by kind",
@@ -66,10 +70,12 @@ def render(results: Sequence[Mapping[str, Any]], args: Mapping[str, Any], wall_s
     lines += ["", "## Memory", "", f"Resident memory of each console (its process and the robot process) after "
               f"each session; bound: {GROWTH_BOUND_MB:g} MB of growth from its first session to its last.", "",
               "| console | sessions | after the first [MB] | after the last [MB] | max [MB] |", "|---|---|---|---|---|"]
-    for worker in sorted({r.get("worker", 0) for r in results if r.get("rss_mb") is not None}):
-        rs = sorted((r for r in results if r.get("worker", 0) == worker and r.get("rss_mb") is not None),
-                    key=lambda r: r.get("order", 0))
-        lines.append(f"| {worker} | {len(rs)} | {rs[0]['rss_mb']:.0f} | {rs[-1]['rss_mb']:.0f} | "
+    consoles = sorted({(r.get("run", ""), r.get("worker", 0)) for r in results if r.get("rss_mb") is not None})
+    runs = len({run for run, _ in consoles})  # a resumed campaign's earlier runs had consoles of their own
+    for run, worker in consoles:
+        rs = sorted((r for r in results if (r.get("run", ""), r.get("worker", 0)) == (run, worker)
+                     and r.get("rss_mb") is not None), key=lambda r: r.get("order", 0))
+        lines.append(f"| {f'{run} / {worker}' if runs > 1 else worker} | {len(rs)} | {rs[0]['rss_mb']:.0f} | {rs[-1]['rss_mb']:.0f} | "
                      f"{max(r['rss_mb'] for r in rs):.0f} |")
     lines += ["", "## Findings", ""]
     for r in results:
