@@ -27,7 +27,7 @@ _COMMANDS = ("set_params", "set_motion", "drop_motion", "set_behavior", "reset_t
 def record(path: Path, duration_s: float) -> None:
     """Run the teleop bench's scenario (warm-up, then `duration_s` of streamed setpoints) and keep every call
     the loop made into its operation layer."""
-    from app.bench_scenarios import SCENARIOS
+    from app.lab.bench_scenarios import SCENARIOS
     from app.service import OperatorService
     from app.service.local import LocalRobot
     from controller.core.types import Ports
