@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from behaviors.base import OVERRUN_FACTOR, Behavior, Commands, Context, Output
+from behaviors.causes import run_cause
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
 from controller.core.types import WalkCommand
 from controller.operation.points import OperationView, Twist, check_twist, sum_per_point
@@ -63,7 +64,8 @@ class RunStatus:
         return {"id": self.id, "behavior": self.behavior, "params": self.params, "state": self.state,
                 "progress": self.progress, "message": self.message, "result": self.result,
                 "points": list(self.points), "started_s": self.started_s, "ended_s": self.ended_s,
-                "nominal_duration_s": self.nominal_duration_s}
+                "nominal_duration_s": self.nominal_duration_s,
+                "cause": run_cause(self.message) if self.state in ("failed", "cancelled") else None}
 
 
 @dataclass

@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, create_model
 from app.console.schemas import CommandRecord, OperatorLockState
 from app.console.viewer_plots import support_edge_mm  # no viser in it: the support polygon's geometry only
 from app.service.host import Published
+from behaviors.causes import RUN_CAUSES
 from controller.core.layer import Status, plain
 from controller.kinematics.rotations import matrix_to_rpy, quat_wxyz_to_matrix
 from robot.names import FORCE_SENSOR_NAMES, JOINT_NAMES
@@ -333,7 +334,10 @@ def run_model() -> type[BaseModel]:
             points=(list[str], Field(description="what it needs alone: operational points, '<hand>.gripper'")),
             started_s=(float, Field(description="control time it started [s]")),
             ended_s=(float | None, Field(description="control time it ended [s]")),
-            nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")))
+            nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")),
+            cause=(Literal[tuple(RUN_CAUSES)] | None, Field(
+                default=None, description="a failed or cancelled run: the cause its message names, from a closed "
+                                          "set (behaviors.causes); null otherwise or when it names none")))
     return _NAMED["RunStatus"]
 
 
