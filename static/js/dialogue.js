@@ -28,7 +28,7 @@ function action(remedy, run = null) {
     if (remedy.lock) { $("lock-btn").click(); return true; }
     return false;
   };
-  return {label: remedy.label, title: remedy.title, act};
+  return {label: remedy.label, title: remedy.title, done: remedy.done, act};
 }
 const actions = (remedy, run) => (remedy ? [action(remedy, run)] : []);
 
@@ -93,7 +93,7 @@ export function stopsInWords(s) {
   ask("walking", !!em.walking_stop, () => "emergency walking stop: stopping in place; it ends by itself once the " +
       "feet stand side by side", pick("walking_stop", "walk_cut"), releaseOf("walking"), `ended ${t}`);
   ask("fall", !!s.fallen, () => `the robot has fallen (${em.fall || "?"}): reset the simulation?`, pick("fall"),
-      {label: "Reset the simulation", title: `POST /api/sim/reset (${scene()})`, post: ["/api/sim/reset", {scene: scene()}]},
+      forRun({cause: "fall"}, scene()),
       `standing again ${t}`);
 }
 

@@ -108,15 +108,15 @@ def test_a_motion_stop_latched_during_a_run_is_asked_with_its_cause_and_released
     outcome = line(page, "robot", re.compile(rf"look_at failed in [\d.]+ s: .*\(run {run['id']}\); "
                                              "cause: a latched stop"))
     expect(outcome).to_have_count(1)
-    expect(outcome.get_by_role("button", name="Release motion")).to_be_visible()
+    expect(outcome.get_by_role("button", name="Release the motion stop")).to_be_visible()
     shot(page, artifacts, "dialogue_latched_stop")
     if os.environ.get("HRP2_SAVE_PLOTS") == "1":
         page.locator("#history").screenshot(path=str(DOC_SCREENSHOT))
     # released from the dialogue once the flag is down (a release while it is up would latch again)
     wait_until(lambda: not c.state()["emergency"]["flag"], 10.0, "the CP flag down")
-    question.get_by_role("button", name="Release motion").click()
+    question.get_by_role("button", name="Release the motion stop").click()
     wait_until(lambda: not c.state()["emergency"]["motion_stop"], 5.0, "the motion stop released")
-    expect(question).to_contain_text("Release motion: done")
+    expect(question).to_contain_text("- released")
     expect(question.get_by_role("button")).to_have_count(0)  # settled: no button left
     expect(page.locator("#s-motion")).to_have_text("off")
     shot(page, artifacts, "dialogue_released")
