@@ -7,7 +7,7 @@ import {myRuns, openFormOf, startBehavior} from "./behaviours.js";
 import {answered} from "./dialogue_line.js";
 import {$, el, fmt, xyz} from "./dom.js";
 import {checkDisplayName} from "./estop.js";
-import {forRefusal, forRun, releaseOf} from "./remedies.js";
+import {forRefusal, forRun, releaseOf, stopIn} from "./remedies.js";
 import {telemetryWs} from "./state.js";
 import {opWsLatest} from "./sticks.js";
 
@@ -42,7 +42,8 @@ export function runsInWords(runs) {
     if (before === r.state || r.state === "running" || (before === undefined && !runsSeen)) continue;
     const took = r.ended_s !== null && r.ended_s !== undefined ? ` in ${fmt(r.ended_s - r.started_s, 1)} s` : "";
     const whose = myRuns.has(r.id) ? "" : ", another client's";
-    const text = `${r.behavior} ${r.state}${took}: ${r.message} (run ${r.id}${whose})`;
+    const said = r.message.startsWith(`${r.behavior} `) ? r.message.slice(r.behavior.length + 1) : r.message;
+    const text = `${r.behavior} ${r.state}${took}: ${said} (run ${r.id}${whose})`;
     if (r.state === "succeeded") {
       log(text, "ok", {who: "robot", details: r});
       if (r.result && r.result.recognition) askRecognitions();
@@ -50,7 +51,9 @@ export function runsInWords(runs) {
     }
     const cause = r.cause ? `cause: ${CAUSE_WORDS[r.cause] || r.cause}` : "no cause named";
     const remedy = forRun(r, scene());
-    log(`${text}; ${cause}`, remedy ? "bad ask" : "bad", {who: "robot", details: r, actions: actions(remedy, r)});
+    const li = log(`${text}; ${cause}`, remedy ? "bad ask" : "bad", {who: "robot", details: r, actions: actions(remedy, r)});
+    const stop = r.cause === "stop" ? stopIn(r.message || "") : null;
+    if (stop && stopLines[stop] !== null) stopFollowers[stop].push(li);  // settled with the stop's question
   }
   runsSeen = true;
 }
@@ -75,10 +78,15 @@ function motionWords(em, s) {
   return `motion stop latched by ${by} at ${fmt(em.motion_stop_time, 3)} s: the planned motion is held, balance ` +
     "keeps working. Release it?";
 }
+const stopFollowers = {hard: [], motion: [], walking: [], fall: []};  // the runs' failures a stop caused
 function ask(stop, on, words, details, remedy, gone) {
   const li = stopLines[stop];
   if (on && li === null) stopLines[stop] = log(words(), "bad ask", {who: "robot", details, actions: actions(remedy)});
-  else if (!on && li !== null) { answered(li, gone); stopLines[stop] = null; }
+  else if (!on && li !== null) {
+    for (const f of [li, ...stopFollowers[stop]]) answered(f, gone);
+    stopLines[stop] = null;
+    stopFollowers[stop] = [];
+  }
 }
 export function stopsInWords(s) {
   const em = s.emergency || {};

@@ -110,14 +110,14 @@ def test_a_motion_stop_latched_during_a_run_is_asked_with_its_cause_and_released
     expect(outcome).to_have_count(1)
     expect(outcome.get_by_role("button", name="Release the motion stop")).to_be_visible()
     shot(page, artifacts, "dialogue_latched_stop")
-    if os.environ.get("HRP2_SAVE_PLOTS") == "1":
-        page.locator("#history").screenshot(path=str(DOC_SCREENSHOT))
     # released from the dialogue once the flag is down (a release while it is up would latch again)
-    wait_until(lambda: not c.state()["emergency"]["flag"], 10.0, "the CP flag down")
+    wait_until(lambda: not c.state()["emergency"]["flag"], 20.0, "the CP flag down")
     question.get_by_role("button", name="Release the motion stop").click()
-    wait_until(lambda: not c.state()["emergency"]["motion_stop"], 5.0, "the motion stop released")
+    # (a click can wait ~20 s behind a software-GL frame of the 3D view on a loaded 2-CPU machine: the fixture's note)
+    wait_until(lambda: not c.state()["emergency"]["motion_stop"], 30.0, "the motion stop released")
     expect(question).to_contain_text("- released")
     expect(question.get_by_role("button")).to_have_count(0)  # settled: no button left
+    expect(outcome.get_by_role("button")).to_have_count(0)  # nor on the failure the stop caused
     expect(page.locator("#s-motion")).to_have_text("off")
     shot(page, artifacts, "dialogue_released")
     motion_released(c)
@@ -148,10 +148,15 @@ def test_another_clients_command_shows_its_display_name_and_this_page_chooses_it
     expect(page.locator("#name-error")).to_be_empty()
     expect(page.locator("#history li").filter(has_text='you are now "Bob.console"')).to_have_count(1)
     page.get_by_role("button", name="Take control").click()
-    wait_until(lambda: get_json(f"{c.base}/api/operator/lock")["holder"] == "Bob.console", 5.0,
+    wait_until(lambda: get_json(f"{c.base}/api/operator/lock")["holder"] == "Bob.console", 30.0,
                "the lock held as Bob.console")
     expect(page.locator("#lock-state")).to_have_text("control: YOU")
     assert c.state()["commands"][-1]["client"] == "Bob.console"  # the lock's request, by the chosen name
     shot(page, artifacts, "dialogue_display_name")
+    if os.environ.get("HRP2_SAVE_PLOTS") == "1":  # the whole dialogue of this module's three tests, for the docs
+        history = page.locator("#history")
+        history.evaluate("(h) => { h.style.maxHeight = 'none'; }")
+        history.screenshot(path=str(DOC_SCREENSHOT))
+        history.evaluate("(h) => { h.style.maxHeight = ''; }")
     page.get_by_role("button", name="Release control").click()
-    wait_until(lambda: get_json(f"{c.base}/api/operator/lock")["holder"] is None, 5.0, "the lock free")
+    wait_until(lambda: get_json(f"{c.base}/api/operator/lock")["holder"] is None, 30.0, "the lock free")
