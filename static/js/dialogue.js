@@ -107,6 +107,7 @@ export function stopsInWords(s) {
 
 // ---- recognitions: the robot asks whether the object is where it says; confirm or correct --------------------
 const asked = new Map();  // object -> the recognition time asked about
+const recognitionLines = new Map();  // object -> its question's line, until answered (here, the pop-up, a client)
 async function askRecognitions() {
   const r = await fetch("/api/recognitions").catch(() => null);
   const d = r && r.ok ? await r.json() : {recognitions: {}};
@@ -119,6 +120,7 @@ async function askRecognitions() {
                      {label: "Confirm", title: `POST /api/recognitions/${name}/confirm`, done: "confirmed",
                       act: async () => !!(await post(`/api/recognitions/${name}/confirm`, {}))},
                      {label: "Correct", title: "Give where it is (world x y z [m])", act: () => correctForm(li, name, rec)}]});
+    recognitionLines.set(name, li);
   }
 }
 function correctForm(li, name, rec) {
@@ -143,7 +145,13 @@ export function commandsInWords(commands) {
   const newest = commands.length ? commands[commands.length - 1].seq : 0;
   if (lastSeq === null || newest < lastSeq) { lastSeq = newest; return; }  // (re)started: not replayed
   for (const c of commands) {
-    if (c.seq <= lastSeq || c.client === CLIENT_ID) continue;
+    if (c.seq <= lastSeq) continue;
+    const rec = c.status < 300 && /^POST \/api\/recognitions\/([^/]+)\/(confirm|correct)$/.exec(c.request);
+    if (rec && recognitionLines.has(rec[1])) {  // the question answered, whoever answered it
+      answered(recognitionLines.get(rec[1]), `${c.answer} (${c.client === CLIENT_ID ? "you" : c.client})`);
+      recognitionLines.delete(rec[1]);
+    }
+    if (c.client === CLIENT_ID) continue;
     const times = c.count > 1 ? ` (x${c.count})` : "";
     const said = c.status < 300 ? (c.answer || `${c.request}: ok`) : `${c.request} refused (${c.status}): ${c.answer}`;
     log(said + times, c.status < 300 ? "other" : "bad", {who: c.client, details: c});
