@@ -109,7 +109,7 @@ function onState(s) {
     const raisedBy = em.motion_stop_cp_error_m != null
       ? ` (CP error ${fmt(1000 * em.motion_stop_cp_error_m, 1)} mm when the flag rose)` : "";
     latched = {key: `motion:${em.motion_stop_time}`, text: `motion stop latched by ${em.motion_stop_reason} at ` +
-      `${fmt(em.motion_stop_time, 3)} s${raisedBy}. Balance keeps working; release it in the motion row.`};
+      `${fmt(em.motion_stop_time, 3)} s${raisedBy}. Balance keeps working; release it in the motion row or the dialogue.`};
   }
   const showLatched = latched !== null && latched.key !== acknowledged;
   $("latched").hidden = !showLatched;
