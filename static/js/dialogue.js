@@ -62,8 +62,11 @@ export function runsInWords(runs) {
 sayRefusals(({method, url, body, status, answer, text}) => {
   const reason = status === 423 ? "locked" : answer.reason;
   const words = reason ? `refused (${reason}): ${answer.detail || text}` : text;
-  log(words, "bad", {who: "robot", details: {request: `${method} ${url}`, body: body ?? null, status, answer},
-                     actions: actions(forRefusal(status, reason, scene()))});
+  const remedy = forRefusal(status, reason, scene());
+  const li = log(words, remedy ? "bad ask" : "bad", {who: "robot", actions: actions(remedy),
+                 details: {request: `${method} ${url}`, body: body ?? null, status, answer}});
+  const stop = {hard_stop: "hard", motion_stop: "motion", walking_stop: "walking"}[reason];
+  if (stop && stopLines[stop] !== null) stopFollowers[stop].push(li);  // settled with the stop's question
 });
 
 // ---- latched stops as questions: what raised it, the value and when, and the button that releases it -----------

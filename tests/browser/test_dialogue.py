@@ -109,6 +109,11 @@ def test_a_motion_stop_latched_during_a_run_is_asked_with_its_cause_and_released
                                              "cause: a latched stop"))
     expect(outcome).to_have_count(1)
     expect(outcome.get_by_role("button", name="Release the motion stop")).to_be_visible()
+    # a behaviour asked for meanwhile is refused naming the stop, with the same one action
+    run_command(page, "squat 0.05")
+    refused = line(page, "robot", "refused (motion_stop): squat refused: the motion stop (EmergencyStopper) is latched")
+    expect(refused).to_have_count(1)
+    expect(refused.get_by_role("button", name="Release the motion stop")).to_be_visible()
     shot(page, artifacts, "dialogue_latched_stop")
     # released from the dialogue once the flag is down (a release while it is up would latch again)
     wait_until(lambda: not c.state()["emergency"]["flag"], 20.0, "the CP flag down")
@@ -118,6 +123,7 @@ def test_a_motion_stop_latched_during_a_run_is_asked_with_its_cause_and_released
     expect(question).to_contain_text("- released")
     expect(question.get_by_role("button")).to_have_count(0)  # settled: no button left
     expect(outcome.get_by_role("button")).to_have_count(0)  # nor on the failure the stop caused
+    expect(refused.get_by_role("button")).to_have_count(0)  # nor on the refusal
     expect(page.locator("#s-motion")).to_have_text("off")
     shot(page, artifacts, "dialogue_released")
     motion_released(c)
