@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 from behaviors.base import OVERRUN_FACTOR, Behavior, Commands, Context, Output
+from behaviors.causes import run_cause
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
 from controller.core.types import WalkCommand
 from controller.operation.points import OperationView, Twist, check_twist, sum_per_point
@@ -58,12 +59,13 @@ class RunStatus:
     started_s: float  # control time [s]
     ended_s: float | None
     nominal_duration_s: float
+    cause: str | None = None  # failed or cancelled: the cause its message names (behaviors.causes), else None
 
     def to_dict(self) -> dict[str, Any]:
         return {"id": self.id, "behavior": self.behavior, "params": self.params, "state": self.state,
                 "progress": self.progress, "message": self.message, "result": self.result,
                 "points": list(self.points), "started_s": self.started_s, "ended_s": self.ended_s,
-                "nominal_duration_s": self.nominal_duration_s}
+                "nominal_duration_s": self.nominal_duration_s, "cause": self.cause}
 
 
 @dataclass
@@ -85,7 +87,8 @@ class _Run:
         return RunStatus(id=self.id, behavior=b.name, params=b.params.to_dict(), state=self.state,
                          progress=round(self.progress, 4), message=self.message, result=dict(self.result),
                          points=self.resources, started_s=self.started_s, ended_s=self.ended_s,
-                         nominal_duration_s=b.nominal_duration_s())
+                         nominal_duration_s=b.nominal_duration_s(),
+                         cause=run_cause(self.message) if self.state in ("failed", "cancelled") else None)
 
 
 def _view(op: OperationPort | None, world_from_control: Callable[[], Sequence[float] | None] | None = None

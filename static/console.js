@@ -6,17 +6,18 @@ import {api, say} from "./js/api.js";
 import {loadBehaviors, updateRuns} from "./js/behaviours.js";
 import {startCamera} from "./js/camera.js";
 import {buildController, setJoints} from "./js/controller.js";
+import {commandsInWords, runsInWords, stopsInWords} from "./js/dialogue.js";
 import {$, el} from "./js/dom.js";
 import {estopKey, openDoor} from "./js/estop.js";
 import {updateLock} from "./js/lock.js";
 import {watchLink} from "./js/link.js";
 import {plotSample} from "./js/plots.js";
-import {readState, startTelemetry, updateCommands} from "./js/state.js";
+import {readState, startTelemetry} from "./js/state.js";
 import {connectOperator, onKeyDown, onKeyUp, setPoints, showLimited} from "./js/sticks.js";
 
 // what each state from the telemetry updates besides the safety bar and the readouts, in this order
-readState(showLimited, (s) => updateRuns(s.runs || []), (s) => updateCommands(s.commands || []),
-          (s) => updateLock(s.operator_lock), plotSample);
+readState(showLimited, (s) => updateRuns(s.runs || []), stopsInWords, (s) => runsInWords(s.runs || []),
+          (s) => commandsInWords(s.commands || []), (s) => updateLock(s.operator_lock), plotSample);
 
 // ---- the 3D view --------------------------------------------------------------------------------------------
 // The 3D view is viser's client served by this console at /viewer/ with one script added (static/viewer_keys.js)

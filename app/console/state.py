@@ -14,6 +14,7 @@ from pydantic import BaseModel, ConfigDict, Field, create_model
 
 from app.console.schemas import CommandRecord, OperatorLockState
 from app.service.state_document import jsonable, state_document, state_json  # noqa: F401 - the routers' names
+from behaviors.causes import RUN_CAUSES
 from controller.core.layer import Status
 
 
@@ -199,7 +200,10 @@ def run_model() -> type[BaseModel]:
             points=(list[str], Field(description="what it needs alone: operational points, '<hand>.gripper'")),
             started_s=(float, Field(description="control time it started [s]")),
             ended_s=(float | None, Field(description="control time it ended [s]")),
-            nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")))
+            nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")),
+            cause=(Literal[tuple(RUN_CAUSES)] | None, Field(
+                default=None, description="a failed or cancelled run: the cause its message names, from a closed "
+                                          "set (behaviors.causes); null otherwise or when it names none")))
     return _NAMED["RunStatus"]
 
 

@@ -1,10 +1,11 @@
 // The page's requests to the API (with the token, the client id and the lock's lease), its WebSocket addresses,
 // and the history and message line that say what came back.
-import {$, el, fmt} from "./dom.js";
+import {$} from "./dom.js";
+import {writeLine} from "./dialogue_line.js";
 import {CLIENT_ID, TOKEN, headers, lockToken, logTo} from "./estop.js";
 
 // the page's identity is defined beside the E-STOP, which needs it and nothing else
-export {CLIENT_ID, headers, lockToken, setLockToken} from "./estop.js";
+export {CLIENT_ID, headers, lockToken, setClientId, setLockToken} from "./estop.js";
 
 // the newest state received (state.js keeps it): its time stamps the history
 export const latest = {state: null};
@@ -22,14 +23,14 @@ export function renew(ws) {
   if (ws && ws.readyState <= WebSocket.OPEN) { ws.renewed = true; ws.close(); }
 }
 
-// ---- history: commands, results, faults, what other clients did ---------------------------------------------
-export function log(text, kind = "") {
-  const h = $("history");
-  const t = latest.state ? `${fmt(latest.state.time, 2)} s ` : "";
-  h.append(el("li", {class: kind, text: t + text}));
-  while (h.children.length > 300) h.firstChild.remove();
-  h.scrollTop = h.scrollHeight;
+// ---- the dialogue: commands, results, faults, what other clients did (js/dialogue_line.js draws a line) ---------
+// `extra`: who said it, the details behind a click, the buttons that answer it (dialogue_line.js's writeLine)
+export function log(text, kind = "", extra = {}) {
+  return writeLine(text, {kind, time: latest.state ? latest.state.time : null, ...extra});
 }
+// what the dialogue says of a refused request instead of the plain line (js/dialogue.js installs it)
+let refusalLine = null;
+export function sayRefusals(fn) { refusalLine = fn; }
 logTo(log);
 export function say(text, bad = false) {
   const m = $("message");
@@ -47,7 +48,8 @@ export async function api(method, url, body) {
         : (data.detail || r.statusText);
       const text = `${method} ${url}: ${r.status} ${typeof why === "string" ? why : JSON.stringify(why)}`;
       say(text, true);
-      log(text, "bad");
+      if (refusalLine) refusalLine({method, url, body, status: r.status, answer: data, text});
+      else log(text, "bad");
       return null;
     }
     if (data.message) say(data.message);

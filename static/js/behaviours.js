@@ -1,12 +1,11 @@
 // Behaviours: a button and a generated form per registered behaviour (GET /api/behaviors), the runs with their
-// progress and cancel, and the command box (`name v1 v2 ...` or `name k=v`, with the built-in commands).
+// progress and cancel (their outcomes in words: js/dialogue.js), and the command box (`name v1 v2 ...` or `name k=v`, with the built-in commands).
 import {api, headers, log, post, postLogged, say} from "./api.js";
 import {$, el, fmt, xyz} from "./dom.js";
 import {estop} from "./estop.js";
 
 let behaviors = [];
-const myRuns = new Set();
-const knownRuns = new Map();  // id -> state
+export const myRuns = new Set();  // the runs this page started (its dialogue says so)
 
 export async function loadBehaviors() {
   behaviors = await api("GET", "/api/behaviors") || [];
@@ -42,6 +41,13 @@ function fieldInput(p, id) {
   return el("input", {id, name: p.name, type: "text", value: p.default ?? ""});
 }
 
+// the form of the behaviour named `name`, opened (the dialogue's "Edit" of a run a limit stopped): found or not
+export function openFormOf(name) {
+  const b = behaviors.find((x) => x.name === name);
+  if (b) openForm(b);
+  return !!b;
+}
+
 function openForm(b) {
   const f = $("behavior-form");
   f.replaceChildren(el("strong", {class: "span", text: `${b.name}: ${b.summary}`}));
@@ -72,24 +78,15 @@ $("behavior-form").addEventListener("submit", (e) => {
   startBehavior(b.name, body, `${b.name} ${JSON.stringify(body)}`);
 });
 
-async function startBehavior(name, body, shown) {
-  log(`> ${shown}`, "cmd");
+export async function startBehavior(name, body, shown) {
+  log(`${shown}`, "cmd");
   const d = await post(`/api/behaviors/${name}`, body);
-  if (d) { myRuns.add(d.id); log(d.message, "ok"); }
+  if (d) { myRuns.add(d.id); log(d.message, "ok", {who: "robot", details: d}); }
   return d;
 }
 
 export function updateRuns(runs) {
   const box = $("runs");
-  for (const r of runs) {
-    const before = knownRuns.get(r.id);
-    if (before === undefined && !myRuns.has(r.id)) log(`another client started ${r.behavior} (run ${r.id})`, "other");
-    if (before !== r.state && r.state !== "running") {
-      const result = r.result && Object.keys(r.result).length ? ` ${JSON.stringify(r.result)}` : "";
-      log(`run ${r.id} ${r.behavior} ${r.state}: ${r.message}${result}`, r.state === "succeeded" ? "ok" : "bad");
-    }
-    knownRuns.set(r.id, r.state);
-  }
   const shown = runs.slice(-4);
   const key = JSON.stringify(shown.map((r) => [r.id, r.state, Math.round(100 * r.progress), r.message]));
   if (key === box.dataset.key) return;  // unchanged: not built again
@@ -190,15 +187,15 @@ $("command-form").addEventListener("submit", async (e) => {
   const text = $("command").value.trim();
   const [word, ...args] = text.split(/\s+/);
   try {
-    if (BUILTINS[word]) { log(`> ${text}`, "cmd"); await BUILTINS[word](args); }
+    if (BUILTINS[word]) { log(`${text}`, "cmd"); await BUILTINS[word](args); }
     else {
       const {name, body, places} = await parseCommand(text);
-      if (places.length) { log(`> ${text}`, "cmd"); for (const p of places) log(p, "ok"); }
+      if (places.length) { log(`${text}`, "cmd"); for (const p of places) log(p, "ok"); }
       await startBehavior(name, body, places.length ? `${name} ${JSON.stringify(body)}` : text);
     }
     $("command").value = "";
   } catch (err) {
-    log(`> ${text}`, "cmd");
+    log(`${text}`, "cmd");
     log(err.message, "bad");
     say(err.message, true);
   }

@@ -5,7 +5,27 @@
 // ---- the token, the client id and the lock's lease (contract with the API): kept in memory only --------------
 export const TOKEN = new URLSearchParams(location.search).get("token");
 if (TOKEN) history.replaceState(null, "", location.pathname);  // not left in the address bar
-export const CLIENT_ID = "page-" + Math.random().toString(36).slice(2, 10);  // a display name: it proves nothing
+// this page's display name (it proves nothing): the one the operator chose for this tab (js/dialogue.js's setting,
+// kept in the tab's session storage), else a random one
+const NAME_KEY = "hrp2.displayName";
+const NAME_RULE = /^[A-Za-z0-9._:-]{1,64}$/;  // the API's client id (app/console/operator_lock.py)
+// why `name` cannot be a display name, naming the field and what is allowed; "" when it can
+export function checkDisplayName(name) {
+  if (typeof name !== "string" || name.length < 1 || name.length > 64) {
+    return `display name: ${name.length} characters; 1 to 64 allowed`;
+  }
+  const bad = [...name].find((c) => !NAME_RULE.test(c));
+  if (bad !== undefined) return `display name: '${bad}' is not allowed; only A-Z a-z 0-9 . _ : -`;
+  return "";
+}
+function storedName() {
+  try { const n = sessionStorage.getItem(NAME_KEY); return n && !checkDisplayName(n) ? n : null; } catch (e) { return null; }
+}
+export let CLIENT_ID = storedName() || "page-" + Math.random().toString(36).slice(2, 10);
+export function setClientId(name) {
+  CLIENT_ID = name;
+  try { sessionStorage.setItem(NAME_KEY, name); } catch (e) { /* kept for this page only */ }
+}
 export let lockToken = null;  // the operator lock's lease token while this page holds it: secret, never shown or logged
 export function setLockToken(token) { lockToken = token; }
 

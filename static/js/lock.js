@@ -6,9 +6,10 @@ import {telemetryWs} from "./state.js";
 import {opWsLatest} from "./sticks.js";
 
 let lockHolder = null;
+let taking = false;  // this page's take in flight: a state naming it before the answer came is not another's
 export function updateLock(lock) {
   const holder = lock ? lock.holder : null;
-  const mine = holder === CLIENT_ID && lockToken !== null;
+  const mine = holder === CLIENT_ID && (lockToken !== null || taking);
   const watching = holder !== null && !mine;
   const st = $("lock-state");
   setText(st, holder === null ? "control: free (anyone)" : mine ? "control: YOU" : `control: ${holder} (watching)`);
@@ -33,7 +34,8 @@ $("lock-btn").addEventListener("click", async () => {
     const d = await api("DELETE", "/api/operator/lock");
     if (d) { setLockToken(null); log("control released", "ok"); }
   } else {
-    const d = await post("/api/operator/lock", {client: CLIENT_ID});
+    taking = true;
+    const d = await post("/api/operator/lock", {client: CLIENT_ID}).finally(() => { taking = false; });
     if (d && d.token) {
       setLockToken(d.token);
       // the stick stream and the telemetry reconnect at once with the lease token (the holder's stream is the

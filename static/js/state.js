@@ -1,6 +1,6 @@
 // The robot's state on the page: the telemetry (WS /ws/telemetry, else polling), the staleness watch, the safety
 // bar's stop rows with their releases, the banner and latched alerts, the readouts, and its events in the history.
-import {CLIENT_ID, headers, latest, log, postLogged, wsUrl} from "./api.js";
+import {headers, latest, log, postLogged, wsUrl} from "./api.js";
 import {$, fmt, setClass, setText} from "./dom.js";
 
 // ---- the other stops, each with its own release ---------------------------------------------------------------
@@ -109,7 +109,7 @@ function onState(s) {
     const raisedBy = em.motion_stop_cp_error_m != null
       ? ` (CP error ${fmt(1000 * em.motion_stop_cp_error_m, 1)} mm when the flag rose)` : "";
     latched = {key: `motion:${em.motion_stop_time}`, text: `motion stop latched by ${em.motion_stop_reason} at ` +
-      `${fmt(em.motion_stop_time, 3)} s${raisedBy}. Balance keeps working; release it in the motion row.`};
+      `${fmt(em.motion_stop_time, 3)} s${raisedBy}. Balance keeps working; release it in the motion row or the dialogue.`};
   }
   const showLatched = latched !== null && latched.key !== acknowledged;
   $("latched").hidden = !showLatched;
@@ -134,15 +134,8 @@ function onState(s) {
 
   if (prev) {
     const pe = prev.emergency || {};
-    if (em.hard_stop && !pe.hard_stop) log(`hard stop engaged${em.hard_stop_reason ? ` (${em.hard_stop_reason})` : ""}`, "bad");
-    if (!em.hard_stop && pe.hard_stop) log("hard stop released", "ok");
-    if (em.motion_stop && !pe.motion_stop) {
-      const cp = em.motion_stop_cp_error_m != null ? `, CP error ${fmt(1000 * em.motion_stop_cp_error_m, 1)} mm` : "";
-      log(`motion stop (${em.motion_stop_reason || "?"}${cp}) at ${fmt(em.motion_stop_time, 3)} s`, "bad");
-    }
-    if (!em.motion_stop && pe.motion_stop) log("motion stop released", "ok");
+    // (the stops and a fall are the dialogue's questions: js/dialogue.js)
     if (em.fault && em.fault !== pe.fault) log(`FAULT: ${em.fault}`, "bad");
-    if (s.fallen && !prev.fallen) log("FALLEN", "bad");
     if (em.flag && !pe.flag) {
       const cp = em.flag_cp_error_m != null ? ` (CP error ${fmt(1000 * em.flag_cp_error_m, 1)} mm)` : "";
       log(`capture-point flag raised${cp} at ${fmt(em.flag_rose_at, 3)} s`, "bad");
@@ -152,17 +145,3 @@ function onState(s) {
   for (const read of readers) read(s);
 }
 $("latched-ack").addEventListener("click", () => { acknowledged = $("latched").dataset.key; $("latched").hidden = true; });
-
-// what the other clients asked (the console's journal of control requests, `commands` in the state): into the
-// history as they come; what was there before this page opened is not replayed
-let lastCommandSeq = null;
-export function updateCommands(commands) {
-  const newest = commands.length ? commands[commands.length - 1].seq : 0;
-  if (lastCommandSeq === null || newest < lastCommandSeq) { lastCommandSeq = newest; return; }  // (re)started
-  for (const c of commands) {
-    if (c.seq <= lastCommandSeq || c.client === CLIENT_ID) continue;
-    const answer = c.status < 300 ? (c.answer || "ok") : `${c.status} ${c.answer}`;
-    log(`${c.client}: ${c.request}${c.body ? " " + c.body : ""} -> ${answer}`, c.status < 300 ? "other" : "bad");
-  }
-  lastCommandSeq = newest;
-}

@@ -106,6 +106,7 @@ def test_a_run_the_operators_motion_stop_catches_fails_naming_the_stop_not_its_s
     run = run_of(client, run_id)
     stopped_at = emergency(client)["motion_stop_time"]
     assert run["state"] == "failed" and run["ended_s"] is not None
+    assert run["cause"] == "stop"  # named from the closed set, for the page's dialogue (issue 29)
     assert re.match(r"look_at stopped at t = \d+\.\d{3} s: the motion stop \(EmergencyStopper\) is latched, "
                     r"raised by the operator \(POST /api/motion/stop\) at t = " + f"{stopped_at:.3f}", run["message"])
     assert "gaze" not in run["message"]
@@ -134,7 +135,7 @@ def test_a_walking_run_the_emergency_walking_stop_catches_fails_naming_it(client
     assert client.post("/api/walk/emergency-stop").status_code == 200
     step(runtime, 0.02)
     run = run_of(client, run_id)
-    assert run["state"] == "failed", run
+    assert run["state"] == "failed" and run["cause"] == "stop", run
     assert "the emergency walking stop (AutoBalancer) is in force, raised by the operator " \
            "(POST /api/walk/emergency-stop)" in run["message"]
 

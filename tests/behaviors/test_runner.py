@@ -116,6 +116,7 @@ def test_a_cancelled_run_leaves_zero_velocity_behind():
     x_before = h.op.p["rhand"][0]
     status = h.runner.cancel(rid)
     assert status.state == "cancelled"
+    assert status.to_dict()["cause"] == "cancel"  # named from the closed set (behaviors.causes), for the page
     h.tick(20)
     assert h.op.p["rhand"][0] == x_before
 
@@ -136,6 +137,8 @@ def test_an_exception_in_a_behaviour_fails_its_run_and_not_the_others():
     good = h.runner.run(Push(PushParams(point="lhand")))
     h.tick(40)
     assert h.runner.get(bad).state == "failed" and "boom" in h.runner.get(bad).message
+    assert h.runner.get(bad).to_dict()["cause"] is None  # an exception names no cause of the closed set
+    assert h.runner.get(good).to_dict()["cause"] is None  # running: no cause
     assert h.runner.get(good).state == "running"
     assert "rhand" not in h.op.calls[-1][0]
 

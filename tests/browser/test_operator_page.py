@@ -836,8 +836,8 @@ def test_the_command_box_runs_walk_to_and_the_history_shows_the_result(page, hrp
     playwright_api.expect(page.locator("#history")).to_contain_text("walk_to started")
     run = [r for r in hrp2_console.state()["runs"] if r["behavior"] == "walk_to"][-1]
     assert run["params"]["x_m"] == pytest.approx(0.1) and run["params"]["y_m"] == 0.0
-    playwright_api.expect(page.locator("#history")).to_contain_text(f"run {run['id']} walk_to succeeded",
-                                                                  timeout=40_000)
+    playwright_api.expect(page.locator("#history")).to_contain_text(
+        re.compile(rf"walk_to succeeded in [\d.]+ s: .*\(run {run['id']}\)"), timeout=40_000)
     shot(page, artifacts, "command_walk_to")
 
 
@@ -850,10 +850,11 @@ def test_a_command_a_script_sends_appears_in_the_pages_history(page, hrp2_consol
     answer = post_json(f"{hrp2_console.base}/api/sequence/joint-angles", body, client="script-7")
     entry = hrp2_console.state()["commands"][-1]
     assert entry["client"] == "script-7" and entry["request"] == "POST /api/sequence/joint-angles"
-    sent = json.dumps(body, separators=(",", ":"))
-    shown = f"script-7: POST /api/sequence/joint-angles {sent} -> {answer['message']}"
-    line = page.locator("#history li").filter(has_text=shown)
+    line = page.locator('#history li[data-who="script-7"]').filter(has_text=answer["message"])  # its words
     playwright_api.expect(line).to_have_count(1)
+    line.locator("summary").click()  # and what it sent, behind a click
+    playwright_api.expect(line.locator("pre.raw")).to_contain_text('"request": "POST /api/sequence/joint-angles"')
+    playwright_api.expect(line.locator("pre.raw")).to_contain_text(json.dumps(json.dumps(body, separators=(",", ":"))))
     wait_until(lambda: abs(joint_deg(hrp2_console, joint) - angle) < 1.0, 10.0, f"{joint} moved by the script")
     line.scroll_into_view_if_needed()
     shot(page, artifacts, "history_other_client")
@@ -1082,7 +1083,8 @@ def test_the_command_box_looks_at_a_named_place(page, hrp2_console, artifacts):
     playwright_api.expect(history).to_contain_text("look_at started")
     run = last_run(hrp2_console, "look_at")
     assert (run["params"]["x_m"], run["params"]["y_m"], run["params"]["z_m"]) == pytest.approx((2.15, 0.0, 0.75))
-    playwright_api.expect(history).to_contain_text(f"run {run['id']} look_at succeeded", timeout=40_000)
+    playwright_api.expect(history).to_contain_text(re.compile(rf"look_at succeeded in [\d.]+ s: .*\(run {run['id']}\)"),
+                                                   timeout=40_000)
     assert last_run(hrp2_console, "look_at")["result"]["error_deg"] < 1.0  # the gaze on the table's point
     page.locator("#history li").last.scroll_into_view_if_needed()
     shot(page, artifacts, "look_at_table")
@@ -1106,6 +1108,9 @@ def test_a_recognition_popup_appears_after_locate_can_and_confirm_and_correct_re
         wait_until(lambda: get_json(f"{hrp2_console.base}/api/recognitions")["recognitions"]["can"].get("status")
                    == "confirmed", 5.0, "the can confirmed")
         playwright_api.expect(pop).to_contain_text("confirmed")
+        # the dialogue asked the same question and says how it was answered (issue 29)
+        asked = page.locator('#history li[data-who="robot"]').filter(has_text="I see the can at")
+        playwright_api.expect(asked).to_contain_text("can confirmed at (")
         pop.get_by_role("button", name="Correct").click()
         pop.get_by_label("can y [m]").fill("0.05")
         pop.get_by_role("button", name="Send").click()

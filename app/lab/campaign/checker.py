@@ -4,11 +4,11 @@ violation is kept with its invariant's number, the simulated time and what was s
 from __future__ import annotations
 
 import dataclasses
-import re
 from collections.abc import Callable, Mapping
 from typing import Any
 
 from app.service.errors import Refused
+from behaviors.causes import run_cause
 
 INVARIANTS: Mapping[int, str] = {
     1: "no fall unless a push beyond the envelope came first",
@@ -22,17 +22,6 @@ INVARIANTS: Mapping[int, str] = {
 #: The closed set of a refusal's `reason` (409 and the stream's acks: the service's reasons and the simulation's
 #: divergence; 423: the operator lock)
 REFUSAL_REASONS: frozenset[str] = frozenset((*Refused.REASONS, "diverged", "locked"))
-#: The closed set of causes a failed or cancelled behaviour's message must name (case-insensitive patterns)
-RUN_CAUSES: Mapping[str, str] = {
-    "stop": r"motion stop|walking stop|e-stop",
-    "cancel": r"cancelled by the operator",
-    "reset": r"the simulation was reset",
-    "fall": r"\bfell\b|fallen|a fall",
-    "lock": r"operator lock",
-    "limit": r"IK limited|joint limit|collision|out of reach|unreachable",
-    "timeout": r"overran its nominal duration",
-    "perception": r"not in the image|not seen|closed on nothing|slipped|short of open",
-}
 LATE_TICK_MS = 2.0  # [ms] a paced tick may start at most this late
 STAND_TOLERANCE_DEG = 3.0  # [deg] every joint (grippers aside) this close to half-sitting after `stand`
 GRIPPERS = ("RARM_JOINT6", "LARM_JOINT6")
@@ -61,14 +50,6 @@ class Expectation:
     void_by: frozenset[str] = frozenset()
     from_tick: int = -1
     first_only: bool = False
-
-
-def run_cause(message: str) -> str | None:
-    """The cause a run's message names, from RUN_CAUSES, or None."""
-    for cause, pattern in RUN_CAUSES.items():
-        if re.search(pattern, message or "", re.IGNORECASE):
-            return cause
-    return None
 
 
 class Checker:
