@@ -83,7 +83,8 @@ def fake_ci(tmp_path: Path, with_python313: bool) -> subprocess.CompletedProcess
 def test_ci_runs_the_suite_on_3_11_then_the_unit_tests_on_3_13(tmp_path):
     done = fake_ci(tmp_path, with_python313=True)
     assert done.returncode == 0, done.stderr
-    assert (tmp_path / "make.calls").read_text().splitlines() == ["test ARGS=--durations=40", "test-py313 PYTHON313=python3.13"]
+    assert (tmp_path / "make.calls").read_text().splitlines() == ["test ARGS=--durations=40",
+                                                                  "test-py313 PYTHON313=python3.13"]
 
 
 def test_ci_without_python_3_13_fails_at_once_naming_it(tmp_path):

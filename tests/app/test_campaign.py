@@ -6,10 +6,11 @@ Asserted: invariants 2-6 (the console's own promises: causes named, e-stops enga
 robot process alive, no controller fault, the consoles' memory bounded; and `stand` back to half-sitting) in every
 session. Printed, not asserted: invariant 1 (no fall without a push beyond the envelope), whose findings belong to the
 walking controller and are still being found: these seeds ran clean twice on one day, and a CI run the same day then
-found a fall with no push (seed 1007, 54.7 s into its session; replayed in process from its actions, it stands). The sessions' timing against a console at
---speed max is not deterministic: a finding is replayed from the recording the campaign keeps (`hrp2-console
-campaign --seed 1000 --sessions 20 --seconds 60 --workers 2 --out DIR`), and fixed with a regression test
-(docs/campaign.md lists them; tests/scenarios/test_campaign_findings.py holds them)."""
+found a fall with no push (seed 1007, 54.7 s into its session; replayed in process from its actions, it stands).
+The sessions' timing against a console at --speed max is not deterministic: a finding is replayed from the
+recording the campaign keeps (`hrp2-console campaign --seed 1000 --sessions 20 --seconds 60 --workers 2 --out DIR`),
+and fixed with a regression test (docs/campaign.md lists them; tests/scenarios/test_campaign_findings.py holds
+them)."""
 
 from __future__ import annotations
 

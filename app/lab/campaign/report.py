@@ -75,7 +75,8 @@ def render(results: Sequence[Mapping[str, Any]], args: Mapping[str, Any], wall_s
     for run, worker in consoles:
         rs = sorted((r for r in results if (r.get("run", ""), r.get("worker", 0)) == (run, worker)
                      and r.get("rss_mb") is not None), key=lambda r: r.get("order", 0))
-        lines.append(f"| {f'{run} / {worker}' if runs > 1 else worker} | {len(rs)} | {rs[0]['rss_mb']:.0f} | {rs[-1]['rss_mb']:.0f} | "
+        name = f"{run} / {worker}" if runs > 1 else worker
+        lines.append(f"| {name} | {len(rs)} | {rs[0]['rss_mb']:.0f} | {rs[-1]['rss_mb']:.0f} | "
                      f"{max(r['rss_mb'] for r in rs):.0f} |")
     lines += ["", "## Findings", ""]
     for r in results:
