@@ -50,8 +50,13 @@ class RunBehavior(Verb):
     motion = True
     behavior: str
     params: tuple[tuple[str, Any], ...] = ()
+    mode: str = "run"  # "step": held before each phase until StepRun (behaviors.runner.RUN_MODES)
 
     def __post_init__(self) -> None:
+        from behaviors.runner import RUN_MODES
+
+        if self.mode not in RUN_MODES:
+            raise InvalidArgument("mode", f"{self.mode!r} is not one of {list(RUN_MODES)}")
         self.build()  # checked where it is made: the field-named errors come back before anything is sent
 
     def build(self):
@@ -65,7 +70,32 @@ class RunBehavior(Verb):
             raise _behavior_argument(exc) from None
 
     def run(self, host: Host) -> int:
-        return host.runner.run(self.build(), host.loop.plant.time_s)
+        return host.runner.run(self.build(), host.loop.plant.time_s, self.mode)
+
+
+@dataclass(frozen=True)
+class PreviewBehavior(RunBehavior):
+    """What a behaviour would do if it started now (behaviors.preview): its planned footsteps and hand paths
+    from its own plan; nothing moves."""
+
+    name = "preview_behavior"
+    motion = False
+    recorded = False
+
+    def run(self, host: Host) -> dict:
+        return host.runner.preview(self.build()).to_dict()
+
+
+@dataclass(frozen=True)
+class StepRun(Verb):
+    """Step mode: let a run start its next phase."""
+
+    name = "step_run"
+    motion = True
+    run_id: int
+
+    def run(self, host: Host):
+        return host.runner.advance(self.run_id)
 
 
 @dataclass(frozen=True)
