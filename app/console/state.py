@@ -333,7 +333,10 @@ def run_model() -> type[BaseModel]:
             points=(list[str], Field(description="what it needs alone: operational points, '<hand>.gripper'")),
             started_s=(float, Field(description="control time it started [s]")),
             ended_s=(float | None, Field(description="control time it ended [s]")),
-            nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")))
+            nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")),
+            mode=(Literal["run", "step"], Field(default="run", description="step: it holds before each phase")),
+            waiting=(bool, Field(default=False, description="step mode: held before its next phase (POST "
+                                                            "/api/behaviors/runs/{id}/step starts it)")))
     return _NAMED["RunStatus"]
 
 
