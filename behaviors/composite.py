@@ -18,6 +18,9 @@ from behaviors.base import NOTHING, OVERRUN_FACTOR, Behavior, BehaviorParams, Co
 from behaviors.preview import MotionPreview, Predicted, PreviewEnds
 
 
+MAX_PREVIEW_STEPS = 100  # a preview follows a plan this many steps at most (a plan looping until a measurement)
+
+
 class StepFailed(Exception):
     """A child behaviour of a plan failed; the message says which and why."""
 
@@ -121,7 +124,7 @@ class Composite(Behavior):
         gen = twin.plan(ctx)
         finished: Behavior | None = None
         try:
-            while True:
+            for _ in range(MAX_PREVIEW_STEPS):
                 child = gen.send(finished) if finished is not None else next(gen)
                 name = twin.phase or child.name
                 if not isinstance(child, Wait) and (not into.phases or into.phases[-1]["phase"] != name):
@@ -130,6 +133,9 @@ class Composite(Behavior):
                 twin.ctx = Context(ctx.time_s, ctx.elapsed_s, ctx.dt_s, predicted.view, ctx.commands)
                 child.outcome = (True, "previewed")
                 finished = child
+            else:
+                into.ends = (f"the preview ends in phase {twin.phase!r}: the plan repeats its steps until what the "
+                             "robot measures says it is done")
         except StopIteration:
             pass
         except StepFailed as exc:
