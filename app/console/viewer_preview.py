@@ -39,9 +39,9 @@ class PreviewGhost:
     def __init__(self, scene) -> None:
         zero = np.zeros((1, 2, 3), dtype=np.float32)
         self.feet = scene.add_line_segments("/preview/footsteps", _fixed(zero, 4 * MAX_GHOST_STEPS), GHOST_FOOT_RGB,
-                                            thickness=0.006, visible=False)
+                                            thickness=0.015, visible=False)
         self.paths = scene.add_line_segments("/preview/hand_paths", _fixed(zero, MAX_GHOST_SEGMENTS), GHOST_PATH_RGB,
-                                             thickness=0.008, visible=False)
+                                             thickness=0.015, visible=False)
         self.version = 0
         self.shown = False
 
