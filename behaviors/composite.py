@@ -17,7 +17,6 @@ from typing import Any
 from behaviors.base import NOTHING, OVERRUN_FACTOR, Behavior, BehaviorParams, Context, Output
 from behaviors.preview import MotionPreview, Predicted, PreviewEnds
 
-
 MAX_PREVIEW_STEPS = 100  # a preview follows a plan this many steps at most (a plan looping until a measurement)
 
 

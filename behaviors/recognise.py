@@ -6,8 +6,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
-from behaviors.preview import PreviewEnds
 from behaviors.perception.worker import LOCATORS, RECOGNITION_DELAY_S, PendingRecognition, recognition_dict
+from behaviors.preview import PreviewEnds
 
 CAMERA = "narrow_left"  # the narrow stereo pair's left camera, with the depth registered to it
 #: [s] paced, how late a result may come and still count (a run fails at 1.5 times the nominal duration). The

@@ -13,19 +13,17 @@ from pathlib import Path
 import playwright.sync_api as playwright_api
 import pytest
 
-from tests.browser.test_operator_page import (  # noqa: F401 - fixtures
-    artifacts,
-    hrp2_console,
-    page,
-    page_urls,
-    released,
-    saves_a_screenshot,
-    shot,
-)
+from tests.browser import test_operator_page as op
+from tests.browser.test_operator_page import released, shot
+
+# the operator page's fixtures, by name: its console, its Chromium page and where the screenshots go
+hrp2_console, page, page_urls, artifacts = op.hrp2_console, op.page, op.page_urls, op.artifacts
+saves_a_screenshot = op.saves_a_screenshot
 
 pytestmark = pytest.mark.browser
 DOC_SHOT = Path(__file__).resolve().parents[2] / "docs" / "img" / "preview_walk_to.png"  # HRP2_SAVE_PLOTS=1
-GHOST_MIN_PIXELS = 20  # [px] more of the view in the ghost's pink with it drawn: measured +44 (1280x800, software WebGL)
+#: [px] more of the 3D view in the ghost's pink once it is drawn: measured +44 (1280x800, software WebGL)
+GHOST_MIN_PIXELS = 20
 STILL_M = 0.01  # [m] the base moves less than this while a preview is shown and cancelled (standing sway: ~1 mm)
 
 

@@ -88,5 +88,6 @@ __all__ = ["Call", "CancelRun", "ChainTiming", "ClearSequence", "ConfirmRecognit
            "ReleaseEstop", "ReleaseMotion", "Reset", "ResetOperationTargets", "RobotInfo", "RunBehavior", "STARTABLE",
            "SequenceStatus", "SetFootsteps", "SetGroupSequence", "SetJointAngles", "SetJointAnglesSequence",
            "SetOperatorVelocity", "SetParams", "SetSomeJointAngles", "SetTargetPose", "Shutdown", "StartImpedance",
-           "StartLayer", "StartRecording", "StepRun", "StopImpedance", "StopLayer", "StopMotion", "StopRecording", "TARGET_LIMBS",
+           "StartLayer", "StartRecording", "StepRun",
+           "StopImpedance", "StopLayer", "StopMotion", "StopRecording", "TARGET_LIMBS",
            "Verb", "CloseStance", "WalkEmergencyStop", "WalkStop", "list_behaviors", "step_params", "typed_changes"]

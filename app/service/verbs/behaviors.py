@@ -4,7 +4,7 @@ confirms ([OP] II)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from app.service.errors import InvalidArgument, NotFound
 from app.service.verbs.base import Host, Verb, check_bounded
@@ -87,34 +87,36 @@ class PreviewBehavior(RunBehavior):
 
 
 @dataclass(frozen=True)
-class StepRun(Verb):
+class _OnRun(Verb):
+    """A verb on one run: the runner's method `action` called with its id."""
+
+    action: ClassVar[str]
+    run_id: int
+
+    def run(self, host: Host):
+        return getattr(host.runner, self.action)(self.run_id)
+
+
+@dataclass(frozen=True)
+class StepRun(_OnRun):
     """Step mode: let a run start its next phase."""
 
     name = "step_run"
     motion = True
-    run_id: int
-
-    def run(self, host: Host):
-        return host.runner.advance(self.run_id)
+    action = "advance"
 
 
 @dataclass(frozen=True)
-class CancelRun(Verb):
+class CancelRun(_OnRun):
     name = "cancel_run"
-    run_id: int
-
-    def run(self, host: Host):
-        return host.runner.cancel(self.run_id)
+    action = "cancel"
 
 
 @dataclass(frozen=True)
-class GetRun(Verb):
+class GetRun(_OnRun):
     name = "get_run"
     recorded = False
-    run_id: int
-
-    def run(self, host: Host):
-        return host.runner.get(self.run_id)
+    action = "get"
 
 
 @dataclass(frozen=True)
