@@ -103,7 +103,7 @@ function watch(id) {
     const r = await api("GET", `/api/behaviors/runs/${id}`);
     if (!r) return;
     const btn = $("preview-step");
-    if (btn) setText(btn, r.waiting ? `Step (${r.result.phase || "next"} done)` : "Step");
+    if (btn) setText(btn, r.waiting ? `Step (next: ${r.result.phase || "?"})` : "Step");
     if (r.state !== "running") { clearInterval(timer); close(); }
   }, POLL_MS);
 }
