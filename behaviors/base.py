@@ -119,6 +119,12 @@ class Commands(Protocol):
         """The latest recognition of an object remembered since the last reset, or None."""
         ...
 
+    def plan_go_pos(self, x_m: float, y_m: float, theta_rad: float, soles: tuple | None = None) -> list:
+        """The footsteps (behaviors.preview.PlannedStep, world) a goPos of (x, y, theta) relative to the feet
+        frame would walk, from the AutoBalancer's own footstep planner, without walking: from the feet where
+        they stand, or from `soles` (right, left PlannedStep, world) where a planned walk leaves them."""
+        ...
+
 
 @dataclass(frozen=True, slots=True)
 class Context:
@@ -199,6 +205,22 @@ class Behavior(ABC):
 
     def teardown(self, ctx: Context) -> None:  # noqa: B027 - optional hook
         """At the end of every run, however it ended."""
+
+    # ---- before the run: what it would do (behaviors.preview) -------------------------------------------------
+    def preview(self, ctx: Context, predicted: Any, into: Any, phase: str) -> Any:
+        """Add the footsteps and hand paths this behaviour plans from `predicted` (behaviors.preview.Predicted,
+        ctx.view is its view) to `into` (a MotionPreview) under `phase`; return the robot as it leaves it. By
+        default it moves nothing a preview draws (a gaze, a gripper)."""
+        return predicted
+
+    def hold_between_phases(self) -> bool:
+        """Run in step mode: wait before each phase until `allow_next_phase`. False: one phase only (the
+        whole behaviour), nothing to hold."""
+        return False
+
+    def allow_next_phase(self) -> str:
+        """Step mode: let the next phase start; returns its name."""
+        return self.name
 
     # ---- helpers for subclasses ---------------------------------------------------------------------------------
     def succeed(self, message: str, **result: Any) -> Output:

@@ -15,6 +15,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from behaviors.base import NOTHING, OVERRUN_FACTOR, Behavior, BehaviorParams, Context, Output
+from behaviors.preview import MotionPreview, Predicted, PreviewEnds
+
+MAX_PREVIEW_STEPS = 100  # a preview follows a plan this many steps at most (a plan looping until a measurement)
 
 
 class StepFailed(Exception):
@@ -61,6 +64,11 @@ class Composite(Behavior):
         self.done_s = 0.0  # [s] taken by the children that have ended
         self.phase = ""
         self.steps_log: list[dict[str, Any]] = []
+        self.step_mode = False  # hold before each new phase until allow_next_phase (mc_rtc's step-by-step FSM)
+        self.permits = 0  # phases allowed to start in step mode
+        self.pending: Behavior | None = None  # the next phase's first child, held
+        self.held_s = 0.0  # [s] spent held between phases (added to the nominal duration)
+        self._started_phase: str | None = None
 
     # ---- to write in subclasses ----------------------------------------------------------------------------------
     def plan(self, ctx: Context) -> Plan:  # pragma: no cover - abstract generator
@@ -80,7 +88,65 @@ class Composite(Behavior):
     # ---- the Behavior interface --------------------------------------------------------------------------------
     def nominal_duration_s(self) -> float:
         current = self.child.nominal_duration_s() if self.child is not None else 0.0
-        return self.done_s + current + self.remaining_estimate_s
+        return self.done_s + current + self.remaining_estimate_s + self.held_s
+
+    # ---- step mode ----------------------------------------------------------------------------------------------
+    def hold_between_phases(self) -> bool:
+        self.step_mode = True
+        self.permits = 1  # the step that starts the run runs the first phase
+        return True
+
+    def allow_next_phase(self) -> str:
+        self.permits += 1
+        return self.phase
+
+    @property
+    def waiting(self) -> bool:
+        """Held between phases in step mode."""
+        return self.pending is not None
+
+    def _held(self, child: Behavior) -> bool:
+        """Step mode: whether `child`, the first of a new phase, must wait for allow_next_phase."""
+        if not self.step_mode or self.phase == self._started_phase:
+            return False
+        if self.permits <= 0:
+            self.pending = child
+            return True
+        self.permits -= 1
+        self._started_phase = self.phase
+        return False
+
+    # ---- preview: the plan followed on the robot as each step is planned to leave it ------------------------------
+    def preview(self, ctx: Context, predicted: Predicted, into: MotionPreview, phase: str) -> Predicted:
+        twin = type(self)(self.params)  # this behaviour's own plan, on a copy (nothing of this run changes)
+        twin.ctx = ctx
+        gen = twin.plan(ctx)
+        finished: Behavior | None = None
+        try:
+            for _ in range(MAX_PREVIEW_STEPS):
+                child = gen.send(finished) if finished is not None else next(gen)
+                name = twin.phase or child.name
+                if not isinstance(child, Wait) and (not into.phases or into.phases[-1]["phase"] != name):
+                    into.phases.append({"phase": name, "behavior": child.name})
+                predicted = child.preview(twin._child_ctx(twin.ctx), predicted, into, name)
+                twin.ctx = Context(ctx.time_s, ctx.elapsed_s, ctx.dt_s, predicted.view, ctx.commands)
+                child.outcome = (True, "previewed")
+                finished = child
+            else:
+                into.ends = (f"the preview ends in phase {twin.phase!r}: the plan repeats its steps until what the "
+                             "robot measures says it is done")
+        except StopIteration:
+            pass
+        except StepFailed as exc:
+            into.ends = f"the plan would fail: {exc}"
+        except PreviewEnds as exc:
+            into.ends = f"the preview ends in phase {twin.phase!r}: {exc}"
+        except Exception as exc:  # noqa: BLE001 - the plan read what a step only knows once it has run
+            into.ends = (f"the preview ends in phase {twin.phase!r}: the plan reads what its step measured "
+                         f"({type(exc).__name__}: {exc})")
+        finally:
+            gen.close()
+        return predicted
 
     def progress(self, ctx: Context) -> float:
         if not self.phases:
@@ -113,19 +179,42 @@ class Composite(Behavior):
             except StepFailed as exc:
                 self.child = None
                 return self.fail(str(exc))
-            self.child = child
-            self.child_started_s = ctx.elapsed_s
-            try:
-                child.start(self._child_ctx(ctx))
-            except Exception as exc:  # noqa: BLE001 - the step is refused: the behaviour fails, naming it
+            if self._held(child):
                 self.child = None
-                return self.fail(f"{self.phase or child.name}: {child.name} refused: {exc}")
+                return None
+            started = self._start_child(ctx, child)
+            if started is not None:
+                return started
             if child.outcome is None:
                 return None
             finished = child  # ended at its start: give it back at once
 
+    def _start_child(self, ctx: Context, child: Behavior) -> Output | None:
+        """Start the plan's next child; an Output (failed) when its start refused it."""
+        self.child = child
+        self.child_started_s = ctx.elapsed_s
+        try:
+            child.start(self._child_ctx(ctx))
+        except Exception as exc:  # noqa: BLE001 - the step is refused: the behaviour fails, naming it
+            self.child = None
+            return self.fail(f"{self.phase or child.name}: {child.name} refused: {exc}")
+        return None
+
     def step(self, ctx: Context) -> Output:
         self.ctx = ctx
+        if self.pending is not None:
+            if self.permits <= 0:
+                self.held_s += ctx.dt_s
+                return NOTHING
+            child, self.pending = self.pending, None
+            self.permits -= 1
+            self._started_phase = self.phase
+            started = self._start_child(ctx, child)
+            if started is not None:
+                return started
+            if child.outcome is not None:  # ended at its start: give it back at once
+                ended = self._advance(ctx, child)
+                return NOTHING if ended is None else ended
         child = self.child
         if child is None:
             return NOTHING

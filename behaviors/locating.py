@@ -54,6 +54,12 @@ class LocateObject(Composite):
     def points(self) -> tuple[str, ...]:
         return ("head", "walk")
 
+    def preview(self, ctx: Context, predicted, into, phase: str):
+        """Taken as finding the object where it is remembered (the plan that follows reads the memory); not
+        remembered yet, what follows cannot be planned before it is located."""
+        ctx.commands.recalled(self.object_name)  # the preview's commands end the preview when it is not there
+        return predicted
+
     def _look(self, target) -> LookAt:
         return LookAt(LookAtParams(x_m=float(target[0]), y_m=float(target[1]), z_m=float(target[2]),
                                    rate_deg_s=self.params.rate_deg_s, tolerance_deg=2.0))

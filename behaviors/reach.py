@@ -12,6 +12,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output, held_by_collision
+from behaviors.preview import MotionPreview, Predicted, line_in_world, point_moved
 from behaviors.servo import min_jerk_duration_s, min_jerk_rate, rotation_vector
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.kinematics.rotations import rpy_to_matrix
@@ -54,12 +55,26 @@ class Reach(Behavior):
         R_goal = self.R_goal if self.R_goal is not None else self.R0
         return e_p, rotation_vector(pose.R_feet_point, R_goal)
 
+    def _plan_from(self, view: OperationView) -> None:
+        """The whole move from where the hand is in `view`: its start orientation, goal orientation, and the
+        position and rotation to go (F)."""
+        p = self.params
+        self.R0 = np.array(view.points[p.hand].R_feet_point)
+        self.R_goal = None if p.keep_orientation else rpy_to_matrix(np.radians([p.roll_deg, p.pitch_deg, p.yaw_deg]))
+        self.dp_m, self.dw_rad = self._errors(view)
+
+    def preview(self, ctx: Context, predicted: Predicted, into: MotionPreview, phase: str) -> Predicted:
+        """The hand's straight line (the plan `start` makes), and the hand at its goal."""
+        self._plan_from(predicted.view)
+        p0 = predicted.view.points[self.params.hand].p_feet_m
+        into.hand_paths.append((phase, self.params.hand, line_in_world(predicted.view, p0, p0 + self.dp_m)))
+        R_end = self.R_goal if self.R_goal is not None else self.R0
+        view = point_moved(predicted.view, self.params.hand, p0 + self.dp_m, R_end)
+        return Predicted(view, predicted.soles)
+
     def start(self, ctx: Context) -> None:
         p = self.params
-        pose = ctx.require_view().points[p.hand]
-        self.R0 = np.array(pose.R_feet_point)
-        self.R_goal = None if p.keep_orientation else rpy_to_matrix(np.radians([p.roll_deg, p.pitch_deg, p.yaw_deg]))
-        self.dp_m, self.dw_rad = self._errors(ctx.view)  # the whole move, in F
+        self._plan_from(ctx.require_view())  # the whole move, in F
         self.plan_s = max(min_jerk_duration_s(float(np.linalg.norm(self.dp_m)), p.speed_m_s, ctx.dt_s),
                           min_jerk_duration_s(float(np.linalg.norm(self.dw_rad)), math.radians(p.angular_speed_deg_s),
                                               ctx.dt_s))

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
 from behaviors.perception.worker import LOCATORS, RECOGNITION_DELAY_S, PendingRecognition, recognition_dict
+from behaviors.preview import PreviewEnds
 
 CAMERA = "narrow_left"  # the narrow stereo pair's left camera, with the depth registered to it
 #: [s] paced, how late a result may come and still count (a run fails at 1.5 times the nominal duration). The
@@ -30,6 +31,9 @@ class Recognise(Behavior):
 
     def nominal_duration_s(self) -> float:
         return RECOGNITION_DELAY_S + RECOGNITION_LATE_S
+
+    def preview(self, ctx: Context, predicted, into, phase: str):
+        raise PreviewEnds(f"what follows depends on recognising the {self.params.object} in the camera's image")
 
     def start(self, ctx: Context) -> None:
         self.pending = PendingRecognition(ctx.commands, CAMERA, self.params.object)

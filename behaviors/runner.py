@@ -12,6 +12,7 @@ from typing import Any, Protocol
 
 from behaviors.base import OVERRUN_FACTOR, Behavior, Commands, Context, Output
 from behaviors.causes import run_cause
+from behaviors.preview import MotionPreview, Predicted, PreviewCommands, PreviewEnds
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName
 from controller.core.types import WalkCommand
 from controller.operation.points import OperationView, Twist, check_twist, sum_per_point
@@ -20,6 +21,7 @@ log = logging.getLogger(__name__)
 
 KEEP_FINISHED = 64  # finished runs kept for GET /api/behaviors/runs/{id}
 STATES = ("running", "succeeded", "failed", "cancelled")
+RUN_MODES = ("run", "step")  # without pauses; held before each phase until advance()
 
 
 @dataclass(frozen=True)
@@ -60,12 +62,15 @@ class RunStatus:
     ended_s: float | None
     nominal_duration_s: float
     cause: str | None = None  # failed or cancelled: the cause its message names (behaviors.causes), else None
+    mode: str = "run"  # run: without pauses; step: held before each phase until POST .../step
+    waiting: bool = False  # step mode: held before its next phase
 
     def to_dict(self) -> dict[str, Any]:
         return {"id": self.id, "behavior": self.behavior, "params": self.params, "state": self.state,
                 "progress": self.progress, "message": self.message, "result": self.result,
                 "points": list(self.points), "started_s": self.started_s, "ended_s": self.ended_s,
-                "nominal_duration_s": self.nominal_duration_s, "cause": self.cause}
+                "nominal_duration_s": self.nominal_duration_s, "cause": self.cause,
+                "mode": self.mode, "waiting": self.waiting}
 
 
 @dataclass
@@ -81,13 +86,15 @@ class _Run:
     ended_s: float | None = None
     result: dict[str, Any] = field(default_factory=dict)
     drove_walk: bool = False  # it sent a walk command: on an interruption, one zero command follows
+    mode: str = "run"
 
     def status(self) -> RunStatus:
         b = self.behavior
         return RunStatus(id=self.id, behavior=b.name, params=b.params.to_dict(), state=self.state,
                          progress=round(self.progress, 4), message=self.message, result=dict(self.result),
                          points=self.resources, started_s=self.started_s, ended_s=self.ended_s,
-                         nominal_duration_s=b.nominal_duration_s(),
+                         nominal_duration_s=b.nominal_duration_s(), mode=self.mode,
+                         waiting=self.state == "running" and bool(getattr(b, "waiting", False)),
                          cause=run_cause(self.message) if self.state in ("failed", "cancelled") else None)
 
 
@@ -135,9 +142,12 @@ class BehaviorRunner:
         return f"BehaviorRunner(running={[r.behavior.name for r in self._running.values()]})"
 
     # ---- commands (at a tick boundary) -------------------------------------------------------------------------
-    def run(self, behavior: Behavior, time_s: float | None = None) -> int:
+    def run(self, behavior: Behavior, time_s: float | None = None, mode: str = "run") -> int:
         """Start `behavior` now; returns its run id. Raises InvalidState when a running behaviour drives one
-        of its points, InvalidCommand when the chain lacks what it needs, or what its start raised."""
+        of its points, InvalidCommand when the chain lacks what it needs, or what its start raised. `mode`
+        "step": the run holds before each of its phases until `advance` (a behaviour of one phase just runs)."""
+        if mode not in RUN_MODES:
+            raise InvalidCommand(f"mode: {mode!r} is not one of {list(RUN_MODES)}")
         now = self._time_s if time_s is None else float(time_s)
         points = tuple(behavior.points())
         resources = tuple(dict.fromkeys((*points, *behavior.resources())))
@@ -152,7 +162,9 @@ class BehaviorRunner:
             if shared:
                 raise InvalidState(f"{behavior.name} refused: {shared} driven by run {other.id} "
                                    f"({other.behavior.name}); cancel it or wait until it ends")
-        run = _Run(self._next_id, behavior, now, points, resources)
+        run = _Run(self._next_id, behavior, now, points, resources, mode=mode)
+        if mode == "step":
+            behavior.hold_between_phases()
         behavior.start(self._context(run, now, self._placed_view(op)))  # may raise: the run is refused
         self._next_id += 1
         self._running[run.id] = run
@@ -171,6 +183,38 @@ class BehaviorRunner:
         if self._running or self._finished:
             raise InvalidState("run ids can only be set before the first run")
         self._next_id = int(next_id)
+
+    def advance(self, run_id: int) -> RunStatus:
+        """Step mode: let run `run_id` start its next phase (it then holds again before the one after)."""
+        run = self._running.get(run_id)
+        if run is None:
+            if run_id in self._finished:
+                raise InvalidState(f"run {run_id} has ended ({self._finished[run_id].state}): nothing to step")
+            raise UnknownName(f"no run {run_id}; runs: {self.ids()}")
+        if run.mode != "step":
+            raise InvalidState(f"run {run_id} ({run.behavior.name}) runs without pauses (mode 'run'): nothing to "
+                               "step; start it with mode 'step'")
+        run.behavior.allow_next_phase()
+        self.version += 1
+        return run.status()
+
+    def preview(self, behavior: Behavior) -> MotionPreview:
+        """What `behavior` would do if it started now: its own plan followed on the robot as each step is planned
+        to leave it (behaviors.preview); nothing is commanded."""
+        view = self._placed_view(self._op())
+        if view is None:
+            raise InvalidCommand(f"{behavior.name}: a preview needs the operation layer's view ('op'): the layer "
+                                 "is not in the chain, or has not ticked yet")
+        ctx = Context(time_s=self._time_s, elapsed_s=0.0, dt_s=self.dt_s, view=view,
+                      commands=PreviewCommands(self.commands))
+        into = MotionPreview(behavior.name)
+        if not hasattr(behavior, "plan"):
+            into.phases.append({"phase": behavior.name, "behavior": behavior.name})
+        try:
+            behavior.preview(ctx, Predicted(view), into, behavior.name)
+        except PreviewEnds as exc:
+            into.ends = f"the preview ends: {exc}"
+        return into
 
     def cancel(self, run_id: int) -> RunStatus:
         run = self._running.get(run_id)

@@ -4,9 +4,13 @@ plan the height is checked against the goal."""
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
+from behaviors.preview import MotionPreview, Predicted, line_in_world, point_moved
 from behaviors.servo import min_jerk_duration_s, min_jerk_rate
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.operation.points import Twist
@@ -34,6 +38,15 @@ class Squat(Behavior):
 
     def nominal_duration_s(self) -> float:
         return getattr(self, "plan_s", 2.0 * abs(self.params.depth_m) / self.params.speed_m_s) + SETTLE_S + 0.5
+
+    def preview(self, ctx: Context, predicted: Predicted, into: MotionPreview, phase: str) -> Predicted:
+        """The waist's vertical line down by depth_m (the plan `start` makes)."""
+        waist = predicted.view.points["waist"]
+        end = waist.p_feet_m - np.array((0.0, 0.0, self.params.depth_m))
+        into.hand_paths.append((phase, "waist", line_in_world(predicted.view, waist.p_feet_m, end)))
+        view = point_moved(predicted.view, "waist", end, waist.R_feet_point)
+        view = dataclasses.replace(view, waist_height_m=predicted.view.waist_height_m - self.params.depth_m)
+        return Predicted(view, predicted.soles)
 
     def start(self, ctx: Context) -> None:
         self.h0_m = ctx.require_view().waist_height_m

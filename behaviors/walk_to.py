@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output
+from behaviors.preview import MotionPreview, Predicted, feet_moved, last_soles, mid_of
 from behaviors.servo import rot_z, wrap_rad
 from controller.operation.points import OperationView
 
@@ -53,6 +54,16 @@ class WalkTo(Behavior):
         self.plan_s = 0.0
         self.corrections_made = 0
         self._go(ctx, d, dtheta)
+
+    def preview(self, ctx: Context, predicted: Predicted, into: MotionPreview, phase: str) -> Predicted:
+        """The first goPos's footsteps, as `start` would ask for them (the corrections depend on where it lands)."""
+        d, dtheta = self._errors(predicted.view)
+        steps = ctx.commands.plan_go_pos(float(d[0]), float(d[1]), float(dtheta), predicted.soles)
+        into.footsteps.extend((phase, s) for s in steps)
+        soles = last_soles(steps, predicted.soles)
+        p = self.params
+        x, y, yaw = mid_of(*soles) if soles is not None else (p.x_m, p.y_m, math.radians(p.theta_deg))
+        return Predicted(feet_moved(predicted.view, x, y, yaw), soles)
 
     def _go(self, ctx: Context, d: np.ndarray, dtheta: float) -> None:
         """One goPos to the goal as the feet frame sees it now."""

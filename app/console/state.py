@@ -203,7 +203,10 @@ def run_model() -> type[BaseModel]:
             nominal_duration_s=(float, Field(description="how long it should take; it fails at 1.5 x [s]")),
             cause=(Literal[tuple(RUN_CAUSES)] | None, Field(
                 default=None, description="a failed or cancelled run: the cause its message names, from a closed "
-                                          "set (behaviors.causes); null otherwise or when it names none")))
+                                          "set (behaviors.causes); null otherwise or when it names none")),
+            mode=(Literal["run", "step"], Field(default="run", description="step: it holds before each phase")),
+            waiting=(bool, Field(default=False, description="step mode: held before its next phase (POST "
+                                                            "/api/behaviors/runs/{id}/step starts it)")))
     return _NAMED["RunStatus"]
 
 

@@ -30,6 +30,7 @@ from app.console.viewer_markers import (
 from app.console.viewer_meshes import add_model
 from app.console.viewer_origin import viser_with_origin_check
 from app.console.viewer_plots import PLOT_RANGE_MM, PLOT_RATE_HZ, CpErrorHistory, add_cp_plot, cp_legend
+from app.console.viewer_preview import PreviewGhost
 from app.console.viser_wakeup import wake_stuck_buffers
 from app.service import OperatorService, ServiceError
 from robot.plant import scene_path
@@ -65,6 +66,7 @@ class Viewer:
         self._plot_updates = 0
         self._follower = CameraFollower()
         self._balance_markers = BalanceMarkers(self.server.scene)
+        self.ghost = PreviewGhost(self.server.scene)  # a behaviour's preview (app/console/viewer_preview.py)
         self._build_scene()
         self._build_gui()
         self._stop = threading.Event()
@@ -253,6 +255,7 @@ class Viewer:
                 if n % max(1, int(self.rate_hz / 5)) == 0:
                     self._update_gui(snap)
                     self._update_recognitions(self.service.recognitions())
+                    self.ghost.update(*self.service.ghost())
                 if n % max(1, round(self.rate_hz / PLOT_RATE_HZ)) == 0:
                     self._update_plot(snap)
                 if n % max(1, round(self.rate_hz * WAKE_PERIOD_S)) == 0:

@@ -23,7 +23,11 @@ from app.service.verbs import (
     WalkStop,
 )
 from behaviors.base import Capture, JointReading
+from behaviors.preview import PlannedStep
+from controller.balance.leg_odometry import control_to_world, world_to_control
 from controller.walking.close_stance import closing_duration_s
+from controller.walking.footsteps import Footstep
+from controller.walking.footsteps import go_pos as plan_go_pos_footsteps
 from robot.names import FORCE_SENSOR_NAMES, joint_index
 
 
@@ -49,6 +53,22 @@ class HostCommands:
         self._apply(verb)
         _, footsteps = self._apply(GetFootsteps())
         return float(sum(f.step_time_s for f in footsteps))
+
+    def plan_go_pos(self, x_m: float, y_m: float, theta_rad: float, soles: tuple | None = None
+                    ) -> list[PlannedStep]:
+        """The footsteps the AutoBalancer's goPos (its gait generator's planner, its footstep parameters and
+        stride limits) would walk from standing, in the world of leg odometry, without walking."""
+        gait = self.host.layer("abc").gait
+        wfc = self.host.world_from_control() or (0.0, 0.0, 0.0, 0.0)
+        if soles is None:
+            T_r, T_l = gait.T_world_rfoot, gait.T_world_lfoot
+        else:
+            z = float(gait.T_world_rfoot[2, 3])
+            T_r, T_l = (Footstep(leg, *world_to_control(wfc, (s.x_m, s.y_m, 0.0))[:2], z, s.yaw_rad - wfc[3]
+                                 ).T_world_foot for leg, s in zip(("rleg", "lleg"), soles, strict=True))
+        steps = plan_go_pos_footsteps(T_r, T_l, x_m, y_m, theta_rad, gait.footstep_params, gait.stride_limits)
+        return [PlannedStep("right" if f.leg == "rleg" else "left", *control_to_world(wfc, (f.x, f.y, f.z))[:2],
+                            f.yaw + wfc[3]) for f in steps]
 
     def walk_stop(self) -> None:
         self._apply(WalkStop())

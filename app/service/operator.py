@@ -35,6 +35,7 @@ from app.service.verbs import (
     InjectFault,
     ListRuns,
     PlaceObject,
+    PreviewBehavior,
     Push,
     ReleaseEstop,
     ReleaseMotion,
@@ -52,6 +53,7 @@ from app.service.verbs import (
     StartImpedance,
     StartLayer,
     StartRecording,
+    StepRun,
     StopImpedance,
     StopLayer,
     StopMotion,
@@ -101,6 +103,7 @@ class OperatorService:
         self._camera = None  # the camera view, made when first watched
         self._claims = PointClaims()  # who streams to which point, whose each recent setpoint was
         self._claims_lock = threading.Lock()
+        self._ghost: tuple[int, dict | None] = (0, None)  # the last preview the 3D view draws (version, preview)
 
     def __repr__(self) -> str:
         return f"OperatorService({self.robot!r})"
@@ -320,9 +323,26 @@ class OperatorService:
                                   f"{timeout_s:g} s")
             time.sleep(0.002)
 
-    def run_behavior(self, name: str, params: Mapping[str, Any] | None = None) -> int:
-        """Start a behaviour; its run id. Parameters are plain JSON values (see list_behaviors)."""
-        return self.run(RunBehavior(name, tuple((params or {}).items())))
+    def run_behavior(self, name: str, params: Mapping[str, Any] | None = None, mode: str = "run") -> int:
+        """Start a behaviour; its run id. Parameters are plain JSON values (see list_behaviors); `mode` "step"
+        holds it before each phase until `step_run`."""
+        return self.run(RunBehavior(name, tuple((params or {}).items()), mode))
+
+    def preview_behavior(self, name: str, params: Mapping[str, Any] | None = None) -> dict:
+        """What a behaviour would do if it started now (behaviors.preview); kept as the 3D view's ghost."""
+        preview = self.run(PreviewBehavior(name, tuple((params or {}).items())))
+        self._ghost = (self._ghost[0] + 1, preview)
+        return preview
+
+    def clear_preview(self) -> None:
+        self._ghost = (self._ghost[0] + 1, None)
+
+    def ghost(self) -> tuple[int, dict | None]:
+        """(version, the last preview or None once cleared): the 3D view redraws when the version changes."""
+        return self._ghost
+
+    def step_run(self, run_id: int):
+        return self.run(StepRun(int(run_id)))
 
     def cancel_run(self, run_id: int):
         return self.run(CancelRun(int(run_id)))

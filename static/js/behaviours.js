@@ -3,6 +3,7 @@
 import {api, headers, log, post, postLogged, say} from "./api.js";
 import {$, el, fmt, xyz} from "./dom.js";
 import {estop} from "./estop.js";
+import {MOVERS, confirmSwitch, showPreview, startOrPreview} from "./preview.js";
 
 let behaviors = [];
 export const myRuns = new Set();  // the runs this page started (its dialogue says so)
@@ -10,7 +11,8 @@ export const myRuns = new Set();  // the runs this page started (its dialogue sa
 export async function loadBehaviors() {
   behaviors = await api("GET", "/api/behaviors") || [];
   $("behaviors").replaceChildren(...behaviors.map((b) => el("button", {type: "button", text: b.name, title: b.summary,
-                                                                        "data-behavior": b.name, onclick: () => openForm(b)})));
+                                                                        "data-behavior": b.name, onclick: () => openForm(b)})),
+                                 confirmSwitch());
 }
 
 function rangeText(p) {
@@ -57,14 +59,16 @@ function openForm(b) {
              el("span", {class: "range", text: rangeText(p), title: p.doc || ""}));
   }
   f.append(el("div", {class: "span row"}, el("button", {type: "submit", text: `Start ${b.name}`}),
+              MOVERS.has(b.name) ? el("button", {type: "button", text: "Preview", onclick: () => {
+                const body = formBody(b);
+                if (body) showPreview(b.name, body, `${b.name} ${JSON.stringify(body)}`, startBehavior);
+              }}) : "",
               el("button", {type: "button", text: "Close", onclick: () => { f.hidden = true; }})));
   f.dataset.behavior = b.name;
   f.hidden = false;
 }
 
-$("behavior-form").addEventListener("submit", (e) => {
-  e.preventDefault();
-  const b = behaviors.find((x) => x.name === $("behavior-form").dataset.behavior);
+function formBody(b) {
   const body = {};
   for (const p of b.params) {
     const input = $(`bp-${b.name}-${p.name}`);
@@ -72,15 +76,22 @@ $("behavior-form").addEventListener("submit", (e) => {
     else if (p.type === "number") body[p.name] = Number(input.value);
     else if (p.type === "integer") body[p.name] = Math.round(Number(input.value));
     else if (p.type === "array") {
-      try { body[p.name] = JSON.parse(input.value || "[]"); } catch (err) { say(`${p.name}: not JSON (${err.message})`, true); return; }
+      try { body[p.name] = JSON.parse(input.value || "[]"); } catch (err) { say(`${p.name}: not JSON (${err.message})`, true); return null; }
     } else body[p.name] = input.value;
   }
-  startBehavior(b.name, body, `${b.name} ${JSON.stringify(body)}`);
+  return body;
+}
+
+$("behavior-form").addEventListener("submit", (e) => {
+  e.preventDefault();
+  const b = behaviors.find((x) => x.name === $("behavior-form").dataset.behavior);
+  const body = formBody(b);
+  if (body) startOrPreview(b.name, body, `${b.name} ${JSON.stringify(body)}`, startBehavior);
 });
 
-export async function startBehavior(name, body, shown) {
+export async function startBehavior(name, body, shown, mode = "run") {
   log(`${shown}`, "cmd");
-  const d = await post(`/api/behaviors/${name}`, body);
+  const d = await post(`/api/behaviors/${name}${mode === "step" ? "?mode=step" : ""}`, body);
   if (d) { myRuns.add(d.id); log(d.message, "ok", {who: "robot", details: d}); }
   return d;
 }
@@ -191,7 +202,7 @@ $("command-form").addEventListener("submit", async (e) => {
     else {
       const {name, body, places} = await parseCommand(text);
       if (places.length) { log(`${text}`, "cmd"); for (const p of places) log(p, "ok"); }
-      await startBehavior(name, body, places.length ? `${name} ${JSON.stringify(body)}` : text);
+      await startOrPreview(name, body, places.length ? `${name} ${JSON.stringify(body)}` : text, startBehavior);
     }
     $("command").value = "";
   } catch (err) {

@@ -6,14 +6,14 @@ Each behaviour has its own POST route whose body schema is generated from its Pa
 import dataclasses
 from typing import Annotated, Any, Literal, Union
 
-from fastapi import APIRouter, Body, Path, Request
+from fastapi import APIRouter, Body, Path, Query, Request
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, create_model
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
 from app.console.deps import ServiceDep
 from app.console.errors import errors
-from app.console.schemas import BehaviorDoc, RunStarted
+from app.console.schemas import BehaviorDoc, Ok, RunStarted
 from app.console.state import jsonable, run_model
 from behaviors.base import BehaviorParams
 from behaviors.registry import BEHAVIORS
@@ -88,27 +88,71 @@ def list_behaviors(service: ServiceDep) -> list[dict[str, Any]]:
     return jsonable(service.list_behaviors())
 
 
+Mode = Annotated[Literal["run", "step"], Query(description="run: without pauses (the default); step: the run "
+                                                            "holds before each of its phases until POST "
+                                                            "/api/behaviors/runs/{id}/step (the first runs at once)")]
+
+
+class PlannedStepDoc(BaseModel):
+    side: Literal["right", "left"]
+    x_m: float = Field(description="sole frame origin, world x [m] (leg odometry)")
+    y_m: float = Field(description="world y [m]")
+    yaw_rad: float = Field(description="heading, world yaw [rad]")
+    phase: str = Field(description="the phase of the plan it belongs to")
+
+
+class PathDoc(BaseModel):
+    phase: str
+    hand: str = Field(description="the operational point: rhand, lhand, waist")
+    points_m: list[list[float]] = Field(description="its straight line, world (x, y, z) [m]")
+
+
+class BehaviorPreview(BaseModel):
+    behavior: str
+    footsteps: list[PlannedStepDoc] = Field(description="planned footsteps, the first the current support foot")
+    hand_paths: list[PathDoc]
+    phases: list[dict[str, str]] = Field(description="the plan's phases in order: {phase, behavior}")
+    complete: bool = Field(description="false: the preview ends before the plan's end (`ends` says why)")
+    ends: str
+
+
+def _values(name: str, params: BaseModel | None) -> dict[str, Any]:
+    values = {} if params is None else params.model_dump(exclude_unset=True)
+    if name == "sequence":
+        values = {"steps": [{"behavior": s["behavior"], "params": s.get("params", {})} for s in values["steps"]]}
+    return values
+
+
 def _add_run_route(name: str) -> None:
     cls = BEHAVIORS[name]
     model = params_model(cls.Params, f"{cls.Params.__name__}Body")
     required = name == "sequence"
 
-    def start(service: ServiceDep, params: Annotated[model | None, Body()] = None) -> RunStarted:  # type: ignore
-        values = {} if params is None else params.model_dump(exclude_unset=True)
-        if name == "sequence":
-            values = {"steps": [{"behavior": s["behavior"], "params": s.get("params", {})} for s in values["steps"]]}
-        run_id = service.run_behavior(name, values)
-        return RunStarted(id=run_id, message=f"{name} started (run {run_id})")
+    def start(service: ServiceDep, params: Annotated[model | None, Body()] = None,  # type: ignore
+              mode: Mode = "run") -> RunStarted:
+        run_id = service.run_behavior(name, _values(name, params), mode)
+        return RunStarted(id=run_id, message=f"{name} started (run {run_id}{', step mode' if mode == 'step' else ''})")
+
+    def preview(service: ServiceDep, params: Annotated[model | None, Body()] = None) -> dict:  # type: ignore
+        return jsonable(service.preview_behavior(name, _values(name, params)))
 
     if required:
-        def start_sequence(service: ServiceDep, params: Annotated[model, Body()]) -> RunStarted:  # type: ignore
-            return start(service, params)
-        endpoint = start_sequence
+        def start_sequence(service: ServiceDep, params: Annotated[model, Body()],  # type: ignore
+                           mode: Mode = "run") -> RunStarted:
+            return start(service, params, mode)
+
+        def preview_sequence(service: ServiceDep, params: Annotated[model, Body()]) -> dict:  # type: ignore
+            return preview(service, params)
+        endpoint, preview_endpoint = start_sequence, preview_sequence
     else:
-        endpoint = start
+        endpoint, preview_endpoint = start, preview
     router.add_api_route(f"/{name}", endpoint, methods=["POST"], response_model=RunStarted, responses=_RUN_ERRORS,
                          summary=f"Start `{name}`: {cls.summary} (body: its parameters; omitted: defaults)",
                          name=f"run_{name}")
+    router.add_api_route(f"/{name}/preview", preview_endpoint, methods=["POST"], response_model=BehaviorPreview,
+                         responses=errors(404, 409, 422),
+                         summary=f"Preview `{name}`: its planned footsteps and hand paths from its own plan, drawn "
+                                 "in the 3D view as a ghost; nothing moves", name=f"preview_{name}")
 
 
 for _name in sorted(BEHAVIORS):
@@ -121,7 +165,7 @@ async def unknown_behavior_handler(request: Request, exc: StarletteHTTPException
     detail = exc.detail
     path = request.url.path
     if exc.status_code == 404 and request.method == "POST" and path.startswith("/api/behaviors/"):
-        name = path.removeprefix("/api/behaviors/")
+        name = path.removeprefix("/api/behaviors/").removesuffix("/preview")
         detail = f"unknown behaviour {name!r}; valid: {', '.join(sorted(BEHAVIORS))}"
     return JSONResponse({"detail": detail}, status_code=exc.status_code, headers=getattr(exc, "headers", None))
 
@@ -139,6 +183,20 @@ def list_runs(service: ServiceDep) -> list[dict[str, Any]]:
             summary="One run: state (running, succeeded, failed, cancelled), progress 0..1, message, result")
 def get_run(run_id: RunId, service: ServiceDep) -> dict[str, Any]:
     return jsonable(service.get_run(run_id).to_dict())
+
+
+@router.post("/runs/{run_id}/step", response_model=RunStatusModel,
+             responses=errors(404, 409, e409="the run has ended, or runs without pauses (mode 'run')"),
+             summary="Step mode: let a run start its next phase; it holds again before the one after")
+def step_run(run_id: RunId, service: ServiceDep) -> dict[str, Any]:
+    return jsonable(service.step_run(run_id).to_dict())
+
+
+@router.delete("/preview", response_model=Ok, responses=errors(),
+               summary="Clear the preview's ghost from the 3D view")
+def clear_preview(service: ServiceDep) -> Ok:
+    service.clear_preview()
+    return Ok(message="preview cleared")
 
 
 @router.post("/runs/{run_id}/cancel", response_model=RunStatusModel, responses=errors(404),

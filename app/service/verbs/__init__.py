@@ -17,9 +17,11 @@ from app.service.verbs.behaviors import (
     GetRun,
     ListBehaviors,
     ListRuns,
+    PreviewBehavior,
     ResetOperationTargets,
     RunBehavior,
     SetOperatorVelocity,
+    StepRun,
     list_behaviors,
 )
 from app.service.verbs.layers import (
@@ -81,9 +83,11 @@ __all__ = ["Call", "CancelRun", "ChainTiming", "ClearSequence", "ConfirmRecognit
            "GetFootsteps", "GetInfo", "GetLoopTiming", "GetParams", "GetRun", "GoPos", "GoVelocity", "Host",
            "InjectFault", "ListBehaviors", "ListRuns", "MAX_FOOTSTEPS", "MAX_FOOTSTEP_POS_M", "MAX_GO_POS_M",
            "MAX_GO_POS_RAD", "MAX_MOTION_TIME_S", "MAX_OBJECT_XY_M", "MAX_OBJECT_Z_M", "MAX_POSITION_M",
-           "MAX_PUSH_DURATION_S", "MAX_PUSH_FORCE_N", "MAX_TARGET_POS_M", "MIN_MOTION_TIME_S", "PlaceObject", "Push",
+           "MAX_PUSH_DURATION_S", "MAX_PUSH_FORCE_N", "MAX_TARGET_POS_M", "MIN_MOTION_TIME_S", "PlaceObject",
+           "PreviewBehavior", "Push",
            "ReleaseEstop", "ReleaseMotion", "Reset", "ResetOperationTargets", "RobotInfo", "RunBehavior", "STARTABLE",
            "SequenceStatus", "SetFootsteps", "SetGroupSequence", "SetJointAngles", "SetJointAnglesSequence",
            "SetOperatorVelocity", "SetParams", "SetSomeJointAngles", "SetTargetPose", "Shutdown", "StartImpedance",
-           "StartLayer", "StartRecording", "StopImpedance", "StopLayer", "StopMotion", "StopRecording", "TARGET_LIMBS",
+           "StartLayer", "StartRecording", "StepRun",
+           "StopImpedance", "StopLayer", "StopMotion", "StopRecording", "TARGET_LIMBS",
            "Verb", "CloseStance", "WalkEmergencyStop", "WalkStop", "list_behaviors", "step_params", "typed_changes"]

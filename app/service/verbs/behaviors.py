@@ -4,7 +4,7 @@ confirms ([OP] II)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 from app.service.errors import InvalidArgument, NotFound
 from app.service.verbs.base import Host, Verb, check_bounded
@@ -50,8 +50,13 @@ class RunBehavior(Verb):
     motion = True
     behavior: str
     params: tuple[tuple[str, Any], ...] = ()
+    mode: str = "run"  # "step": held before each phase until StepRun (behaviors.runner.RUN_MODES)
 
     def __post_init__(self) -> None:
+        from behaviors.runner import RUN_MODES
+
+        if self.mode not in RUN_MODES:
+            raise InvalidArgument("mode", f"{self.mode!r} is not one of {list(RUN_MODES)}")
         self.build()  # checked where it is made: the field-named errors come back before anything is sent
 
     def build(self):
@@ -65,26 +70,53 @@ class RunBehavior(Verb):
             raise _behavior_argument(exc) from None
 
     def run(self, host: Host) -> int:
-        return host.runner.run(self.build(), host.loop.plant.time_s)
+        return host.runner.run(self.build(), host.loop.plant.time_s, self.mode)
 
 
 @dataclass(frozen=True)
-class CancelRun(Verb):
-    name = "cancel_run"
+class PreviewBehavior(RunBehavior):
+    """What a behaviour would do if it started now (behaviors.preview): its planned footsteps and hand paths
+    from its own plan; nothing moves."""
+
+    name = "preview_behavior"
+    motion = False
+    recorded = False
+
+    def run(self, host: Host) -> dict:
+        return host.runner.preview(self.build()).to_dict()
+
+
+@dataclass(frozen=True)
+class _OnRun(Verb):
+    """A verb on one run: the runner's method `action` called with its id."""
+
+    action: ClassVar[str]
     run_id: int
 
     def run(self, host: Host):
-        return host.runner.cancel(self.run_id)
+        return getattr(host.runner, self.action)(self.run_id)
 
 
 @dataclass(frozen=True)
-class GetRun(Verb):
+class StepRun(_OnRun):
+    """Step mode: let a run start its next phase."""
+
+    name = "step_run"
+    motion = True
+    action = "advance"
+
+
+@dataclass(frozen=True)
+class CancelRun(_OnRun):
+    name = "cancel_run"
+    action = "cancel"
+
+
+@dataclass(frozen=True)
+class GetRun(_OnRun):
     name = "get_run"
     recorded = False
-    run_id: int
-
-    def run(self, host: Host):
-        return host.runner.get(self.run_id)
+    action = "get"
 
 
 @dataclass(frozen=True)
