@@ -84,7 +84,7 @@ function at(values, name) {
 
 $("reset-form").addEventListener("submit", (e) => {
   e.preventDefault();
-  log(`> reset ${$("scene").value}`, "cmd");
+  log(`reset ${$("scene").value}`, "cmd");
   postLogged("/api/sim/reset", {scene: $("scene").value});
 });
 $("params-dump").addEventListener("click", async () => {
