@@ -303,8 +303,9 @@ def state_model() -> type[BaseModel]:
         loop_ms=(float, Field(description="wall time of the last tick, chain + physics [ms]")),
         loop=(loop, Field(description="how the loop keeps its deadlines")),
         operation=(dict[str, Any] | None, Field(
-            description="the operation layer per operational point (rhand, lhand, head, waist, walk): target, "
-                        "achieved, limited (null, 'reach', 'joint_limit', 'velocity' or 'motion_stop'), the "
+            description="the operation layer per operational point (rhand, lhand, head, waist, walk, rfoot, lfoot): "
+                        "target, achieved, limited (null, 'reach', 'joint_limit', 'velocity', 'motion_stop' or "
+                        "'balancing' (a foot waits for the COM to be over the other foot)), the "
                         "operator's (motion) and the behaviours' twists, feet frame F, the dead-man's state of the "
                         "operator's stream (deadman: 'streaming', 'ramping' or 'stopped'); null without the layer")),
         runs=(list[run_model()], Field(description="the behaviour runs kept, oldest first")),
