@@ -347,8 +347,10 @@ def ack_model() -> type[BaseModel]:
             time_s=(float, Field(description="that tick's control time: the dead-man's stamp [s]")),
             ignored=(str | None, Field(default=None, description="why it was not applied: 'hard_stop' (the hard "
                                                                  "e-stop was engaged), 'before_release' (sent "
-                                                                 "before the e-stop's release) or 'invalid' (out "
-                                                                 "of the point's ranges); null: applied")))
+                                                                 "before the e-stop's release), 'invalid' (out "
+                                                                 "of the point's ranges) or 'state' (not now: a "
+                                                                 "foot while walking or the other foot up, the "
+                                                                 "walk with a foot up); null: applied")))
     return _NAMED["SetpointAckState"]
 
 
