@@ -46,19 +46,23 @@ def integrate_foot(foot: str, offset_m: tuple, twist: Twist, speed_m_s: float,
     return clamped, VELOCITY if scale < 1.0 else None
 
 
+class PointRefused(InvalidCommand):
+    """A valid setpoint for a point that may not be driven now (the console acknowledges it as ignored: 'state')."""
+
+
 def check_foot_allowed(point: str, twist: Twist, walking: bool, targets) -> None:
-    """Raise InvalidCommand naming the point when a foot (or the walking point) may not be driven now: no foot
+    """Raise PointRefused naming the point when a foot (or the walking point) may not be driven now: no foot
     while walking, one foot at a time, no walking while a foot is operated."""
     if point in FEET:
         if walking:
-            raise InvalidCommand(f"{point}: refused while walking (the gait owns the feet); stop the walk first")
+            raise PointRefused(f"{point}: refused while walking (the gait owns the feet); stop the walk first")
         other = FEET[1 - FEET.index(point)]
         if other in targets:
-            raise InvalidCommand(f"{point}: the {other} is operated; one foot at a time (release it first)")
+            raise PointRefused(f"{point}: the {other} is operated; one foot at a time (release it first)")
     elif point == "walk" and not twist.is_zero:
         lifted = [f for f in FEET if f in targets]
         if lifted:
-            raise InvalidCommand(f"walk: refused while the {lifted[0]} is operated; release it (it is put down) "
+            raise PointRefused(f"walk: refused while the {lifted[0]} is operated; release it (it is put down) "
                                  "first")
 
 

@@ -161,6 +161,31 @@ def run(seed: int) -> FootCanResult:
                          sim_time_s=robot.loop.snapshot.time_s, wall_time_s=time.perf_counter() - wall0)
 
 
+def plot_trials(results: list[FootCanResult], out) -> None:
+    """Top view of the trials: each can's start, end and mark with the tolerance circle [m, world]."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 5))
+    for k, r in enumerate(results):
+        ax.plot(*r.can_start_m, "o", color="0.6", label="can start" if k == 0 else None)
+        ax.plot(*r.mark_m, "+", color="g", ms=10, label="mark" if k == 0 else None)
+        ax.add_patch(plt.Circle(r.mark_m, MARK_TOL_M, fill=False, color="g", lw=0.5))
+        ax.plot(*r.can_end_m, "x", color="r" if not r.succeeded else "b", label="can end" if k == 0 else None)
+        ax.annotate("", r.can_end_m, r.can_start_m, arrowprops={"arrowstyle": "->", "color": "0.7", "lw": 0.6})
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (forward) [m]")
+    ax.set_ylabel("y (left) [m]")
+    ok = sum(r.succeeded for r in results)
+    ax.set_title(f"foot-can: {ok}/{len(results)} within {1e3 * MARK_TOL_M:.0f} mm of the mark")
+    ax.legend(loc="upper left", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(out, dpi=100)
+    plt.close(fig)
+
+
 def main(argv) -> int:
     import argparse
 
@@ -169,18 +194,22 @@ def main(argv) -> int:
                                             "the foot streamed as an operational point by a scripted operator.")
     p.add_argument("--seed", type=int, default=0, help="the first trial's seed (the can's place, the mark)")
     p.add_argument("--trials", type=int, default=1, help="seeded trials: seed, seed + 1, ...")
+    p.add_argument("--plot", default=None, help="write a top view of the trials to this PNG")
     args = p.parse_args(list(argv))
     if args.trials < 1:
         p.error(f"--trials: {args.trials} must be >= 1")
-    ok = 0
+    ok, results = 0, []
     for seed in range(args.seed, args.seed + args.trials):
         r = run(seed)
         ok += r.succeeded
+        results.append(r)
         print(f"seed {seed}: can from ({r.can_start_m[0]:.3f}, {r.can_start_m[1]:.3f}) to ({r.can_end_m[0]:.3f}, "
               f"{r.can_end_m[1]:.3f}) m, mark ({r.mark_m[0]:.3f}, {r.mark_m[1]:.3f}): {1e3 * r.error_m:.1f} mm off, "
               f"tilted {r.tilt_deg:.1f} deg; cp error peak {r.cp_error_peak_mm:.0f} mm; {r.sim_time_s:.1f} s "
               f"simulated in {r.wall_time_s:.1f} s; {r.verdict}", flush=True)
     print(f"foot-can: {ok}/{args.trials} succeeded")
+    if args.plot:
+        plot_trials(results, args.plot)
     return 0 if ok == args.trials else 1
 
 
