@@ -126,7 +126,7 @@ def run(seed: int) -> FootCanResult:
     service = OperatorService(robot)
     can_x, can_y, ahead = draw(seed)
     robot.loop.run_for(SETTLE_S)
-    rsole = robot.loop.chain["abc"].last_gait.p_rsole_world  # (the plan's frame is the world's at the start)
+    rsole = robot.loop.snapshot.reference.gait.p_rsole_world  # (the plan's frame is the world's at the start)
     _, centre_y = sole_centre_offset_m(HRP2_RIGHT_SOLE)
     start = (float(rsole[0] + can_x), float(rsole[1] + centre_y + can_y))
     mark = (start[0] + ahead, start[1])
