@@ -147,8 +147,12 @@ class FootLift:
         if self.phase == "idle":
             return future
         direction = {"shifting": 1.0, "returning": -1.0}.get(self.phase, 0.0)
-        k = np.arange(len(future))
-        progress = np.clip(self.progress + direction * k * self.dt_s / SHIFT_TIME_S, 0.0, 1.0)
+        if direction == 0.0 or (direction > 0.0 and self.progress >= 1.0):  # held: one row repeated (as idle)
+            return np.broadcast_to(shifted_zmp(future[0], self._stance_centre(sample), np.float64(self.progress)),
+                                   future.shape)
+        wait_s = max(0.0, SETTLE_TIME_S - self.settled_s) if direction < 0.0 else 0.0  # returning: the pause first
+        t_s = np.maximum(0.0, np.arange(len(future)) * self.dt_s - wait_s)
+        progress = np.clip(self.progress + direction * t_s / SHIFT_TIME_S, 0.0, 1.0)
         return shifted_zmp(future[0], self._stance_centre(sample), progress)
 
     def sample(self, g):

@@ -102,3 +102,12 @@ def test_the_preview_carries_the_shift_ahead():
     assert future[0][:2] == pytest.approx((0.0, 0.0), abs=1e-6)
     assert future[-1][:2] == pytest.approx((0.015, -0.105))  # the right sole's centre, 2 s ahead
     assert np.all(np.diff(future[:, 1]) <= 1e-12)  # monotonic toward it
+
+
+def test_returning_the_preview_waits_for_the_pause_on_both_feet_then_carries_the_shift_back():
+    lift, g = FootLift(DT), _idle_sample()
+    lift.phase, lift.foot, lift.progress = "returning", "rfoot", 1.0
+    future = lift.zmp_preview(np.zeros((400, 3)), g)
+    pause = round(SETTLE_TIME_S / DT)
+    assert np.allclose(future[:pause + 1, :2], (0.015, 0.105))  # still over the left sole during the pause
+    assert future[-1][:2] == pytest.approx((0.0, 0.0), abs=1e-9)  # back in the middle 1.2 s later
