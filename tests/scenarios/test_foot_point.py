@@ -77,7 +77,7 @@ def test_rfoot_forward_and_up_while_standing_on_the_left_is_held_and_put_down():
     assert robot.phases == ["shifting", "lifted", "lowering", "returning", "idle"], robot.phases
     assert robot.min_stance_margin_m >= 0.02, robot.min_stance_margin_m  # measured 0.067 m
     back = robot.right_from_left() - robot.rest_m
-    assert np.linalg.norm(back) < 0.008, back  # measured 3.2 mm
+    assert np.linalg.norm(back) < 0.008, back  # measured 3.1 mm
     assert not robot.snap.layers["es"].stopped
 
 
