@@ -378,7 +378,11 @@ def _velocity_model(point: str) -> type[BaseModel]:
             "head": "gaze: angular (0, pitch, yaw) [deg/s], pitch > 0 looks down; linear unused",
             "waist": "waist: linear (0, 0, height rate) [m/s], angular BODY (roll, pitch, yaw) rates [deg/s]",
             "walk": "walking (goVelocity): linear (vx, vy, 0) [m/s], angular (0, 0, vtheta) [deg/s], and the "
-                    "step parameters"}
+                    "step parameters",
+            "rfoot": "right sole: linear (x, y, z) [m/s], angular unused; standing only, held up while streamed, "
+                     "put down when the stream stops",
+            "lfoot": "left sole: linear (x, y, z) [m/s], angular unused; standing only, held up while streamed, "
+                     "put down when the stream stops"}
     return create_model(f"{point.capitalize()}Velocity", __base__=StrictBody, __doc__=docs[point], **fields)
 
 

@@ -170,8 +170,9 @@ def state_model() -> type[BaseModel]:
         loop_ms=(float, Field(description="wall time of the last tick, chain + physics [ms]")),
         loop=(loop, Field(description="how the loop keeps its deadlines")),
         operation=(dict[str, Any] | None, Field(
-            description="the operation layer per operational point (rhand, lhand, head, waist, walk): target, "
-                        "achieved, limited (null, 'reach', 'joint_limit', 'velocity' or 'motion_stop'), the "
+            description="the operation layer per operational point (rhand, lhand, head, waist, walk, rfoot, lfoot): "
+                        "target, achieved, limited (null, 'reach', 'joint_limit', 'velocity', 'motion_stop' or "
+                        "'balancing' (a foot waits for the COM to be over the other foot)), the "
                         "operator's (motion) and the behaviours' twists, feet frame F, the dead-man's state of the "
                         "operator's stream (deadman: 'streaming', 'ramping' or 'stopped'); null without the layer")),
         runs=(list[run_model()], Field(description="the behaviour runs kept, oldest first")),
@@ -219,8 +220,10 @@ def ack_model() -> type[BaseModel]:
             time_s=(float, Field(description="that tick's control time: the dead-man's stamp [s]")),
             ignored=(str | None, Field(default=None, description="why it was not applied: 'hard_stop' (the hard "
                                                                  "e-stop was engaged), 'before_release' (sent "
-                                                                 "before the e-stop's release) or 'invalid' (out "
-                                                                 "of the point's ranges); null: applied")))
+                                                                 "before the e-stop's release), 'invalid' (out "
+                                                                 "of the point's ranges) or 'state' (not now: a "
+                                                                 "foot while walking or the other foot up, the "
+                                                                 "walk with a foot up); null: applied")))
     return _NAMED["SetpointAckState"]
 
 

@@ -70,6 +70,32 @@ def _teleop_stream(robot: LocalRobot) -> None:
     }, t)
 
 
+def _teleop_hand_stream(robot: LocalRobot) -> None:
+    """Standing, the right hand on a slow circle (0.05 m/s) in x-z, the left hand's and the head's as in 'teleop'."""
+    _teleop_standing(robot, "rhand")
+
+
+def _teleop_foot_stream(robot: LocalRobot) -> None:
+    """Standing, the right foot instead of the right hand: up first (the COM goes over the left foot, 1.6 s),
+    then on a slow ellipse (0.05 m/s across, 0.02 m/s up and down) in x-z; the left hand's and the head's as in 'teleop'."""
+    _teleop_standing(robot, "rfoot")
+
+
+def _teleop_standing(robot: LocalRobot, point: str) -> None:
+    t = robot.plant.time_s
+    c, s_ = math.cos(1.0 * t), math.sin(1.0 * t)
+    still = (0.0, 0.0, 0.0)
+    up = point == "rfoot" and t < TELEOP_WARMUP_S + 2.5  # (the foot point waits 1.6 s for the COM to shift)
+    robot.host.apply_setpoints({
+        point: Setpoint(point, (0.0, 0.0, 0.05) if up else (0.05 * c, 0.0, (0.02 if point == "rfoot" else 0.05) * s_),
+                        still),
+        "lhand": Setpoint("lhand", (0.05 * c, 0.0, -0.05 * s_), still),
+        "head": Setpoint("head", still, (0.0, 0.0, math.radians(20.0) * c)),
+    }, t)
+
+
+TELEOP_WARMUP_S = 2.5  # [s] standing before the timed part of the teleop scenarios
+
 # the catch: the push map's run 0.1 m/s, 20 N s from 135 deg at phase 0.6875 (app.lab.study.push_walking), one gait
 # cycle earlier; the walk goes straight ahead, so the direction in the robot's frame is the world's
 CATCH_WALK_START_S = 2.5  # [s] the warm-up's end: goVelocity
@@ -103,6 +129,12 @@ SCENARIOS: dict[str, Scenario] = {
     "teleop": Scenario("walk at 0.1 m/s through the operation layer's walking point while both hands and the "
                        "head are streamed through it every tick, after 2.5 s of standing", _teleop_walk,
                        warmup_s=2.5, needs=("op", "abc"), stream=_teleop_stream),
+    "teleop_hand": Scenario("standing, the right hand, the left hand and the head streamed through the operation "
+                            "layer every tick (the reference for teleop_foot)", _teleop_walk,
+                            warmup_s=TELEOP_WARMUP_S, needs=("op", "abc"), stream=_teleop_hand_stream),
+    "teleop_foot": Scenario("as teleop_hand with the right foot streamed instead of the right hand: the COM over "
+                            "the left foot, the sole lifted and moved on a circle", _teleop_walk,
+                            warmup_s=TELEOP_WARMUP_S, needs=("op", "abc"), stream=_teleop_foot_stream),
     "catch": Scenario(f"goVelocity(0.1 m/s) as 'walk', pushed {CATCH_PUSH_AFTER_S:g} s into the walk "
                       f"({CATCH_PUSH[1]:g} N s from {CATCH_PUSH[2]:g} deg, late in a swing): the capture step; "
                       "'catching' reports the ticks the emergency step is up (--duration 8 covers it whole)",

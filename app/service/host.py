@@ -27,6 +27,7 @@ from behaviors.perception.worker import prepare as prepare_recognition
 from behaviors.registry import BEHAVIORS  # noqa: F401 - imported here, not at the first behaviour's boundary
 from behaviors.runner import BehaviorRunner
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
+from controller.operation.foot_point import PointRefused
 from controller.core.layer import Params
 from controller.core.loop import Snapshot
 from controller.core.loop_timing import LoopTiming
@@ -589,6 +590,8 @@ def _applied(op, point: str, sp: Setpoint, time_s: float) -> str | None:
     ranges: the schemas and the door let none through, an edited session file might), so the loop goes on."""
     try:
         op.set_motion(point, sp.twist(), time_s, sp.walk())
+    except PointRefused:  # valid, not now: a foot while walking, the other foot up, a walk with a foot up
+        return "state"
     except (InvalidCommand, TypeError, ValueError):
         return "invalid"
     return None

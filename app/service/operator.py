@@ -247,6 +247,10 @@ class OperatorService:
         if sender is None:  # the console's own (scripts, the viewer's sticks): no request schema checked it
             checked(setpoint)
         now_s = self._refuse_setpoint()
+        abc = self.published().snapshot.layers.get("abc")
+        if setpoint.point in ("rfoot", "lfoot") and abc is not None and abc.walking and not setpoint.is_zero():
+            raise Refused("state", f"{setpoint.point}: refused while walking (the gait owns the feet); stop the "
+                                   "walk first")
         with self._claims_lock:
             self._claims.stale_s = self._stream_stale_s()
             self._claims.claim(setpoint, sender, now_s, override)
@@ -541,6 +545,9 @@ def ignored_message(reason: str) -> str:
         return "setpoint ignored: it was sent before the hard e-stop's release (nothing runs that was sent before)"
     if reason == "invalid":
         return "setpoint ignored: outside the point's ranges (the operation layer's check; see GET /api/config)"
+    if reason == "state":
+        return ("setpoint ignored: the point may not be driven now (a foot while walking, the other foot operated, "
+                "or the walking point while a foot is operated)")
     return f"setpoint ignored ({reason})"
 
 

@@ -9,7 +9,7 @@ import numpy as np
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
-__all__ = ["BalanceEstimate", "Estimate", "GaitState", "OdometryEstimate", "Ports", "Reference", "StepInProgress",
+__all__ = ["BalanceEstimate", "Estimate", "FootCommand", "GaitState", "OdometryEstimate", "Ports", "Reference", "StepInProgress",
            "TickContext", "WalkCommand", "frozen_array", "read_only"]
 
 
@@ -27,6 +27,15 @@ class WalkCommand:
     @property
     def is_zero(self) -> bool:
         return self.vx_m_s == 0.0 and self.vy_m_s == 0.0 and self.vtheta_rad_s == 0.0
+
+
+@dataclass(frozen=True, slots=True)
+class FootCommand:
+    """A foot operational point this tick (Ports.foot_command, op -> abc): the swing sole's offset from the pose it
+    rests at, in the feet frame F's axes [m]; the AutoBalancer brings the COM over the other foot first."""
+
+    foot: str  # "rfoot" | "lfoot"
+    offset_m: tuple[float, float, float]
 
 
 @dataclass(frozen=True, slots=True)
@@ -63,6 +72,9 @@ class GaitState:
     cog_acc_world: np.ndarray | None = None  # (3,) planned COG acceleration [m/s^2]
     base_pos_world: np.ndarray | None = None  # (3,) BODY where the AutoBalancer put it this tick [m]
     base_rpy_rad: np.ndarray | None = None  # (3,) and its roll, pitch, yaw [rad] (op places the upper body on it)
+    #: a foot lifted by its operational point: (foot, its sole's offset from its rest place in the world (3,) [m]);
+    #: the feet frame F stays where the rest soles put it
+    foot_lift: tuple[str, tuple[float, float, float]] | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -215,6 +227,7 @@ class Ports:
     cog_acc_world: np.ndarray | None = None  # abc: the planned COG acceleration (3,) [m/s^2]; kf removes it next tick
     gait: GaitState | None = None  # abc: this tick's gait state (soles, contacts, COG); op reads the feet frame from it
     walk_command: WalkCommand | None = None  # op: the walking point, read by abc; None: not driven this tick
+    foot_command: FootCommand | None = None  # op: a foot point's offset, read by abc; None: the feet stand
     motion_stopped: bool = False  # es: it holds or reverts the motion (op freezes its integration)
     motion_reverted_to_s: float | None = None  # es: while stopped, the plan time its revert goes back to [s]
     #: co: the body pairs the command would make collide while it holds the last collision-free posture

@@ -32,6 +32,7 @@ from controller.walking.auto_balancer_params import (
 )
 from controller.walking.close_stance import CLOSE_STANCE_LOWERING_M, closing_gait_params, closing_steps
 from controller.walking.emergency_stepping import EmergencyStepping, PreparedReplan
+from controller.walking.foot_lift import FootLift
 from controller.walking.footsteps import StepParams
 from controller.walking.gait_generator import GaitGenerator
 from controller.walking.preview_control import PreviewController, PreviewControlParams
@@ -118,6 +119,7 @@ class AutoBalancer(Layer):
         self._closing_stance = False  # the walk is close_stance's step
         self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
         self._prepared: PreparedReplan | None = None  # after_write's re-plan, for the next tick only
+        self.lift = FootLift(dt_s)  # a foot moved by its operational point while standing
         if active:
             self.start()
 
@@ -251,6 +253,8 @@ class AutoBalancer(Layer):
         return len(steps)
 
     def _require_balanced(self, what: str, stance: bool = True) -> None:
+        if self.lift.active:
+            raise InvalidState(f"{what}: the {self.lift.foot} is lifted (its operational point); {what} once it is down")
         if self._closing_stance and self.gait.walking:
             raise InvalidState(f"{what}: the robot is closing its stance (closeStance); {what} once it stands")
         if self.estep.active:
@@ -319,6 +323,8 @@ class AutoBalancer(Layer):
         self._walk_point = "walking"
 
     def _walk_point_refusal(self, cmd: WalkCommand) -> str | None:
+        if self.lift.active:
+            return f"ignored: the {self.lift.foot} is lifted (its operational point); walk once it is down"
         if self.estep.active:
             return "ignored: a capture-point emergency step is in progress"
         if self._last_cp_flag and not self.gait.walking:
@@ -389,7 +395,8 @@ class AutoBalancer(Layer):
         if self.estep.active:
             if self.estep.tick(ctx, self.params, self.preview, self.last_gait, prepared):
                 self._disarm_walk_point()  # a stick held through the step must be released before it walks again
-        elif self.params.emergency_step.enabled and not self.gait.walking and self._blend is None:
+        elif self.params.emergency_step.enabled and not self.gait.walking and self._blend is None \
+                and not self.lift.active:  # (on one foot the lift keeps the COM over its sole)
             if self.estep.check_standing(ctx, self.last_gait, self.params, self.preview):
                 self._walking_stop_requested = False
                 self._disarm_walk_point()
@@ -411,9 +418,14 @@ class AutoBalancer(Layer):
             self._walk_point = "idle"
         if self._pending_preview is not None:
             self._swap_preview()
+        lift, foot_cmd = self.lift, ctx.ports.foot_command
+        if foot_cmd is not None or lift.active:
+            lift.step(foot_cmd, self.gait.walking, "the capture-point flag, an emergency step or a blend" if (
+                self.estep.active or self._last_cp_flag or not self.active or self._blend is not None) else None)
         future = self.gait.zmp_preview(self.preview.preview_length)
-        cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(future[:, :2])
         g = self.gait.tick()
+        g, lift_off = lift.sample(g) if lift.active else (g, None)
+        cog_xy, cog_vel_xy, cog_acc_xy, _ = self.preview.update(lift.zmp_preview(future, g)[:, :2])
         if g.walking and not self._was_walking and not self.estep.active:
             self._walk_cut = None  # a new walk began
         self._was_walking = g.walking and not self.estep.active
@@ -450,7 +462,7 @@ class AutoBalancer(Layer):
             cog_pc_world=np.array((cog_pc[0], cog_pc[1], com_z)),
             cog_acc_world=np.array((cog_acc_xy[0], cog_acc_xy[1], 0.0)),
             base_pos_world=base, base_rpy_rad=base_rpy,
-        )
+            foot_lift=None if lift_off is None else (lift.foot, tuple(lift_off.tolist())))
         zmp_base = R_body.T @ (zmp - base)
         if self._tilt is not None:
             gait, base, base_rpy = tilted(gait, self._tilt)
@@ -571,7 +583,8 @@ class AutoBalancer(Layer):
                                   walk_point=self._walk_point,
                                   preview_gains="current" if self._pending_preview is None else "pending",
                                   emergency_step=self.estep.active, emergency_steps=self.estep.records,
-                                  walk_cut=self._walk_cut, walk_height_lowering_m=round(self._walk_lowering_m, 4))
+                                  walk_cut=self._walk_cut, walk_height_lowering_m=round(self._walk_lowering_m, 4),
+                                  foot_lift=self.lift.refused or self.lift.phase, lifted_foot=self.lift.foot)
 
     def _status_footsteps(self) -> tuple[FootstepStatus, ...]:
         """remaining_footsteps() for status(), rebuilt only when the plan or the footstep index changes

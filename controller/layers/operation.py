@@ -20,7 +20,9 @@ from controller.kinematics.operation_ik import OperationIK
 from controller.kinematics.rotations import matrix_to_rpy
 from controller.operation.body_frame import NECK_FRAME, POINT_FRAMES, BodyInFeet, achieved_pose, ik_targets
 from controller.operation.command_sum import CommandSum
+from controller.operation.foot_point import FEET, FootPoints, check_foot_allowed
 from controller.operation.frame import sub3
+from controller.operation.limits import MOTION_STOP
 from controller.operation.point_targets import HANDS, IK_POINTS, PointTargets
 from controller.operation.points import OperationView, Twist, check_twist
 from controller.operation.ranges import check_setpoint
@@ -38,6 +40,7 @@ __all__ = ["OperationLayer", "OperationParams", "OperationStatus", "PointStatus"
 _LEGS = set(JOINT_GROUPS["rleg"] + JOINT_GROUPS["lleg"])
 _IS_UPPER = np.array([i not in _LEGS for i in range(len(JOINT_NAMES))])  # torso, head, arms
 _ZERO3 = read_only(np.zeros(3))
+_OPERATED = IK_POINTS + FEET
 
 
 @dataclass(frozen=True)
@@ -51,6 +54,8 @@ class OperationParams(Params):
     waist_angular_speed_rad_s: float = field(default=0.5, metadata={"unit": "rad/s", "min": 0.001, "max": 5.0})
     walk_speed_m_s: float = field(default=0.3, metadata={"unit": "m/s", "min": 0.001, "max": 1.0})
     walk_turn_rad_s: float = field(default=0.5, metadata={"unit": "rad/s", "min": 0.001, "max": 3.0})
+    # a foot point's sole (rfoot, lfoot): the AutoBalancer bounds it at 0.12 m/s besides (controller/walking/foot_lift)
+    foot_speed_m_s: float = field(default=0.1, metadata={"unit": "m/s", "min": 0.001, "max": 0.12})
     # acceleration limits of the summed twist (Eq. 5) per point: a stick flicked from one direction to another
     # turns the point in ~0.2 s instead of one tick. A step of the hand's velocity (0.1 m/s forward to 0.05 m/s
     # up) reversed the chest at ~20 deg/s within a tick; the COM estimate moved 9 mm in 50 ms and the
@@ -113,6 +118,7 @@ class OperationLayer(Layer):
             raise InvalidCommand(f"time_s must be a finite control time [s], got {time_s!r}")
         if walk is not None and point != "walk":
             raise InvalidCommand(f"walk step parameters given for point {point!r}; only the 'walk' point takes them")
+        check_foot_allowed(point, twist, self._last.walking, self._points.targets)
         self._commands.streamed.set(point, twist, time_s, walk)
 
     def drop_motion(self) -> None:
@@ -125,6 +131,7 @@ class OperationLayer(Layer):
         """The behaviours' sum per point for the next tick only (not refreshed: zero)."""
         for point, twist in twists.items():
             check_twist(point, twist)
+            check_foot_allowed(point, twist, self._last.walking, self._points.targets)
         self._commands.set_behavior(twists, walk)
 
     def reset_targets(self) -> None:
@@ -169,7 +176,7 @@ class OperationLayer(Layer):
             if walk is not None:
                 ctx.ports.walk_command = walk
         if not self._points.targets and not stopped:
-            for point in IK_POINTS:
+            for point in _OPERATED:
                 twist = total.get(point)
                 if twist is not None and not twist.is_zero:
                     break
@@ -211,8 +218,10 @@ class OperationLayer(Layer):
                     seeded.append(True)
                 return self._seed(point, anchor, float(F.p[2]) - ground_z(gait, F))
             stepped_from = points.integrate(total, self.params, ctx.dt_s, seed)
+            FootPoints.integrate(total, points, self.params.foot_speed_m_s, ctx.dt_s, gait)
             if self._reset.pending:  # a new motion during a reset: from where the blend is
                 self._reset.cancel()
+        self._command_feet(ctx, stopped, F.yaw)
         q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
         if "waist" in points.targets:
             base_out, rpy_out = self._waist.realise(points, ref, gait, F, stopped)
@@ -235,6 +244,20 @@ class OperationLayer(Layer):
             out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
         last.ref_out = out
         return out
+
+    def _command_feet(self, ctx: TickContext, stopped: bool, yaw_rad: float) -> None:
+        """The foot point's command for the AutoBalancer: while the motion is stopped, the target the revert went
+        back to (None before the foot was operated: it is put down), else the integrated one."""
+        targets = self._points.targets
+        if stopped and self._history.revert_to_s is not None:
+            entry = self._history.entry_at(self._history.revert_to_s)
+            targets = {} if entry is None else entry[1]
+        ctx.ports.foot_command = FootPoints.command(targets)
+        if stopped:
+            for foot in FEET:
+                if foot in self._points.targets:
+                    self._points.limited[foot] = MOTION_STOP
+        FootPoints.settle(self._points, ctx.last_ports.gait, yaw_rad)
 
     def _seed(self, point: str, anchor: np.ndarray, ground_in_feet_m: float = 0.0):
         """A point's first target: where the posture has it now, in F (self.kin is on it, in F), the hands

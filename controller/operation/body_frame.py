@@ -41,7 +41,7 @@ class BodyInFeet:
     def of_rows(self, ref: Reference, gait) -> tuple[PlanarFrame, tuple, tuple]:
         """of() with BODY's pose as floats: position (3 floats [m]) and rotation rows."""
         if gait is not None and gait.base_pos_world is not None:
-            F = PlanarFrame(*feet_frame(gait.p_rsole_world, gait.R_rsole_world, gait.p_lsole_world, gait.R_lsole_world))
+            F = PlanarFrame(*feet_frame(*rest_soles(gait)))
             return F, *F.to_local_rpy_rows(gait.base_pos_world, gait.base_rpy_rad)
         F = self.reference_frame(ref)
         return F, *F.to_local_rpy_rows(ref.base_pos_world, ref.base_rpy_rad)
@@ -56,6 +56,19 @@ class BodyInFeet:
             self._frame = PlanarFrame(*feet_frame(pr, Rr, pl, Rl))
             self._key = key
         return self._frame
+
+
+def rest_soles(gait) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The gait's soles (p, R right; p, R left) with a foot lifted by its operational point back at its rest
+    place: F does not move with the foot (nor the hands held in F)."""
+    pr, pl = gait.p_rsole_world, gait.p_lsole_world
+    if gait.foot_lift is not None:
+        foot, off = gait.foot_lift
+        if foot == "rfoot":
+            pr = pr - np.array(off)
+        else:
+            pl = pl - np.array(off)
+    return pr, gait.R_rsole_world, pl, gait.R_lsole_world
 
 
 def ik_targets(targets: dict, neck_feet_m: np.ndarray | None, p_body: list, R_body: list) -> OperationTargets:

@@ -15,6 +15,7 @@ REACH = "reach"  # the IK cannot get there (workspace, singularity, balance, ano
 JOINT_LIMIT = "joint_limit"  # a joint of the point's limb brakes at its position limit
 VELOCITY = "velocity"  # the commanded speed is over the point's limit (or a joint runs at its velocity limit)
 MOTION_STOP = "motion_stop"  # the EmergencyStopper holds the motion: nothing integrates until it is released
+BALANCING = "balancing"  # a foot waits on the floor while the AutoBalancer brings the COM over the other foot
 LIMIT_REASONS = (REACH, JOINT_LIMIT, VELOCITY, MOTION_STOP)
 
 

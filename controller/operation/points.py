@@ -11,8 +11,12 @@ Linear parts are in m/s, angular parts in rad/s (the HTTP API takes deg/s), both
 | `head`  | unused (0)                     | gaze rates: (0, pitch, yaw); pitch > 0 looks down |
 | `waist` | (0, 0, height rate)            | BODY (roll, pitch, yaw) rates                 |
 | `walk`  | (vx, vy, 0): goVelocity        | (0, 0, vtheta): goVelocity                    |
+| `rfoot` | sole velocity (x, y, z)        | unused (0)                                    |
+| `lfoot` | sole velocity (x, y, z)        | unused (0)                                    |
 
-The waist's x-y and the COM are never commanded: balance is the controller's ([OP] Eq. 4).
+The waist's x-y and the COM are never commanded: balance is the controller's ([OP] Eq. 4). A foot point lifts
+its sole while standing (refused while walking): the AutoBalancer brings the COM over the other foot first, and
+puts the foot down when nothing drives its point any more (controller/operation/foot_point.py).
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ from controller.kinematics.rotations import wrap_rad
 from robot.sensors import frozen_array
 
 #: The operational points, in the order they are solved and reported.
-POINTS: tuple[str, ...] = ("rhand", "lhand", "head", "waist", "walk")
+POINTS: tuple[str, ...] = ("rhand", "lhand", "head", "waist", "walk", "rfoot", "lfoot")
 
 #: Components a point uses: (linear mask, angular mask); a non-zero unused component is refused.
 USED_COMPONENTS: Mapping[str, tuple[tuple[bool, bool, bool], tuple[bool, bool, bool]]] = {
@@ -38,6 +42,8 @@ USED_COMPONENTS: Mapping[str, tuple[tuple[bool, bool, bool], tuple[bool, bool, b
     "head": ((False, False, False), (False, True, True)),
     "waist": ((False, False, True), (True, True, True)),
     "walk": ((True, True, False), (False, False, True)),
+    "rfoot": ((True, True, True), (False, False, False)),
+    "lfoot": ((True, True, True), (False, False, False)),
 }
 
 
@@ -121,7 +127,8 @@ class OperationView:
     time_s: float
     feet_p_world_m: np.ndarray  # (3,) origin of F in the world
     feet_yaw_rad: float  # yaw of F in the world
-    points: Mapping[str, PointPose]  # "rhand", "lhand", "head" (the gaze origin, x along the gaze), "waist" (BODY)
+    #: "rhand", "lhand", "head" (the gaze origin, x along the gaze), "waist" (BODY), "rfoot", "lfoot" (the soles)
+    points: Mapping[str, PointPose]
     gaze_rad: tuple[float, float]  # (pitch, yaw) of the gaze in F; pitch > 0 looks down
     waist_height_m: float  # BODY height above F
     walking: bool

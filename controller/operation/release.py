@@ -46,6 +46,10 @@ class ReleaseHistory:
         """The entry a release restarts from: the last one at or before the revert's time (the revert is used
         up); None when the revert went back to before anything was operated (restart from the reference)."""
         t_rev, self.revert_to_s = self.revert_to_s, None
+        return self.entry_at(t_rev)
+
+    def entry_at(self, t_rev: float | None) -> tuple[float, dict, np.ndarray] | None:
+        """The last entry at or before `t_rev` [s]; None when that is before anything was operated (or None)."""
         if t_rev is None or self.active_since_s is None or t_rev < self.active_since_s or not self._entries:
             return None
         entry = self._entries[0]

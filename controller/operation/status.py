@@ -23,10 +23,11 @@ class PointStatus:
 
     target: tuple[float, ...] | None = field(metadata=described(
         "target in F: hands (x, y, z [m], roll, pitch, yaw [rad]); head (pitch, yaw [rad]); waist (height [m], "
-        "roll, pitch, yaw [rad]); walk (vx, vy [m/s], vtheta [rad/s]); null: not operated"))
+        "roll, pitch, yaw [rad]); walk (vx, vy [m/s], vtheta [rad/s]); feet (the sole's offset from its rest place "
+        "x, y, z [m]); null: not operated"))
     achieved: tuple[float, ...] | None = field(metadata=described("the IK's pose, same layout as target"))
     limited: str | None = field(metadata=described(
-        "why the point did less than asked: null, 'reach', 'joint_limit', 'velocity' or 'motion_stop'"))
+        "why the point did less than asked: null, 'reach', 'joint_limit', 'velocity', 'motion_stop' or 'balancing' (a foot)"))
     motion: tuple[float, ...] = field(metadata=described(
         "operator twist after the dead-man (vx, vy, vz [m/s], wx, wy, wz [rad/s]) in F"))
     behavior: tuple[float, ...] = field(metadata=described("the behaviours' summed twist, same layout"))

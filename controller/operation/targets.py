@@ -150,4 +150,6 @@ def status_layout(pose, anchor: np.ndarray) -> tuple[float, ...] | None:
         return (*(pose.p_feet_m + anchor).tolist(), *matrix_to_rpy_floats(pose.R_feet_hand))
     if isinstance(pose, GazeAngles):
         return (pose.pitch_rad, pose.yaw_rad)
+    if hasattr(pose, "offset_m"):  # a foot (controller.operation.foot_point.FootOffset)
+        return tuple(pose.offset_m)
     return (pose.height_m, *pose.rpy_rad)

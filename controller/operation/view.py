@@ -60,6 +60,12 @@ class ViewOfTick:
             p_w, R_w = F_world.to_world_rows((x, y, z), R_feet)
             points[point] = PointPose(p_world_m=frozen_array(p_w), R_world_point=frozen_array(R_w),
                                       p_feet_m=frozen_array((x, y, z)), R_feet_point=frozen_array(R_feet))
+        if gait is not None:  # the soles as the AutoBalancer plans them (a lifted one where it lifted it)
+            for point, p_w, R_w in (("rfoot", gait.p_rsole_world, gait.R_rsole_world),
+                                    ("lfoot", gait.p_lsole_world, gait.R_lsole_world)):
+                p_f, R_f = F_world.to_local(p_w, R_w)
+                points[point] = PointPose(p_world_m=frozen_array(p_w), R_world_point=frozen_array(R_w),
+                                          p_feet_m=frozen_array(p_f), R_feet_point=frozen_array(R_f))
         gaze = GazeAngles.of_direction(points["head"].R_feet_point[:, 0])
         soles = _SOLES_APART if gait is None else sole_from_sole(gait.p_rsole_world, gait.R_rsole_world,
                                                                  gait.p_lsole_world, gait.R_lsole_world)

@@ -195,4 +195,8 @@ class AutoBalancerStatus(Status):
         "how far BODY is held below the operated waist height because a walk is on: walking plans at the "
         "half-sitting height (a raised waist stretches the swing leg straight when the COM shifts over the "
         "stance foot)", "m"))
+    foot_lift: str = field(default="idle", metadata=described(
+        "a foot operational point's phase: 'idle', 'shifting' (the COM to the stance foot), 'lifted', 'lowering', "
+        "'returning' (the weight shared again), or 'ignored: <why>' for a lift refused this tick"))
+    lifted_foot: str | None = field(default=None, metadata=described("the foot being lifted ('rfoot', 'lfoot')"))
 

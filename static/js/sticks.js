@@ -35,7 +35,7 @@ window.addEventListener("blur", () => heldKeys.clear());
 let POINTS = [];
 let RANGES = {};  // point -> {linear: [3] m/s, angular: [3] deg/s}: |v| allowed per component, 0 where it is unused
 const FULL = {  // full deflection: linear [m/s], angular [deg/s]
-  rhand: [0.1, 30], lhand: [0.1, 30], head: [0, 30], waist: [0.05, 15], walk: [0.2, 20],
+  rhand: [0.1, 30], lhand: [0.1, 30], head: [0, 30], waist: [0.05, 15], walk: [0.2, 20], rfoot: [0.05, 0], lfoot: [0.05, 0],
 };
 const STICK_DEAD_ZONE = 0.08;
 const GAMEPAD_DEAD_ZONE = 0.1;
