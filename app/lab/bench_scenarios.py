@@ -77,7 +77,8 @@ def _teleop_hand_stream(robot: LocalRobot) -> None:
 
 def _teleop_foot_stream(robot: LocalRobot) -> None:
     """Standing, the right foot instead of the right hand: up first (the COM goes over the left foot, 1.6 s),
-    then on a slow ellipse (0.05 m/s across, 0.02 m/s up and down) in x-z; the left hand's and the head's as in 'teleop'."""
+    then on a slow ellipse (0.05 m/s across, 0.02 m/s up and down) in x-z; the left hand's and the head's as in
+    'teleop'."""
     _teleop_standing(robot, "rfoot")
 
 

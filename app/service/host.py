@@ -27,10 +27,10 @@ from behaviors.perception.worker import prepare as prepare_recognition
 from behaviors.registry import BEHAVIORS  # noqa: F401 - imported here, not at the first behaviour's boundary
 from behaviors.runner import BehaviorRunner
 from controller.core.errors import InvalidCommand, InvalidState, UnknownName, Unreachable
-from controller.operation.foot_point import PointRefused
 from controller.core.layer import Params
 from controller.core.loop import Snapshot
 from controller.core.loop_timing import LoopTiming
+from controller.operation.foot_point import PointRefused
 from controller.system import ControllerSystem
 from robot.camera import CAMERA_NICE
 from robot.names import JOINT_NAMES

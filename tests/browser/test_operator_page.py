@@ -154,20 +154,15 @@ def page_urls() -> list[str]:
 
 
 @pytest.fixture(scope="module")
-def page_failures() -> list[str]:
-    """Every answer of 400 or more the module's page was given ("404 http://..."), as it came."""
-    return []
-
-
-@pytest.fixture(scope="module")
-def page(hrp2_console, page_urls, page_failures):
+def page(hrp2_console, page_urls):
     with playwright_api.sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, headless=True, args=CHROMIUM_ARGS)
         try:
             pg = browser.new_page(viewport={"width": 1280, "height": 800})
             pg.on("request", lambda r: page_urls.append(r.url))
             pg.on("websocket", lambda ws: page_urls.append(ws.url))
-            pg.on("response", lambda r: r.status >= 400 and page_failures.append(f"{r.status} {r.url}"))
+            pg.failed_answers = []  # every answer of 400 or more the page was given ("404 http://..."), as it came
+            pg.on("response", lambda r: r.status >= 400 and pg.failed_answers.append(f"{r.status} {r.url}"))
             pg.on("console", lambda m: m.type in ("error", "warning") and print(f"[page {m.type}] {m.text[:300]}"))
             pg.on("pageerror", lambda e: print(f"[page error] {e}"))
             # Software WebGL (SwiftShader) renders the viser iframe in the same renderer and GPU process: while
@@ -320,8 +315,7 @@ def leaving(urls: list[str], ports: set[int]) -> list[str]:
     return out
 
 
-def test_every_request_of_the_page_and_its_3d_view_stays_on_this_machine(page, hrp2_console, page_urls, artifacts,
-                                                                       page_failures):
+def test_every_request_of_the_page_and_its_3d_view_stays_on_this_machine(page, hrp2_console, page_urls, artifacts):
     """What the page and its 3D view asked for: the page's requests and WebSockets (Playwright's events), and
     every resource each frame fetched (its Resource Timing entries: the 3D view's iframe runs in another
     process, whose requests Playwright does not report) and the 3D view's websocket address. None of the page's
@@ -342,7 +336,7 @@ def test_every_request_of_the_page_and_its_3d_view_stays_on_this_machine(page, h
     assert expected <= paths, sorted(paths)
     assert urlsplit(viewer_ws).port == hrp2_console.viewer_port
     assert not leaving(urls, ports), leaving(urls, ports)
-    assert page_failures == []
+    assert page.failed_answers == []
     shot(page, artifacts, "page_local_requests")
 
 
