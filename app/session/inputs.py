@@ -119,7 +119,8 @@ def same_outcome(recorded: Mapping, replayed: Mapping) -> bool:
 # ---- streamed setpoints as numbers: the recorder packs them into an array (a pickle of tuples cost the loop's
 # thread ~80 us a batch when the operator streams four points every tick) and the writer makes their JSON
 SETPOINT_POINTS = ("rhand", "lhand", "head", "waist", "walk", "rfoot", "lfoot")  # controller.operation.points.POINTS
-IGNORED = (None, "hard_stop", "before_release", "invalid", "state")  # SetpointAck.ignored (append only: recorded by index)
+#: SetpointAck.ignored (append only: recorded by index)
+IGNORED = (None, "hard_stop", "before_release", "invalid", "state")
 PHASES = ("boundary", "hook")
 #: one row per setpoint: `order` numbers the recorder's events (the setpoints of one table share it)
 SETPOINT_COLUMNS = ("order", "tick", "phase", "time_s", "point", "lx", "ly", "lz", "ax", "ay", "az", "max_stride",

@@ -9,8 +9,8 @@ import numpy as np
 from robot.names import FORCE_SENSOR_NAMES, NUM_JOINTS
 from robot.sensors import Sensors, frozen_array
 
-__all__ = ["BalanceEstimate", "Estimate", "FootCommand", "GaitState", "OdometryEstimate", "Ports", "Reference", "StepInProgress",
-           "TickContext", "WalkCommand", "frozen_array", "read_only"]
+__all__ = ["BalanceEstimate", "Estimate", "FootCommand", "GaitState", "OdometryEstimate", "Ports", "Reference",
+           "StepInProgress", "TickContext", "WalkCommand", "frozen_array", "read_only"]
 
 
 @dataclass(frozen=True, slots=True)

@@ -254,7 +254,8 @@ class AutoBalancer(Layer):
 
     def _require_balanced(self, what: str, stance: bool = True) -> None:
         if self.lift.active:
-            raise InvalidState(f"{what}: the {self.lift.foot} is lifted (its operational point); {what} once it is down")
+            raise InvalidState(f"{what}: the {self.lift.foot} is lifted (its operational point); "
+                               f"{what} once it is down")
         if self._closing_stance and self.gait.walking:
             raise InvalidState(f"{what}: the robot is closing its stance (closeStance); {what} once it stands")
         if self.estep.active:

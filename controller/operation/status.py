@@ -27,7 +27,8 @@ class PointStatus:
         "x, y, z [m]); null: not operated"))
     achieved: tuple[float, ...] | None = field(metadata=described("the IK's pose, same layout as target"))
     limited: str | None = field(metadata=described(
-        "why the point did less than asked: null, 'reach', 'joint_limit', 'velocity', 'motion_stop' or 'balancing' (a foot)"))
+        "why the point did less than asked: null, 'reach', 'joint_limit', 'velocity', 'motion_stop' or "
+        "'balancing' (a foot)"))
     motion: tuple[float, ...] = field(metadata=described(
         "operator twist after the dead-man (vx, vy, vz [m/s], wx, wy, wz [rad/s]) in F"))
     behavior: tuple[float, ...] = field(metadata=described("the behaviours' summed twist, same layout"))
