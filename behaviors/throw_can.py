@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from behaviors.base import BehaviorParams, Context
+from behaviors.check_landing import CheckLanding, CheckLandingParams
 from behaviors.composite import Composite, Plan, Wait
 from behaviors.hand_geometry import can_from_hand_point, hand_point_for_can
 from behaviors.locate_trash_box import LocateTrashBox
@@ -65,8 +66,8 @@ class ThrowCan(Composite):
     name = "throw_can"
     Params = ThrowCanParams
     summary = "Locate the trash box, walk to it, bring the held can over the hole and release it"
-    phases = ("locate", "turn", "walk", "relocate", "walk", "over the hole", "release", "clear")
-    remaining_estimate_s = 40.0
+    phases = ("locate", "turn", "walk", "relocate", "walk", "over the hole", "release", "clear", "where it landed")
+    remaining_estimate_s = 52.0
 
     def points(self) -> tuple[str, ...]:
         return ("head", "walk", "rhand")
@@ -147,6 +148,16 @@ class ThrowCan(Composite):
         clear = yield Reach(ReachParams(hand="rhand", x_m=float(back[0]), y_m=float(back[1]),
                                         z_m=float(back[2]), speed_m_s=self.params.speed_m_s, tolerance_m=0.01))
         self.result["clear"] = clear.outcome[1]
+        # [OP] II: the operator sees where the can ended, from the head's images (step back to where the box was
+        # located from: from the release stance the lid is out of the head's view)
+        self.set_phase("where it landed")
+        x, y = stance_for(hole, yaw, LOOK_BACK_M)
+        landing = yield CheckLanding(CheckLandingParams(
+            hole_x_m=float(hole[0]), hole_y_m=float(hole[1]), hole_z_m=float(hole[2]),
+            box_yaw_deg=float(box["yaw_deg"]), stance_x_m=x, stance_y_m=y, stance_yaw_deg=math.degrees(yaw)))
+        self.result["landing"] = landing.result.get("landing", {"verdict": None, "detail": landing.outcome[1]})
         hx, hy = TRASH_BOX.hole_m
         return (f"released the can {1e3 * along:+.0f} mm along and {1e3 * across:+.0f} mm across the "
-                f"{1e3 * hx:.0f} x {1e3 * hy:.0f} mm hole's centre (the robot's estimate)")
+                f"{1e3 * hx:.0f} x {1e3 * hy:.0f} mm hole's centre (the robot's estimate); "
+                + (f"it landed {self.result['landing']['verdict']} ({self.result['landing']['detail']})"
+                   if self.result["landing"]["verdict"] else f"where it landed is not known: {landing.outcome[1]}"))

@@ -49,6 +49,7 @@ class TrialResult:
     sim_time_s: float
     wall_time_s: float
     message: str
+    landing_verdict: str | None = None  # where throw_can saw the can end, from its images ("in the box", ...)
 
     @property
     def succeeded(self) -> bool:
@@ -89,6 +90,7 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
     steps = [("locate_can", look_table), ("take_can", {"table_edge_x_m": edge_x}), ("locate_trash_box", look_box),
              ("throw_can", {})]
     errors: dict[str, float | None] = {"locate": None, "relocate": None, "release": None, "estimate": None}
+    landing = None
     message, fallen = "", False
     seen_relocate = False
     for name, params in steps:
@@ -119,6 +121,8 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
             errors["locate"] = 1e3 * float(np.linalg.norm(np.array(rec["position_m"]) - can_true))
         if name == "throw_can" and "release_estimate" in status.result:
             errors["estimate"] = 1e3 * status.result["release_estimate"]["error_m"]
+        if name == "throw_can":
+            landing = (status.result.get("landing") or {}).get("verdict")
         if fallen or status.state != "succeeded":
             message = "the robot fell" if fallen else f"{name} {status.state}: {status.message}"
             break
@@ -138,7 +142,7 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
     verdict = "succeeded" if in_box and not message else f"failed: {message}"
     return TrialResult(trial, can_u_m, can_v_m, robot_distance_m, verdict, errors["locate"], errors["relocate"],
                        errors["release"], errors["estimate"], in_box, fallen, sim_s,
-                       time.perf_counter() - wall0, detail)
+                       time.perf_counter() - wall0, detail, landing)
 
 
 def placements(n: int, seed: int) -> list[tuple[float, float, float]]:
