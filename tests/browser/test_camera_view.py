@@ -15,7 +15,9 @@ import pytest
 from tests.browser import test_operator_page as op
 from tests.browser.test_operator_page import get_json, post_json, shot, wait_until
 
-artifacts, saves_a_screenshot = op.artifacts, op.saves_a_screenshot
+# the operator page's fixtures, by name (its page opens on this module's console): the Chromium page, where the
+# screenshots go
+page, page_urls, artifacts, saves_a_screenshot = op.page, op.page_urls, op.artifacts, op.saves_a_screenshot
 
 pytestmark = pytest.mark.browser
 
@@ -40,22 +42,6 @@ def hrp2_console():
         yield c
     finally:
         c.stop()
-
-
-@pytest.fixture(scope="module")
-def page(hrp2_console):
-    with playwright_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=op.CHROMIUM, headless=True, args=op.CHROMIUM_ARGS)
-        try:
-            pg = browser.new_page(viewport={"width": 1280, "height": 800})
-            pg.on("pageerror", lambda e: print(f"[page error] {e}"))
-            pg.set_default_timeout(40_000)
-            playwright_api.expect.set_options(timeout=15_000)
-            pg.goto(f"{hrp2_console.base}/", wait_until="domcontentloaded")
-            playwright_api.expect(pg.locator("#conn")).to_contain_text("live", timeout=30_000)
-            yield pg
-        finally:
-            browser.close()
 
 
 def run_to_end(c: op.Console, behavior: str, params: dict | None = None) -> dict:
