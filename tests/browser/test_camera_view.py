@@ -65,10 +65,10 @@ def popups_inside(page, where: str) -> list:
 def test_recognition_popups_stay_inside_the_camera_frame(page, hrp2_console, artifacts):
     post_json(f"{hrp2_console.base}/api/sim/reset", {"scene": "expo"}, timeout=60.0)
     wait_until(lambda: hrp2_console.state()["scene"] == "expo", 30.0, "the expo scene")
-    for name in ("locate_can", "locate_trash_box"):
-        done = run_to_end(hrp2_console, name)
-        assert done["state"] == "succeeded", done["message"]
-    playwright_api.expect(page.locator(".rec-pop")).to_have_count(2)
+    done = run_to_end(hrp2_console, "locate_can")
+    assert done["state"] == "succeeded", done["message"]
+    # the camera renders the new scene in a new process: on a loaded 2-core machine its first frame came >15 s late
+    playwright_api.expect(page.locator(".rec-pop")).to_have_count(1, timeout=60_000)
     for w, h in SIZES:
         page.set_viewport_size({"width": w, "height": h})
         page.wait_for_timeout(1000)  # a few frames laid out at the new size
@@ -87,12 +87,17 @@ def test_recognition_popups_stay_inside_the_camera_frame(page, hrp2_console, art
 
 
 def test_the_taken_cans_popup_goes_and_one_confirm_remains(page, hrp2_console, artifacts):
+    """In the EXPO trial's order ([OP] VI): take the can, then locate the box (the head turns to it)."""
     done = run_to_end(hrp2_console, "take_can")
     assert done["state"] == "succeeded", done["message"]
     assert get_json(f"{hrp2_console.base}/api/recognitions")["recognitions"]["can"]["status"] == "held"
-    playwright_api.expect(page.locator(".rec-pop", has_text="can at")).to_have_count(0)
-    playwright_api.expect(page.locator(".rec-pop")).to_have_count(1)  # the trash box's
+    playwright_api.expect(page.locator(".rec-pop")).to_have_count(0)
+    done = run_to_end(hrp2_console, "locate_trash_box")
+    assert done["state"] == "succeeded", done["message"]
+    playwright_api.expect(page.locator(".rec-pop")).to_have_count(1)  # the trash box's alone
+    playwright_api.expect(page.locator(".rec-pop", has_text="trash_box at")).to_have_count(1)
     playwright_api.expect(page.locator("#camera-popups").get_by_role("button", name="Confirm")).to_have_count(1)
+    popups_inside(page, "the trash box")
     shot(page, artifacts, "camera_can_taken")
 
 
