@@ -13,12 +13,13 @@ const popups = new Map();  // object name -> {box, pop, key, editing}
 let lastMeta = null;
 
 // A pop-up of size w x h [px] for an object whose box is `box` (null: out of view), in a W x H frame, avoiding the
-// rectangles already `placed`: the first of right, left, below, above that fits whole and overlaps nothing, else
-// the one that overlaps least, pushed inside the frame. Returns {left, top}.
+// rectangles already `placed` and its own box: the first of right, left, below, above that fits whole and overlaps
+// nothing, else the one that overlaps least, pushed inside the frame. Returns {left, top}.
 export function placePopup(box, w, h, W, H, placed) {
   const clamp = (v, lo, hi) => Math.max(lo, Math.min(v, Math.max(lo, hi)));
   const inside = (x, y) => ({left: clamp(x, 0, W - w), top: clamp(y, 0, H - h)});
-  const overlap = (a) => placed.reduce((s, r) => s + Math.max(0, Math.min(a.left + w, r.left + r.w) -
+  const avoid = box ? [...placed, {left: box[0], top: box[1], w: box[2] - box[0], h: box[3] - box[1]}] : placed;
+  const overlap = (a) => avoid.reduce((s, r) => s + Math.max(0, Math.min(a.left + w, r.left + r.w) -
     Math.max(a.left, r.left)) * Math.max(0, Math.min(a.top + h, r.top + r.h) - Math.max(a.top, r.top)), 0);
   const candidates = box ? [
     [box[2] + GAP_PX, box[1]], [box[0] - GAP_PX - w, box[1]], [box[0], box[3] + GAP_PX], [box[0], box[1] - GAP_PX - h],
