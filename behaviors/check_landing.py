@@ -1,8 +1,8 @@
 """Where the thrown can ended, from the head's images ([OP] II: the robot shows the operator what it perceives):
 step back from the box, look at it and at the floor on either side, recognise the can. Seen outside the lid's
 outline, or on the lid: out of the box, with where; within the outline below the lid's top: in; not seen around
-the box: in (it fell through the hole, where the box's walls hide it). The verdict is remembered as the can's recognition, so the
-camera view shows it over the box."""
+the box: in (it fell through the hole, where the box's walls hide it). The verdict is remembered as the can's
+recognition, so the camera view shows it over the box."""
 
 from __future__ import annotations
 
