@@ -20,9 +20,15 @@ from behaviors.base import BehaviorParams, Context
 from behaviors.composite import Composite, Plan, StepFailed, Wait
 from behaviors.grasp import Grasp, GraspParams
 from behaviors.gripper import gripper_joint
-from behaviors.hand_geometry import PRE_GRASP_BACK_M, approach_feet, grasp_rotation_feet, hand_point_for_can
+from behaviors.hand_geometry import (
+    PRE_GRASP_BACK_M,
+    approach_feet,
+    can_from_hand_point,
+    grasp_rotation_feet,
+    hand_point_for_can,
+)
 from behaviors.locate_can import LocateCan
-from behaviors.perception.models import CAN
+from behaviors.perception.models import CAN, HELD, NOT_ON_THE_TABLE
 from behaviors.reach import Reach, ReachParams
 from behaviors.release import Release, ReleaseParams
 from behaviors.servo import rot_z
@@ -207,7 +213,7 @@ class TakeCan(Composite):
         commands = ctx.commands
         self.set_phase("locate")
         can = commands.recalled("can")
-        if can is None:
+        if can is None or can.get("status") in NOT_ON_THE_TABLE:  # held, or thrown: where is it now?
             self.require((yield LocateCan()))
             can = commands.recalled("can")
         can_world = np.array(can["position_m"])
@@ -297,5 +303,9 @@ class TakeCan(Composite):
         self.require((yield WalkTo(WalkToParams(x_m=float(feet[0] - STEP_BACK_M * math.cos(yaw)),
                                                 y_m=float(feet[1] - STEP_BACK_M * math.sin(yaw)),
                                                 theta_deg=math.degrees(yaw)))))
+        # the can is in the hand now: its recognition on the table is out of date (no pop-up to confirm it)
+        hand = self.view.points["rhand"]
+        commands.remember("can", {**can, "status": HELD, "position_m": [
+            round(float(v), 5) for v in can_from_hand_point(hand.p_world_m, hand.R_world_point)]})
         return (f"holding the can: {load_n:.2f} N at the wrist (the can weighs {weight_n:.2f} N), "
                 f"jaw at {math.degrees(jaw.q_meas_rad):.1f} deg ({CAN.diameter_m * 1e3:.0f} mm can)")

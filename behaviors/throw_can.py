@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from behaviors.base import BehaviorParams, Context
+from behaviors.check_landing import CheckLanding, CheckLandingParams
 from behaviors.composite import Composite, Plan, Wait
 from behaviors.hand_geometry import can_from_hand_point, hand_point_for_can
 from behaviors.locate_trash_box import LocateTrashBox
@@ -40,6 +41,8 @@ class ThrowCanParams(BehaviorParams):
     speed_m_s: float = field(default=0.1, metadata={"unit": "m/s", "min": 0.02, "max": 0.3, "doc": "hand speed"})
     clearance_m: float = field(default=RELEASE_CLEARANCE_M, metadata={"unit": "m", "min": 0.0, "max": 0.3,
                                                                       "doc": "can bottom above the lid"})
+    look_after: bool = field(default=True, metadata={"unit": "-", "doc": "step back and look where the can "
+                                                     "landed (in or out of the box, from the images; ~21 s)"})
 
 
 def heading_to(hole_yaw_rad: float, bearing_rad: float) -> float:
@@ -65,8 +68,8 @@ class ThrowCan(Composite):
     name = "throw_can"
     Params = ThrowCanParams
     summary = "Locate the trash box, walk to it, bring the held can over the hole and release it"
-    phases = ("locate", "turn", "walk", "relocate", "walk", "over the hole", "release", "clear")
-    remaining_estimate_s = 40.0
+    phases = ("locate", "turn", "walk", "relocate", "walk", "over the hole", "release", "clear", "where it landed")
+    remaining_estimate_s = 52.0
 
     def points(self) -> tuple[str, ...]:
         return ("head", "walk", "rhand")
@@ -148,5 +151,18 @@ class ThrowCan(Composite):
                                         z_m=float(back[2]), speed_m_s=self.params.speed_m_s, tolerance_m=0.01))
         self.result["clear"] = clear.outcome[1]
         hx, hy = TRASH_BOX.hole_m
-        return (f"released the can {1e3 * along:+.0f} mm along and {1e3 * across:+.0f} mm across the "
+        said = (f"released the can {1e3 * along:+.0f} mm along and {1e3 * across:+.0f} mm across the "
                 f"{1e3 * hx:.0f} x {1e3 * hy:.0f} mm hole's centre (the robot's estimate)")
+        if not self.params.look_after:
+            return said
+        # [OP] II: the operator sees where the can ended, from the head's images (step back to where the box was
+        # located from: from the release stance the lid is out of the head's view)
+        self.set_phase("where it landed")
+        x, y = stance_for(hole, yaw, LOOK_BACK_M)
+        landing = yield CheckLanding(CheckLandingParams(
+            hole_x_m=float(hole[0]), hole_y_m=float(hole[1]), hole_z_m=float(hole[2]),
+            box_yaw_deg=float(box["yaw_deg"]), stance_x_m=x, stance_y_m=y, stance_yaw_deg=math.degrees(yaw)))
+        self.result["landing"] = landing.result.get("landing", {"verdict": None, "detail": landing.outcome[1]})
+        return (f"{said}; "
+                + (f"it landed {self.result['landing']['verdict']} ({self.result['landing']['detail']})"
+                   if self.result["landing"]["verdict"] else f"where it landed is not known: {landing.outcome[1]}"))

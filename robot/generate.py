@@ -50,6 +50,7 @@ from robot.scenes import (
     mjcf_scene_valve,
     mjcf_scene_wall,
 )
+from robot.silhouette import SILHOUETTE_GROUP, SILHOUETTE_RGBA, silhouette
 
 #: the names the rest of the project takes from here (defined in robot.parameters, robot.robot_model and
 #: robot.scenes)
@@ -73,7 +74,8 @@ GENERATED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml",
 def render(params: dict | None = None) -> dict[str, str]:
     """The generated files' contents: file name -> text."""
     params = load_parameters() if params is None else params
-    return {"hrp2.xml": mjcf_robot(params), "scene.xml": mjcf_scene(params),
+    return {"hrp2.xml": mjcf_robot(params, silhouette(params), SILHOUETTE_GROUP, SILHOUETTE_RGBA),
+            "scene.xml": mjcf_scene(params),
             "scene_wall.xml": mjcf_scene_wall(params), "scene_valve.xml": mjcf_scene_valve(params),
             "scene_door.xml": mjcf_scene_door(params), "scene_expo.xml": mjcf_scene_expo(params),
             "hrp2.urdf": urdf(params)}

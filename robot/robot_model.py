@@ -94,6 +94,7 @@ class Geom:
     material: str = "limb"
     friction: tuple[float, float, float] | None = None
     collide: bool = True
+    visual_class: str = "visual"  # the MJCF default class of a geom that does not collide
 
 
 def group_of(link: str) -> str:
@@ -301,13 +302,15 @@ def mjcf_geom(g: Geom, group: str, indent: str) -> str:
         attrs.append(f'pos="{vec(g.pos_m)}" size="{vec(g.size_m)}"')
         if g.axis != "z":
             attrs.append(f'zaxis="{ {"x": "1 0 0", "y": "0 1 0"}[g.axis] }"')
-    attrs.append(f'class="{group if g.collide else "visual"}" material="{g.material}"')
+    attrs.append(f'class="{group if g.collide else g.visual_class}" material="{g.material}"')
     if g.friction is not None:
         attrs.append(f'friction="{vec(g.friction)}"')
     return f"{indent}<geom {' '.join(attrs)}/>"
 
 
-def mjcf_body(params: dict, link: str, joint: dict | None, depth: int, frames, children) -> list[str]:
+def mjcf_body(params: dict, link: str, joint: dict | None, depth: int, frames, children, drawn=None) -> list[str]:
+    """The MJCF of `link` and its subtree; `drawn`: link -> drawing-only geoms (robot/silhouette.py), written
+    after the link's own."""
     ind = "  " * depth
     pos = joint["offset_m"] if joint else (0.0, 0.0, params["half_sitting_deg"]["base_height_m"])
     lines = [f'{ind}<body name="{link}" pos="{vec(pos)}"' + (' childclass="hrp2">' if joint is None else ">")]
@@ -320,14 +323,14 @@ def mjcf_body(params: dict, link: str, joint: dict | None, depth: int, frames, c
         lines.append(f'{ind}  <joint name="{joint["name"]}" class="{servo_class(joint["name"])}" '
                      f'axis="{vec(joint["axis"])}" range="{fmt(lo)} {fmt(hi)}"/>')
     group = group_of(link)
-    lines += [mjcf_geom(g, group, ind + "  ") for g in link_geoms(params, link)]
+    lines += [mjcf_geom(g, group, ind + "  ") for g in link_geoms(params, link) + list((drawn or {}).get(link, ()))]
     for name, (flink, fpos) in frames.items():
         if flink == link:
             lines.append(f'{ind}  <site name="{name}" pos="{vec(fpos)}" size="0.01"/>')
     if link == "HEAD_LINK1":
         lines += mjcf_cameras(ind + "  ")
     for child in children.get(link, []):
-        lines += mjcf_body(params, child["child_link"], child, depth + 1, frames, children)
+        lines += mjcf_body(params, child["child_link"], child, depth + 1, frames, children, drawn)
     lines.append(f"{ind}</body>")
     return lines
 
@@ -349,7 +352,7 @@ def mjcf_cameras(ind: str) -> list[str]:
     return lines
 
 
-def mjcf_defaults() -> list[str]:
+def mjcf_defaults(drawn_group: int | None = None) -> list[str]:
     lines = ["  <default>", '    <default class="hrp2">']
     lines.append('      <geom condim="3" friction="1 0.005 0.0001" solref="0.005 1"/>')
     lines.append('      <site group="4" rgba="1 0.3 0.3 1"/>')
@@ -366,24 +369,31 @@ def mjcf_defaults() -> list[str]:
     lines.append('      <default class="visual">')
     lines.append('        <geom contype="0" conaffinity="0" group="2"/>')
     lines.append("      </default>")
+    if drawn_group is not None:
+        lines.append('      <default class="silhouette">')
+        lines.append(f'        <geom contype="0" conaffinity="0" group="{drawn_group}"/>')
+        lines.append("      </default>")
     lines += ["    </default>", "  </default>"]
     return lines
 
 
-def mjcf_robot(params: dict) -> str:
+def mjcf_robot(params: dict, drawn: dict | None = None, drawn_group: int | None = None,
+               drawn_rgba: dict | None = None) -> str:
+    """hrp2.xml; `drawn` (link -> geoms), of class "silhouette" in geom group `drawn_group` with the materials
+    `drawn_rgba` (name -> rgba), are drawing only (robot/silhouette.py)."""
     frames = site_frames(params)
     children = children_of(params)
     lines = ['<mujoco model="hrp2">',
              f"  {GENERATED_NOTE}",
              '  <compiler angle="radian" autolimits="true" inertiafromgeom="false"/>',
              '  <option timestep="0.001" integrator="implicitfast" cone="elliptic" impratio="10"/>']
-    lines += mjcf_defaults()
+    lines += mjcf_defaults(drawn_group)
     lines.append("  <asset>")
-    for name, rgba in RGBA.items():
+    for name, rgba in {**RGBA, **(drawn_rgba or {})}.items():
         lines.append(f'    <material name="{name}" rgba="{rgba}"/>')
     lines.append("  </asset>")
     lines.append("  <worldbody>")
-    lines += mjcf_body(params, BASE_LINK, None, 2, frames, children)
+    lines += mjcf_body(params, BASE_LINK, None, 2, frames, children, drawn)
     lines.append("  </worldbody>")
     lines.append("  <contact>")
     for a, b in CONTACT_EXCLUDES:

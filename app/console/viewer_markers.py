@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from behaviors.perception.models import HELD
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE, support_polygon
 from controller.balance.leg_odometry import control_to_world
 from controller.operation.targets import feet_frame, yaw_rotation
@@ -176,10 +177,12 @@ class RecognitionMarkers:
         self.shown: dict[str, tuple] = {}
 
     def update(self, recognitions) -> None:
-        """A marker and a label at each located object's position (the operator's correction once given)."""
+        """A marker and a label at each located object's position (the operator's correction once given); none
+        for an object the robot holds (where it was taken from is out of date)."""
         scene = self.scene
+        recognitions = {n: r for n, r in recognitions.items() if r.get("status") != HELD}
         for name in list(self.shown):
-            if name not in recognitions:  # a reset forgot it
+            if name not in recognitions:  # a reset forgot it, or the robot took it
                 for handle in reversed(self.shown.pop(name)[:2]):
                     handle.remove()
         for name, rec in recognitions.items():

@@ -12,6 +12,8 @@ import trimesh
 log = logging.getLogger(__name__)
 
 _VISUAL_GROUPS = (0, 1, 2)  # MJCF geom groups drawn by default; group 3 holds the collision shapes
+#: The robot's silhouette (robot/silhouette.py): a body with geoms in this group is drawn by them alone.
+_SILHOUETTE_GROUP = 5
 
 
 def _rgb_opacity(rgba: np.ndarray) -> tuple[tuple[int, int, int], float | None]:
@@ -49,24 +51,39 @@ def _geom_color(model: mujoco.MjModel, g: int) -> np.ndarray:
     return np.asarray(model.geom_rgba[g])
 
 
+def drawn_geoms(model: mujoco.MjModel) -> list[int]:
+    """The geoms the view draws: a body's silhouette if it has one, else its visual geoms (groups 0-2), else (a
+    body with none) its collision geoms."""
+    groups = np.asarray(model.geom_group)
+    bodies = np.asarray(model.geom_bodyid)
+    has_silhouette = np.zeros(model.nbody, dtype=bool)
+    has_visual = np.zeros(model.nbody, dtype=bool)
+    has_silhouette[bodies[groups == _SILHOUETTE_GROUP]] = True
+    has_visual[bodies[np.isin(groups, _VISUAL_GROUPS)]] = True
+    out = []
+    for g in range(model.ngeom):
+        b = bodies[g]
+        if has_silhouette[b]:
+            keep = groups[g] == _SILHOUETTE_GROUP
+        else:
+            keep = (groups[g] in _VISUAL_GROUPS) == bool(has_visual[b]) and groups[g] != _SILHOUETTE_GROUP
+        if keep:
+            out.append(g)
+    return out
+
+
 def add_model(scene, model: mujoco.MjModel) -> tuple[list, list]:
     """Draw a MuJoCo model's bodies in a viser scene: one frame per moving body ("/bodies/<name>", placed later
-    from body poses) holding its visual geoms (or its collision geoms when it has no visual one), the world's geoms
-    under "/static". Returns (the frames of bodies 1..nbody-1, every node made)."""
+    from body poses) holding the geoms drawn_geoms() picks, the world's geoms under "/static". Returns (the
+    frames of bodies 1..nbody-1, every node made)."""
     names = tuple(model.body(b).name for b in range(model.nbody))
-    has_visual = np.zeros(model.nbody, dtype=bool)
-    for g in range(model.ngeom):
-        if model.geom_group[g] in _VISUAL_GROUPS:
-            has_visual[model.geom_bodyid[g]] = True
     frames, nodes = [], []
     for b in range(1, model.nbody):
         frame = scene.add_frame(f"/bodies/{names[b]}", show_axes=False)
         frames.append(frame)
         nodes.append(frame)
-    for g in range(model.ngeom):
+    for g in drawn_geoms(model):
         b = model.geom_bodyid[g]
-        if (model.geom_group[g] in _VISUAL_GROUPS) != bool(has_visual[b]):
-            continue  # draw the visual geoms, or the collision ones of bodies that have no visual
         parent = "/static" if b == 0 else f"/bodies/{names[b]}"
         node = add_geom(scene, model, g, f"{parent}/geom{g}")
         if node is not None:

@@ -107,7 +107,8 @@ def overlay(name: str, recognition: Mapping[str, Any], T_world_camera, intrinsic
     position = recognition["position_m"]
     corners = box_corners_world(position, math.radians(float(recognition.get("yaw_deg", 0.0))),
                                 OBJECT_HALF_EXTENTS_M.get(name, DEFAULT_HALF_EXTENTS_M))
-    keep = ("object", "position_m", "sigma_m", "yaw_deg", "time_s", "status", "estimated_position_m", "bbox_px")
+    keep = ("object", "position_m", "sigma_m", "yaw_deg", "time_s", "status", "estimated_position_m", "bbox_px",
+            "verdict_detail")
     return {"name": name, **{k: recognition[k] for k in keep if k in recognition},
             "box_px": image_box_px(T_world_camera, intrinsics, corners)}
 

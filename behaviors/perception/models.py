@@ -28,3 +28,10 @@ class TrashBoxModel:
 
 CAN = CanModel()
 TRASH_BOX = TrashBoxModel()
+
+#: A recognition's status beyond the operator's "confirmed" / "corrected": the robot holds the object (take_can)
+#: or saw where it landed (throw_can); the page shows no Confirm for these.
+HELD = "held"
+IN_BOX = "in the box"
+OUT_OF_BOX = "out of the box"
+NOT_ON_THE_TABLE = (HELD, IN_BOX, OUT_OF_BOX)

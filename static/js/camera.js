@@ -1,7 +1,8 @@
 // The wide head camera (WS /ws/camera: meta, then the JPEG) and the recognitions drawn over it, each with a popup
-// to confirm or correct it.
-import {log, post, wsUrl} from "./api.js";
-import {$, el, fmt, setClass, setText, xyz} from "./dom.js";
+// to confirm or correct it (camera_popups.js).
+import {wsUrl} from "./api.js";
+import {drawRecognitions, watchFrameSize} from "./camera_popups.js";
+import {$, fmt, setText} from "./dom.js";
 
 const CAMERA_HZ = 12;  // asked of the stream: a little over the 10 Hz the view must keep
 window.hrp2Camera = {frames: 0, seq: null, meta: null, src: null};  // src: the frame on screen (the next may load)
@@ -41,7 +42,9 @@ function showCameraFrame(blob, meta) {
   img.onerror = () => shown(false);
   img.src = URL.createObjectURL(blob);
 }
+let watching = false;
 export function startCamera() {
+  if (!watching) { watching = true; watchFrameSize(); }
   if (cameraWs || document.hidden) return;  // a hidden page watches nothing: the console renders for no one
   let ws;
   try { ws = new WebSocket(wsUrl(`/ws/camera?rate_hz=${CAMERA_HZ}`)); } catch (e) { return; }
@@ -64,70 +67,3 @@ document.addEventListener("visibilitychange", () => {
   if (document.hidden && cameraWs) { const ws = cameraWs; cameraWs = null; ws.close(); }
   else if (!document.hidden) startCamera();
 });
-
-const popups = new Map();  // object name -> {box, pop, key, editing}
-function drawRecognitions(meta) {
-  const layer = $("camera-popups");
-  const scale = $("camera-img").clientWidth / (meta.width || 320);
-  const seen = new Set();
-  let stacked = 0;
-  for (const r of meta.recognitions || []) {
-    seen.add(r.name);
-    let p = popups.get(r.name);
-    if (!p) {
-      p = {box: el("div", {class: "rec-box"}), pop: el("div", {class: "rec-pop", role: "dialog",
-                                                               "aria-label": `recognition of ${r.name}`}),
-           key: null, editing: false};
-      layer.append(p.box, p.pop);
-      popups.set(r.name, p);
-    }
-    const status = r.status || "estimated";
-    setClass(p.box, `rec-box ${status}`);
-    setClass(p.pop, `rec-pop ${status}`);
-    const key = JSON.stringify([r.position_m, status, r.time_s]);
-    if (key !== p.key && !p.editing) {
-      if (p.key === null || JSON.parse(p.key)[2] !== r.time_s) {  // a new recognition: into the history too
-        log(`recognition: ${r.name} at ${xyz(r.position_m)} m (${status}); confirm or correct it over the camera view`,
-            "other");
-      }
-      p.key = key;
-      renderPopup(p, r, status);
-    }
-    if (r.box_px) {
-      const [u0, v0, u1, v1] = r.box_px.map((v) => v * scale);
-      Object.assign(p.box.style, {left: `${u0}px`, top: `${v0}px`, width: `${u1 - u0}px`, height: `${v1 - v0}px`,
-                                  display: "block"});
-      Object.assign(p.pop.style, {left: `${Math.min(u1 + 4, 320 - 40)}px`, top: `${Math.max(0, v0 - 10)}px`});
-    } else {
-      p.box.style.display = "none";
-      Object.assign(p.pop.style, {left: "4px", top: `${4 + 44 * stacked++}px`});
-    }
-  }
-  for (const [name, p] of popups) {
-    if (!seen.has(name)) { p.box.remove(); p.pop.remove(); popups.delete(name); }
-  }
-}
-function renderPopup(p, r, status) {
-  const sigma = r.sigma_m ? Math.hypot(r.sigma_m[0], r.sigma_m[1]) * 1000 : null;
-  const text = `${r.name} at ${xyz(r.position_m)} m` + (sigma !== null ? `, sigma ${fmt(sigma, 1)} mm` : "") +
-    (r.box_px ? "" : " (out of view)") + ` - ${status}`;
-  const confirm = el("button", {type: "button", text: "Confirm", onclick: async () => {
-    const d = await post(`/api/recognitions/${r.name}/confirm`, {});
-    if (d) log(d.message, "ok");
-  }});
-  const form = el("form", {hidden: true, "aria-label": `corrected position of ${r.name}`});
-  const inputs = ["x", "y", "z"].map((axis, i) => el("input", {type: "number", step: "any", min: -20, max: 20,
-    value: r.position_m[i], "aria-label": `${r.name} ${axis} [m]`, required: true}));
-  form.append(...inputs, el("button", {type: "submit", text: "Send"}));
-  form.addEventListener("submit", async (e) => {
-    e.preventDefault();
-    const d = await post(`/api/recognitions/${r.name}/correct`, {position_m: inputs.map((x) => Number(x.value))});
-    if (d) { log(d.message, "ok"); p.editing = false; form.hidden = true; }
-  });
-  const correct = el("button", {type: "button", text: "Correct", onclick: () => {
-    p.editing = form.hidden;
-    form.hidden = !form.hidden;
-    if (!form.hidden) inputs[0].focus();
-  }});
-  p.pop.replaceChildren(el("div", {text}), confirm, correct, form);
-}

@@ -194,6 +194,14 @@ def test_a_located_object_gets_a_marker_at_its_position_and_a_correction_moves_i
     sphere, label, _ = viewer._recognition_markers["can"]
     np.testing.assert_allclose(sphere.position, [1.25, 0.1, 0.75])
     assert sphere.color == (40, 170, 60)
+    robot.host.recognitions["can"] = {**robot.host.recognitions["can"], "status": "held"}  # take_can holds it
+    robot.step()
+    viewer._update_recognitions(service.recognitions())
+    assert "can" not in viewer._recognition_markers  # its marker on the table went
+    robot.host.recognitions["can"] = {"object": "can", "position_m": [1.2, 0.1, 0.75], "sigma_m": [0.003, 0.004, 0.0]}
+    robot.step()
+    viewer._update_recognitions(service.recognitions())
+    assert "can" in viewer._recognition_markers
     robot.reset()
     viewer._update_recognitions(service.recognitions())
     assert "can" not in viewer._recognition_markers

@@ -32,6 +32,11 @@ def test_one_expo_trial_puts_the_can_in_the_box(trial):
     assert trial.succeeded, trial.verdict
 
 
+def test_the_robot_sees_where_the_can_landed_as_it_did(trial):
+    """throw_can's look at the box after the release (its images) says what the simulator's pose says."""
+    assert trial.landing_verdict == ("in the box" if trial.in_box else "out of the box")
+
+
 def test_the_can_is_located_and_released_within_40_mm(trial):
     assert trial.can_location_error_mm is not None and trial.can_location_error_mm < ERROR_LIMIT_MM
     assert trial.release_error_mm is not None and trial.release_error_mm < ERROR_LIMIT_MM

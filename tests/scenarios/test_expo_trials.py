@@ -23,7 +23,8 @@ ERROR_LIMIT_MM = 40.0
 
 @pytest.fixture(scope="module")
 def results():
-    out = sorted(run_trials(placements(TRIALS, SEED), workers=2), key=lambda r: r.trial)
+    # without throw_can's look at where the can landed (21 s of each trial's ~160, checked in test_expo_behaviors)
+    out = sorted(run_trials(placements(TRIALS, SEED), workers=2, look_after=False), key=lambda r: r.trial)
     print("\n" + summary_table(out))
     return out
 

@@ -49,6 +49,7 @@ class TrialResult:
     sim_time_s: float
     wall_time_s: float
     message: str
+    landing_verdict: str | None = None  # where throw_can saw the can end, from its images ("in the box", ...)
 
     @property
     def succeeded(self) -> bool:
@@ -68,9 +69,10 @@ def _inside_box(can_m: np.ndarray, box_xy) -> bool:
 
 
 def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, trial: int = 0,
-              progress=None) -> TrialResult:
+              progress=None, look_after: bool = True) -> TrialResult:
     """One trial: the can U along the near long side from its middle, V inward from the near edge [m]; the
-    table's near edge `robot_distance_m` ahead of the robot, the trash box where it is relative to the table."""
+    table's near edge `robot_distance_m` ahead of the robot, the trash box where it is relative to the table;
+    `look_after`: throw_can ends by looking where the can landed (its verdict in `landing_verdict`)."""
     wall0 = time.perf_counter()
     robot = LocalRobot("expo", speed=None)
     service = OperatorService(robot)
@@ -87,8 +89,9 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
     look_box = {"x_m": box_xy[0], "y_m": box_xy[1], "z_m": gen.TRASH_BOX_OUTER_M[2]}
     # the table's place is known ([OP] VI): take_can keeps the feet clear of its near edge
     steps = [("locate_can", look_table), ("take_can", {"table_edge_x_m": edge_x}), ("locate_trash_box", look_box),
-             ("throw_can", {})]
+             ("throw_can", {"look_after": look_after})]
     errors: dict[str, float | None] = {"locate": None, "relocate": None, "release": None, "estimate": None}
+    landing = None
     message, fallen = "", False
     seen_relocate = False
     for name, params in steps:
@@ -119,6 +122,8 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
             errors["locate"] = 1e3 * float(np.linalg.norm(np.array(rec["position_m"]) - can_true))
         if name == "throw_can" and "release_estimate" in status.result:
             errors["estimate"] = 1e3 * status.result["release_estimate"]["error_m"]
+        if name == "throw_can":
+            landing = (status.result.get("landing") or {}).get("verdict")
         if fallen or status.state != "succeeded":
             message = "the robot fell" if fallen else f"{name} {status.state}: {status.message}"
             break
@@ -138,7 +143,7 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
     verdict = "succeeded" if in_box and not message else f"failed: {message}"
     return TrialResult(trial, can_u_m, can_v_m, robot_distance_m, verdict, errors["locate"], errors["relocate"],
                        errors["release"], errors["estimate"], in_box, fallen, sim_s,
-                       time.perf_counter() - wall0, detail)
+                       time.perf_counter() - wall0, detail, landing)
 
 
 def placements(n: int, seed: int) -> list[tuple[float, float, float]]:
@@ -149,16 +154,16 @@ def placements(n: int, seed: int) -> list[tuple[float, float, float]]:
 
 
 def run_trials(trials: list[tuple[float, float, float]], workers: int = 1,
-               progress=None) -> Iterator[TrialResult]:
+               progress=None, look_after: bool = True) -> Iterator[TrialResult]:
     """Each (U, V, distance) as a trial, in `workers` spawned processes (each trial builds its own robot:
     the results are the same however many run at once); yields them as they finish."""
     if workers <= 1:
         for i, (u, v, d) in enumerate(trials):
-            yield run_trial(u, v, d, trial=i, progress=progress)
+            yield run_trial(u, v, d, trial=i, progress=progress, look_after=look_after)
         return
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        futures = [pool.submit(run_trial, u, v, d, i) for i, (u, v, d) in enumerate(trials)]
+        futures = [pool.submit(run_trial, u, v, d, i, None, look_after) for i, (u, v, d) in enumerate(trials)]
         for future in as_completed(futures):
             yield future.result()
 
