@@ -97,18 +97,23 @@ class Viewer:
         with self.server.atomic():
             self._set_body_poses(truth)
 
-    def _set_body_poses(self, truth) -> None:
+    def _set_body_poses(self, truth) -> bool:
+        """False (nothing drawn) for a snapshot of another model than the one drawn: around a reset to another
+        scene, the scene's name and the snapshots change at different moments."""
         pos, quat = truth.body_pos_world, truth.body_quat_wxyz
+        if len(pos) != len(self._frames) + 1:
+            return False
         for b, frame in enumerate(self._frames, start=1):
             frame.position = pos[b]
             frame.wxyz = quat[b]
+        return True
 
     def apply_snapshot(self, snap) -> None:
         """Body poses and the balance markers of one observation (a snapshot with the ground truth beside it),
         in one atomic batch."""
         with self.server.atomic():
-            self._set_body_poses(snap.truth)
-            self._balance_markers.update(snap)
+            if self._set_body_poses(snap.truth):
+                self._balance_markers.update(snap)
 
     # ---- markers (app/console/viewer_markers.py) --------------------------------------------------------
     @property
