@@ -28,9 +28,10 @@ from robot.scenes import (
 )
 
 #: The hinge (the fridge frame's origin) in the world at the default pose [m]: the cabinet's front face 0.56 m
-#: ahead of the robot, its right edge 0.35 m to the robot's right.
-FRIDGE_HINGE_M = (0.56, -0.35)
-FRIDGE_CABINET_M = (0.40, 0.50, 1.10)  # depth (x), width (y), height (z) [m]
+#: ahead of the robot, its right edge 0.42 m to the robot's right: the handle 0.20 m right of the body's middle, where the
+#: right hand takes a can (take_can: 0.19-0.28 m; nearer the middle the wrist met the chest).
+FRIDGE_HINGE_M = (0.50, -0.42)
+FRIDGE_CABINET_M = (0.40, 0.60, 1.10)  # depth (x), width (y), height (z) [m]
 FRIDGE_WALL_M = 0.02  # walls, top, back and the shelf [m]
 FRIDGE_SHELF_TOP_M = 0.72  # the shelf's top face the can stands on [m]
 FRIDGE_DOOR_THICKNESS_M = 0.03
@@ -39,16 +40,20 @@ FRIDGE_DOOR_MASS_KG = 4.0
 FRIDGE_DOOR_RANGE_DEG = (0.0, 110.0)  # 0 closed (the stop), positive = open toward the robot
 FRIDGE_DOOR_DAMPING = 1.0  # N m s/rad
 FRIDGE_DOOR_FRICTIONLOSS = 0.3  # N m
-#: The handle: a vertical bar [m] this far from the hinge along the door, its axis this far in front of the
-#: door's face, between these heights, of this radius (a 30 mm bar: the JRL hand's jaws open to 0.10 m).
-FRIDGE_HANDLE_FROM_HINGE_M = 0.36
+#: The handle: a vertical bar [m] this far from the hinge along the door (not at the door's free edge: there
+#: the right hand would cross the body's middle and the left hand would have no room beside the door), its axis this far in front of the
+#: door's face, between these heights, of this radius (a 40 mm bar: the JRL hand's jaws open to 0.10 m; a
+#: 30 mm bar, pulled, slipped out between the pads). Its contacts resist turning (condim 6, as the can's).
+FRIDGE_HANDLE_FROM_HINGE_M = 0.22
 FRIDGE_HANDLE_STANDOFF_M = 0.045
-FRIDGE_HANDLE_Z_M = (0.70, 1.00)
-FRIDGE_HANDLE_RADIUS_M = 0.015
-FRIDGE_HANDLE_FRICTION = (1.0, 0.005, 0.0001)
-#: The can's default place on the shelf, in the fridge frame [m] (x in from the cabinet's front, y from the hinge).
-FRIDGE_CAN_IN_FRIDGE_M = (0.13, 0.37)
-FRIDGE_CAN_Y_RANGE_M = (0.33, 0.41)  # the can's y places the experiment draws from (fridge frame) [m]
+FRIDGE_HANDLE_Z_M = (0.65, 0.95)
+FRIDGE_HANDLE_RADIUS_M = 0.02
+FRIDGE_HANDLE_FRICTION = (1.5, 0.02, 0.001)
+#: The can's default place on the shelf, in the fridge frame [m] (x in from the cabinet's front, y from the hinge):
+#: 0.08 m left of the body's middle, where the left hand takes it (nearer the middle its arm met its limits and
+#: the right wrist), 0.55 m ahead (the right hand takes a can at most 0.56 m ahead).
+FRIDGE_CAN_IN_FRIDGE_M = (0.05, 0.49)
+FRIDGE_CAN_Y_RANGE_M = (0.47, 0.51)  # the can's y places the experiment draws from (fridge frame) [m]
 
 FRIDGE_RGBA = {
     "cabinet": "0.82 0.82 0.8 1",  # light grey, low saturation
@@ -101,7 +106,8 @@ def fridge_door_lines() -> list[str]:
         f'damping="{fmt(FRIDGE_DOOR_DAMPING)}" frictionloss="{fmt(FRIDGE_DOOR_FRICTIONLOSS)}" solreflimit="0.005 1"/>',
         _box("fridge_door_panel", (-t, 0.0, gap), (0.0, w, gap + dh), "door", ind),
         f'{ind}<geom name="fridge_handle" type="cylinder" fromto="{vec((hx, hy, z0, hx, hy, z1))}" '
-        f'size="{fmt(FRIDGE_HANDLE_RADIUS_M)}" material="fridge_handle" friction="{vec(FRIDGE_HANDLE_FRICTION)}"/>',
+        f'size="{fmt(FRIDGE_HANDLE_RADIUS_M)}" material="fridge_handle" friction="{vec(FRIDGE_HANDLE_FRICTION)}" '
+        f'condim="{CAN_CONDIM}" solref="{vec(CAN_SOLREF)}"/>',
     ]
     for k, z in enumerate((z0 + 0.02, z1 - 0.02)):
         lines.append(f'{ind}<geom name="fridge_handle_post{k}" type="box" pos="{vec(((hx - t) / 2, hy, z))}" '

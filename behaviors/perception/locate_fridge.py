@@ -11,7 +11,6 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from behaviors.perception.geometry import fit_circle_known_radius
 from behaviors.perception.locate import SIGMA_FLOOR_M, Recognition, _bbox, _check, _region_points
 from behaviors.perception.segmentation import ColourRange
 from robot.images import CameraIntrinsics
@@ -19,15 +18,17 @@ from robot.images import CameraIntrinsics
 #: The handle is yellow, the door blue (robot/scene_fridge.py's colours).
 YELLOW = ColourRange(hue_deg=50.0, hue_tolerance_deg=15.0)
 BLUE = ColourRange(hue_deg=220.0, hue_tolerance_deg=20.0)
+#: [m] points this close below the bar's highest are on its top disc
+TOP_DISC_BAND_M = 0.004
 
 
 @dataclass(frozen=True, slots=True)
 class FridgeModel:
     """The fridge the robot knows: where the handle is on the door relative to the hinge, and its size."""
 
-    handle_radius_m: float = 0.015
+    handle_radius_m: float = 0.02
     handle_length_m: float = 0.30  # the bar's visible length (its top is what the image shows best)
-    handle_from_hinge_m: float = 0.36  # along the door, from the hinge's axis to the bar's axis
+    handle_from_hinge_m: float = 0.22  # along the door, from the hinge's axis to the bar's axis
     handle_off_door_m: float = 0.075  # the bar's axis in front of the door's inner face (door 0.03 + 0.045)
 
 
@@ -67,9 +68,9 @@ def hinge_from_handle_xy(handle_xy, yaw_rad: float, model: FridgeModel = FRIDGE)
 
 def locate_fridge_handle(rgb, depth_m, intrinsics: CameraIntrinsics, T_world_camera, time_s: float = 0.0,
                          model: FridgeModel = FRIDGE, min_pixels: int = 30) -> Recognition | None:
-    """The handle: the largest yellow region fitted as a vertical cylinder of the model's radius (position: its
-    axis at the bar's middle height, from its top and the model's length); yaw: the door's normal from the
-    largest blue region. None if either has fewer than `min_pixels` pixels."""
+    """The handle: the largest yellow region fitted as a vertical cylinder of the model's radius (position: the
+    top of its axis: the head, looking down on it from the standing robot, sees the top best and the bottom
+    not at all); yaw: the door's normal from the largest blue region. None if either has fewer than `min_pixels` pixels."""
     rgb, depth = _check(rgb, depth_m, intrinsics, T_world_camera)
     region, points, _ = _region_points(rgb, depth, intrinsics, T_world_camera, YELLOW)
     door_region, door, _ = _region_points(rgb, depth, intrinsics, T_world_camera, BLUE)
@@ -77,20 +78,20 @@ def locate_fridge_handle(rgb, depth_m, intrinsics: CameraIntrinsics, T_world_cam
         return None
     camera_xy = np.asarray(T_world_camera, dtype=float)[:2, 3]
     top = float(np.percentile(points[:, 2], 99))
-    side = points[points[:, 2] < top - 0.01]
-    side = side if len(side) >= 10 else points
-    mean_xy = side[:, :2].mean(axis=0)
-    away = mean_xy - camera_xy
-    away /= max(np.linalg.norm(away), 1e-9)
-    centre_xy, cov_xy, _ = fit_circle_known_radius(side[:, :2], model.handle_radius_m,
-                                                   mean_xy + model.handle_radius_m * away)
+    # the bar's top disc (seen from above, whole): its centroid is on the axis; the side below it mixes with the
+    # posts that hold the bar off the door
+    disc = points[points[:, 2] > top - TOP_DISC_BAND_M]
+    if len(disc) < 10:
+        return None
+    centre_xy = disc[:, :2].mean(axis=0)
+    cov_xy = np.cov(disc[:, :2].T) / len(disc)
     cov = np.zeros((3, 3))
     cov[:2, :2] = cov_xy
     cov += SIGMA_FLOOR_M ** 2 * np.eye(3)
-    position = np.array([centre_xy[0], centre_xy[1], top - model.handle_length_m / 2])
+    position = np.array([centre_xy[0], centre_xy[1], top])
     # the door's face beside the handle's height (not its top face), by image column
     _, door_u = np.nonzero(door_region)
-    face = np.abs(door[:, 2] - position[2]) < model.handle_length_m / 2
+    face = np.abs(door[:, 2] - (top - model.handle_length_m / 2)) < model.handle_length_m / 2
     if np.count_nonzero(face) < min_pixels:
         return None
     yaw = door_yaw_rad(door[face, :2], camera_xy, door_u[face])
