@@ -494,6 +494,10 @@ def main(argv: Sequence[str] | None = None) -> int:
               "--help)",
               file=sys.stderr)
         code = 2
+    elif argv[:2] == ["experiment", "fridge"]:
+        from app.lab.experiments.fridge import main as fridge_main
+
+        code = fridge_main(argv[2:])
     elif argv[:2] == ["experiment", "floor"]:
         from app.lab.experiments.floor_object import main as floor_main
 

@@ -5,8 +5,9 @@ from __future__ import annotations
 
 from behaviors.locating import LocateObject, locate_params
 
-#: The fridge's usual place (robot/scene_fridge.py): the handle about 0.43 m ahead, 0.20 m to the right, at its top (0.95 m): the head pitches down no further at that distance.
-HANDLE_LOOK_M = (0.43, -0.20, 0.95)
+#: The fridge's usual place (robot/scene_fridge.py): the handle about 0.5 m ahead, 0.20 m to the right, at its top
+#: (0.95 m): the head pitches down no further at that distance.
+HANDLE_LOOK_M = (0.50, -0.20, 0.95)
 
 
 class LocateHandle(LocateObject):

@@ -17,10 +17,9 @@ from behaviors.follow_arc import FollowArc, FollowArcParams
 from behaviors.grasp import Grasp, GraspParams
 from behaviors.locate_handle import LocateHandle
 from behaviors.perception.locate_fridge import FRIDGE, hinge_from_handle_xy
-from behaviors.reach import Reach, ReachParams
+from behaviors.reach import Reach, reach_pose
 from behaviors.release import Release, ReleaseParams
 from behaviors.servo import rot_z
-from controller.kinematics.rotations import matrix_to_rpy
 
 #: The open hand rises where it hangs, goes forward beside the body, then to the pre-grasp (take_can's path to
 #: the can: straight from READY the wrist met the chest) [m, F].
@@ -52,7 +51,8 @@ def grasp_rotation_feet(door_yaw_feet_rad: float) -> np.ndarray:
     approach = np.array([math.cos(a), 0.0, -math.sin(a)])
     z_hand = -approach
     x_hand = np.array([0.0, 1.0, 0.0])
-    return rot_z(door_yaw_feet_rad + math.radians(GRASP_YAW_FROM_DOOR_DEG)) @ np.column_stack([x_hand, np.cross(z_hand, x_hand), z_hand])
+    R_door = np.column_stack([x_hand, np.cross(z_hand, x_hand), z_hand])
+    return rot_z(door_yaw_feet_rad + math.radians(GRASP_YAW_FROM_DOOR_DEG)) @ R_door
 
 
 def _bar_in_hand_m() -> np.ndarray:
@@ -102,13 +102,7 @@ class OpenDoor(Composite):
         return (*self.points(), "rhand.gripper")
 
     def _reach(self, p_feet, R_feet=None) -> Reach:
-        kw = {}
-        if R_feet is not None:
-            roll, pitch, yaw = np.degrees(matrix_to_rpy(R_feet))
-            kw = {"keep_orientation": False, "roll_deg": float(roll), "pitch_deg": float(pitch),
-                  "yaw_deg": float(yaw)}
-        return Reach(ReachParams(hand="rhand", x_m=float(p_feet[0]), y_m=float(p_feet[1]), z_m=float(p_feet[2]),
-                                 speed_m_s=self.params.speed_m_s, tolerance_m=0.01, tolerance_deg=3.0, **kw))
+        return reach_pose("rhand", p_feet, R_feet, self.params.speed_m_s)
 
     def plan(self, ctx: Context) -> Plan:
         p = self.params

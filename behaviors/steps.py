@@ -26,8 +26,8 @@ from behaviors.walk_to import WalkTo
 from controller.core.errors import UnknownName
 
 STEPS: dict[str, type[Behavior]] = {cls.name: cls for cls in (
-    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateHandle, LocateTrashBox, ApproachTable,
-    TakeCan, ThrowCan, FollowArc, OpenDoor)}
+    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateHandle, LocateTrashBox,
+    ApproachTable, TakeCan, ThrowCan, FollowArc, OpenDoor)}
 
 
 def make_from(classes: Mapping[str, type[Behavior]], name: str, params: Mapping[str, Any] | None = None,

@@ -27,10 +27,10 @@ from robot.scenes import (
     mjcf_scene_file,
 )
 
-#: The hinge (the fridge frame's origin) in the world at the default pose [m]: the cabinet's front face 0.56 m
-#: ahead of the robot, its right edge 0.42 m to the robot's right: the handle 0.20 m right of the body's middle, where the
-#: right hand takes a can (take_can: 0.19-0.28 m; nearer the middle the wrist met the chest).
-FRIDGE_HINGE_M = (0.50, -0.42)
+#: The hinge (the fridge frame's origin) in the world at the default pose [m]: the cabinet's front face 0.58 m
+#: ahead of the robot, its right edge 0.42 m to the robot's right: the handle 0.20 m right of the body's middle,
+#: where the right hand takes a can (take_can: 0.19-0.28 m; nearer the middle the wrist met the chest).
+FRIDGE_HINGE_M = (0.58, -0.42)
 FRIDGE_CABINET_M = (0.40, 0.60, 1.10)  # depth (x), width (y), height (z) [m]
 FRIDGE_WALL_M = 0.02  # walls, top, back and the shelf [m]
 FRIDGE_SHELF_TOP_M = 0.72  # the shelf's top face the can stands on [m]
@@ -41,8 +41,8 @@ FRIDGE_DOOR_RANGE_DEG = (0.0, 110.0)  # 0 closed (the stop), positive = open tow
 FRIDGE_DOOR_DAMPING = 1.0  # N m s/rad
 FRIDGE_DOOR_FRICTIONLOSS = 0.3  # N m
 #: The handle: a vertical bar [m] this far from the hinge along the door (not at the door's free edge: there
-#: the right hand would cross the body's middle and the left hand would have no room beside the door), its axis this far in front of the
-#: door's face, between these heights, of this radius (a 40 mm bar: the JRL hand's jaws open to 0.10 m; a
+#: the right hand would cross the body's middle and the left hand would have no room beside the door), its axis
+#: this far in front of the door's face, between these heights, of this radius (a 40 mm bar: the JRL hand's jaws open to 0.10 m; a
 #: 30 mm bar, pulled, slipped out between the pads). Its contacts resist turning (condim 6, as the can's).
 FRIDGE_HANDLE_FROM_HINGE_M = 0.22
 FRIDGE_HANDLE_STANDOFF_M = 0.045
@@ -51,7 +51,8 @@ FRIDGE_HANDLE_RADIUS_M = 0.02
 FRIDGE_HANDLE_FRICTION = (1.5, 0.02, 0.001)
 #: The can's default place on the shelf, in the fridge frame [m] (x in from the cabinet's front, y from the hinge):
 #: 0.08 m left of the body's middle, where the left hand takes it (nearer the middle its arm met its limits and
-#: the right wrist), 0.55 m ahead (the right hand takes a can at most 0.56 m ahead).
+#: the right wrist), 0.63 m ahead: beyond the 0.56 m a standing hand reaches (the left hand leans in; with the
+#: fridge nearer, the door's arc came so close to the body that the right arm stopped it at 24 deg).
 FRIDGE_CAN_IN_FRIDGE_M = (0.05, 0.49)
 FRIDGE_CAN_Y_RANGE_M = (0.47, 0.51)  # the can's y places the experiment draws from (fridge frame) [m]
 

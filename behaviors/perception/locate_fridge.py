@@ -70,7 +70,8 @@ def locate_fridge_handle(rgb, depth_m, intrinsics: CameraIntrinsics, T_world_cam
                          model: FridgeModel = FRIDGE, min_pixels: int = 30) -> Recognition | None:
     """The handle: the largest yellow region fitted as a vertical cylinder of the model's radius (position: the
     top of its axis: the head, looking down on it from the standing robot, sees the top best and the bottom
-    not at all); yaw: the door's normal from the largest blue region. None if either has fewer than `min_pixels` pixels."""
+    not at all); yaw: the door's normal from the largest blue region. None if either has fewer than `min_pixels`
+    pixels."""
     rgb, depth = _check(rgb, depth_m, intrinsics, T_world_camera)
     region, points, _ = _region_points(rgb, depth, intrinsics, T_world_camera, YELLOW)
     door_region, door, _ = _region_points(rgb, depth, intrinsics, T_world_camera, BLUE)

@@ -15,8 +15,12 @@ the shelf and floor (held), the door open more than DOOR_OPEN_MIN_DEG, the robot
 from __future__ import annotations
 
 import math
+import multiprocessing
 import time
-from dataclasses import dataclass
+from collections.abc import Iterator
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -47,13 +51,18 @@ LHAND_READY_M = (0.15, 0.30, 0.82)
 LHAND_VIA_M = (0.30, 0.30, 0.80)
 LHAND_ROTATE_AT_M = (0.36, 0.28, 0.82)
 #: The left hand's grasp: pitched down as the right hand's on the table, turned toward the body's middle [deg]
-LHAND_YAW_DEG = -30.0
+LHAND_YAW_DEG = -45.0
 PRE_GRASP_BACK_M = 0.10  # [m] along the approach
+#: [rad] the operator leans the waist forward for the left hand to reach into the fridge (the can 0.63 m ahead;
+#: standing upright the hand takes a can at most 0.56 m ahead), slowly: [rad/s]
+LEAN_RAD = math.radians(10.0)
+LEAN_RATE_RAD_S = math.radians(8.0)
 GRASP_PAST_CENTRE_M = 0.010  # [m] the palm seats the can (take_can's)
 GRASP_ABOVE_CENTRE_M = 0.015  # [m] (take_can's)
 LIFT_M = 0.03  # [m] the can lifted off the shelf
 OUT_M = (0.25, 0.18, 0.85)  # [m, F] the held can drawn out to here (the hand point)
 HELD_MIN_Z_M = 0.3  # [m] the can's centre above this at the end: held, not dropped
+THROUGH = ("can", "door")  # how far a trial goes: the can out (the task), or the door held open
 MIRROR_Y = np.diag([1.0, -1.0, 1.0])
 
 
@@ -92,6 +101,7 @@ class FridgeResult:
     fallen: bool
     sim_time_s: float
     wall_time_s: float
+    series: list = field(default_factory=list, repr=False)  # FridgeOperator.series
 
     @property
     def succeeded(self) -> bool:
@@ -102,17 +112,26 @@ class FridgeOperator(Operator):
     """The floor task's scripted operator, also counting the ticks in which a behaviour drives the right hand
     and the stick the left (from the operation layer's status)."""
 
-    def __init__(self, robot, service, progress=None) -> None:
+    def __init__(self, robot, service, progress=None, door_deg=None) -> None:
         super().__init__(robot, service, progress)
         self.two_point_ticks = 0
+        self.door_deg = door_deg  # () -> the door's angle [deg] from the simulator, for the record only
+        #: per tick: time [s], door [deg], |rhand behaviour twist| [m/s], |lhand stick twist| [m/s]
+        self.series: list[tuple[float, float, float, float]] = []
 
     def step(self) -> None:
         super().step()
-        op = self.robot.loop.snapshot.layers.get("op")
+        snap = self.robot.loop.snapshot
+        op = snap.layers.get("op")
+        right_m_s = left_m_s = 0.0
         if op is not None and op.active:
             right, left = op.points["rhand"], op.points["lhand"]
+            right_m_s = float(np.linalg.norm(np.asarray(right.behavior)[:3]))
+            left_m_s = float(np.linalg.norm(np.asarray(left.motion)[:3]))
             if np.any(np.asarray(right.behavior) != 0.0) and np.any(np.asarray(left.motion) != 0.0):
                 self.two_point_ticks += 1
+        if self.door_deg is not None:
+            self.series.append((float(snap.time_s), self.door_deg(), right_m_s, left_m_s))
 
     def until_phase(self, run_id: int, phases: tuple[str, ...], timeout_s: float) -> None:
         """Step until the run is in one of `phases`; a run that ended (or did not get there) ends the trial."""
@@ -137,9 +156,17 @@ def in_fridge(p_world, origin, yaw_rad: float) -> np.ndarray:
     return rot_z(yaw_rad).T @ (np.asarray(p_world, dtype=float) - origin)
 
 
+class _Done(Exception):
+    """The trial went as far as asked."""
+
+
 def run_trial(shift_x_m: float = 0.0, shift_y_m: float = 0.0, yaw_deg: float = 0.0,
-              can_y_m: float = fridge.FRIDGE_CAN_IN_FRIDGE_M[1], trial: int = 0, progress=None) -> FridgeResult:
-    """One trial: the fridge shifted and turned about its hinge, the can `can_y_m` from the hinge on the shelf."""
+              can_y_m: float = fridge.FRIDGE_CAN_IN_FRIDGE_M[1], trial: int = 0, progress=None,
+              through: str = "can") -> FridgeResult:
+    """One trial: the fridge shifted and turned about its hinge, the can `can_y_m` from the hinge on the shelf.
+    `through="door"` ends once the door is held open and the can located (the verdict: the door open, standing)."""
+    if through not in THROUGH:
+        raise ValueError(f"through={through!r}: one of {THROUGH}")
     wall0 = time.perf_counter()
     robot = LocalRobot("fridge", speed=None)
     service = OperatorService(robot)
@@ -149,7 +176,9 @@ def run_trial(shift_x_m: float = 0.0, shift_y_m: float = 0.0, yaw_deg: float = 0
     can_local = np.array([fridge.FRIDGE_CAN_IN_FRIDGE_M[0], can_y_m,
                           fridge.FRIDGE_SHELF_TOP_M + gen.CAN_HEIGHT_M / 2 + 0.001])
     can_true = plant.place_object("can", origin + rot_z(yaw) @ can_local, yaw)
-    op = FridgeOperator(robot, service, progress)
+    door_adr = plant.model.sensor("fridge_door_angle").adr[0]
+    op = FridgeOperator(robot, service, progress,
+                        door_deg=lambda: math.degrees(float(plant.data.sensordata[door_adr])))
     handle_error = can_error = None
     message = ""
     try:
@@ -172,6 +201,8 @@ def run_trial(shift_x_m: float = 0.0, shift_y_m: float = 0.0, yaw_deg: float = 0
             raise RuntimeError("the can was not located")
         can_seen = np.array(robot.host.recognitions["can"]["position_m"])
         can_error = 1e3 * float(np.linalg.norm(can_seen - can_true))
+        if through == "door":
+            raise _Done
         # the robot has not walked: the feet frame is where it started, the world's origin
         R = lhand_grasp_rotation_feet()
         approach = -R[:, 2]
@@ -181,8 +212,9 @@ def run_trial(shift_x_m: float = 0.0, shift_y_m: float = 0.0, yaw_deg: float = 0
                  required=True)
         op.drive(hand_m=np.array(LHAND_ROTATE_AT_M), hand_R=R, point="lhand", label="left hand turned", tol_m=0.01,
                  tol_rad=math.radians(2.0), required=True)
+        op.drive(waist_pitch_rad=LEAN_RAD, angular_rad_s=LEAN_RATE_RAD_S, label="lean forward", timeout_s=6.0)
         op.drive(hand_m=grasp - PRE_GRASP_BACK_M * approach, hand_R=R, point="lhand", label="pre-grasp",
-                 required=True)
+                 linear_m_s=0.05, required=True)
         op.drive(hand_m=grasp, hand_R=R, point="lhand", label="grasp", linear_m_s=0.05, required=True)
         if op.press("grasp", {"hand": "lhand"}).state != "succeeded":
             raise RuntimeError("the left hand missed the can")
@@ -192,7 +224,10 @@ def run_trial(shift_x_m: float = 0.0, shift_y_m: float = 0.0, yaw_deg: float = 0
                  label="back", linear_m_s=0.05, tol_m=0.01, required=True)
         op.drive(hand_m=np.array(OUT_M), hand_R=R, point="lhand", label="out", linear_m_s=0.05, tol_m=0.01,
                  required=True)
+        op.drive(waist_pitch_rad=0.0, angular_rad_s=LEAN_RATE_RAD_S, label="upright", timeout_s=6.0)
         op.wait(1.0)
+    except _Done:
+        pass
     except Exception as exc:  # a fall, a fault, a refused setpoint, a failed step: the trial ends there
         message = str(exc)
     door_deg = math.degrees(float(plant.data.sensordata[plant.model.sensor("fridge_door_angle").adr[0]]))
@@ -202,9 +237,81 @@ def run_trial(shift_x_m: float = 0.0, shift_y_m: float = 0.0, yaw_deg: float = 0
     robot.close()
     if not message and door_deg < DOOR_OPEN_MIN_DEG:
         message = f"the door is open {door_deg:.1f} deg, less than {DOOR_OPEN_MIN_DEG} deg"
-    if not message and not (can_out > 0.0 and can_end[2] > HELD_MIN_Z_M):
+    if not message and through == "can" and not (can_out > 0.0 and can_end[2] > HELD_MIN_Z_M):
         message = f"the can is at ({can_end[0]:.3f}, {can_end[1]:.3f}, {can_end[2]:.3f}) m, not out and held"
     verdict = "succeeded" if not message else f"failed: {message}"
     return FridgeResult(trial, shift_x_m, shift_y_m, yaw_deg, can_y_m, verdict, door_deg, can_out,
                         float(can_end[2]), handle_error, can_error, op.two_point_ticks, op.fallen, sim_s,
-                        time.perf_counter() - wall0)
+                        time.perf_counter() - wall0, op.series)
+
+
+def placements(n: int, seed: int) -> list[tuple[float, float, float, float]]:
+    """(shift x, shift y [m], yaw [deg], can y [m]) for n trials, uniform in the stated ranges."""
+    rng = np.random.default_rng(seed)
+    return [(float(rng.uniform(*SHIFT_X_RANGE_M)), float(rng.uniform(*SHIFT_Y_RANGE_M)),
+             float(rng.uniform(*YAW_RANGE_DEG)), float(rng.uniform(*fridge.FRIDGE_CAN_Y_RANGE_M)))
+            for _ in range(n)]
+
+
+def _trial(args: tuple) -> FridgeResult:
+    """One trial from (index, placement, through) in a worker process."""
+    i, (dx, dy, yaw, can_y), through = args
+    return run_trial(dx, dy, yaw, can_y, trial=i, through=through)
+
+
+def run_trials(trials: list[tuple[float, float, float, float]], workers: int = 1, progress=None,
+               through: str = "can") -> Iterator[FridgeResult]:
+    """Each placement as a trial, in `workers` spawned processes (each builds its own robot: the results do not
+    depend on how many run at once); yields them as they finish."""
+    if workers <= 1:
+        for i, (dx, dy, yaw, can_y) in enumerate(trials):
+            yield run_trial(dx, dy, yaw, can_y, trial=i, progress=progress, through=through)
+        return
+    ctx = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
+        futures = [pool.submit(_trial, (i, t, through)) for i, t in enumerate(trials)]
+        for future in as_completed(futures):
+            yield future.result()
+
+
+def trial_line(r: FridgeResult) -> str:
+    def mm(v):
+        return "-" if v is None else f"{v:.1f} mm"
+
+    return (f"trial {r.trial}: fridge ({r.shift_x_m:+.3f}, {r.shift_y_m:+.3f}) m {r.yaw_deg:+.1f} deg, can y "
+            f"{r.can_y_m:.3f} m: door {r.door_deg:.1f} deg, can out {1e3 * r.can_out_m:.0f} mm, z {r.can_z_m:.3f} m; "
+            f"handle located {mm(r.handle_error_mm)} off, can {mm(r.can_error_mm)} off; two-point ticks "
+            f"{r.two_point_ticks}; {r.sim_time_s:.0f} s sim in {r.wall_time_s:.0f} s: {r.verdict}")
+
+
+def main(argv) -> int:
+    import argparse
+
+    p = argparse.ArgumentParser(prog="hrp2-console experiment fridge",
+                                description="[OP] Fig. 8: the right hand opens the fridge door and holds it, the "
+                                            "left hand (the operator's stick) takes the can out.")
+    p.add_argument("--trials", type=int, help="seeded trials (default: one trial at the nominal placement)")
+    p.add_argument("--seed", type=int, default=8, help="seed of the placements")
+    p.add_argument("--workers", type=int, default=1, choices=range(1, 65), metavar="N",
+                   help="trials run in N processes at once (1-64)")
+    p.add_argument("--through", choices=THROUGH, default="can",
+                   help="door: end once the door is held open and the can located")
+    p.add_argument("--verbose", action="store_true", help="print each step (one process only)")
+    p.add_argument("--plot", type=Path, help="one trial: write its door angle and the two hands' twists as a PNG")
+    args = p.parse_args(list(argv))
+    log = (lambda m: print(m, flush=True)) if args.verbose else None
+    trials = placements(args.trials, args.seed) if args.trials else [(0.0, 0.0, 0.0, fridge.FRIDGE_CAN_IN_FRIDGE_M[1])]
+    results = []
+    for r in run_trials(trials, args.workers, progress=log, through=args.through):
+        results.append(r)
+        print(trial_line(r), flush=True)
+    if args.plot is not None and len(results) == 1:
+        from app.lab.experiments.fridge_plot import plot_fridge
+
+        plot_fridge(results[0].series, args.plot)
+        print(f"plot: {args.plot}")
+    ok = sum(r.succeeded for r in results)
+    door_ok = sum(r.door_deg >= DOOR_OPEN_MIN_DEG and not r.fallen for r in results)
+    print(f"door open >= {DOOR_OPEN_MIN_DEG:.0f} deg, standing: {door_ok}/{len(results)}")
+    print(f"{ok}/{len(results)} succeeded")
+    return 0 if ok == len(results) else 1
