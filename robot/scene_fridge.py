@@ -42,19 +42,20 @@ FRIDGE_DOOR_DAMPING = 1.0  # N m s/rad
 FRIDGE_DOOR_FRICTIONLOSS = 0.3  # N m
 #: The handle: a vertical bar [m] this far from the hinge along the door (not at the door's free edge: there
 #: the right hand would cross the body's middle and the left hand would have no room beside the door), its axis
-#: this far in front of the door's face, between these heights, of this radius (a 40 mm bar: the JRL hand's jaws open to 0.10 m; a
-#: 30 mm bar, pulled, slipped out between the pads). Its contacts resist turning (condim 6, as the can's).
+#: this far in front of the door's face, between these heights, of this radius (a 40 mm bar: the JRL hand's jaws
+#: open to 0.10 m; a 30 mm bar, pulled, slipped out between the pads). Its contacts resist turning (condim 6, as the
+#: can's) and grip (friction 1.5: at 1.0 the bar slid out at 24 deg).
 FRIDGE_HANDLE_FROM_HINGE_M = 0.22
 FRIDGE_HANDLE_STANDOFF_M = 0.045
 FRIDGE_HANDLE_Z_M = (0.65, 0.95)
 FRIDGE_HANDLE_RADIUS_M = 0.02
 FRIDGE_HANDLE_FRICTION = (1.5, 0.02, 0.001)
 #: The can's default place on the shelf, in the fridge frame [m] (x in from the cabinet's front, y from the hinge):
-#: 0.08 m left of the body's middle, where the left hand takes it (nearer the middle its arm met its limits and
-#: the right wrist), 0.63 m ahead: beyond the 0.56 m a standing hand reaches (the left hand leans in; with the
+#: 0.02 m right of the body's middle, where the left hand turned 45 deg takes it (0.07 m farther left its palm met
+#: the cabinet's left wall), 0.63 m ahead: beyond the 0.56 m a standing hand reaches (the left hand leans in; with the
 #: fridge nearer, the door's arc came so close to the body that the right arm stopped it at 24 deg).
-FRIDGE_CAN_IN_FRIDGE_M = (0.05, 0.49)
-FRIDGE_CAN_Y_RANGE_M = (0.47, 0.51)  # the can's y places the experiment draws from (fridge frame) [m]
+FRIDGE_CAN_IN_FRIDGE_M = (0.05, 0.40)
+FRIDGE_CAN_Y_RANGE_M = (0.38, 0.42)  # the can's y places the experiment draws from (fridge frame) [m]
 
 FRIDGE_RGBA = {
     "cabinet": "0.82 0.82 0.8 1",  # light grey, low saturation

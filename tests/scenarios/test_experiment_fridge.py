@@ -6,8 +6,8 @@ stays open and the can inside is located. The can's extraction by the left hand 
 yet (docs/fig8-tasks.md).
 
 Measured (this machine, `pytest -s -m slow tests/scenarios/test_experiment_fridge.py`): 10/10, door 31.9-34.7 deg,
-handle located 0.7-2.2 mm off, can 1.2-1.8 mm off, 696-698 two-point ticks; 35 s simulated per trial, 7-46 s wall
-each; 123 s wall for the ten on 2 workers with the machine's load average at 5-13 (docs/fig8-tasks.md)."""
+handle located 0.7-2.2 mm off, can 1.1-1.8 mm off, 696-698 two-point ticks; 35 s simulated per trial, 8-11 s wall
+each; 53 s wall for the ten on 2 workers, the machine nearly idle (load average ~2) (docs/fig8-tasks.md)."""
 
 from __future__ import annotations
 

@@ -43,7 +43,7 @@ SHIFT_Y_RANGE_M = (-0.02, 0.02)
 YAW_RANGE_DEG = (-4.0, 4.0)
 #: Where the operator asks the robot to look for the can: the shelf's middle in front, at can height (world; the
 #: fridge's usual place, robot/scene_fridge.py)
-CAN_LOOK_M = (fridge.FRIDGE_HINGE_M[0] + 0.05, fridge.FRIDGE_HINGE_M[1] + 0.49, fridge.FRIDGE_SHELF_TOP_M + 0.06)
+CAN_LOOK_M = (fridge.FRIDGE_HINGE_M[0] + 0.05, fridge.FRIDGE_HINGE_M[1] + 0.40, fridge.FRIDGE_SHELF_TOP_M + 0.06)
 #: The left hand (F) [m]: raised where it hangs while the door opens, then forward (its orientation kept), then
 #: turned to the grasp's orientation there (the right hand's path to the can on the table, mirrored: turned on
 #: the way, the wrist met the chest)
@@ -51,11 +51,11 @@ LHAND_READY_M = (0.15, 0.30, 0.82)
 LHAND_VIA_M = (0.30, 0.30, 0.80)
 LHAND_ROTATE_AT_M = (0.36, 0.28, 0.82)
 #: The left hand's grasp: pitched down as the right hand's on the table, turned toward the body's middle [deg]
-LHAND_YAW_DEG = -45.0
+LHAND_YAW_DEG = -45.0  # (-10 and -30: the left forearm met the door's edge or its joints their limits)
 PRE_GRASP_BACK_M = 0.10  # [m] along the approach
 #: [rad] the operator leans the waist forward for the left hand to reach into the fridge (the can 0.63 m ahead;
 #: standing upright the hand takes a can at most 0.56 m ahead), slowly: [rad/s]
-LEAN_RAD = math.radians(10.0)
+LEAN_RAD = math.radians(15.0)
 LEAN_RATE_RAD_S = math.radians(8.0)
 GRASP_PAST_CENTRE_M = 0.010  # [m] the palm seats the can (take_can's)
 GRASP_ABOVE_CENTRE_M = 0.015  # [m] (take_can's)
@@ -212,10 +212,12 @@ def run_trial(shift_x_m: float = 0.0, shift_y_m: float = 0.0, yaw_deg: float = 0
                  required=True)
         op.drive(hand_m=np.array(LHAND_ROTATE_AT_M), hand_R=R, point="lhand", label="left hand turned", tol_m=0.01,
                  tol_rad=math.radians(2.0), required=True)
+        if op.press("release", {"hand": "lhand"}).state != "succeeded":  # the gripper opened for the can
+            raise RuntimeError("the left gripper did not open")
         op.drive(waist_pitch_rad=LEAN_RAD, angular_rad_s=LEAN_RATE_RAD_S, label="lean forward", timeout_s=6.0)
         op.drive(hand_m=grasp - PRE_GRASP_BACK_M * approach, hand_R=R, point="lhand", label="pre-grasp",
                  linear_m_s=0.05, required=True)
-        op.drive(hand_m=grasp, hand_R=R, point="lhand", label="grasp", linear_m_s=0.05, required=True)
+        op.drive(hand_m=grasp, hand_R=R, point="lhand", label="grasp", linear_m_s=0.02, required=True)
         if op.press("grasp", {"hand": "lhand"}).state != "succeeded":
             raise RuntimeError("the left hand missed the can")
         op.drive(hand_m=grasp + np.array([0.0, 0.0, LIFT_M]), hand_R=R, point="lhand", label="lift",
