@@ -498,6 +498,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         from app.lab.experiments.foot_can import main as foot_can_main
 
         code = foot_can_main(argv[2:])
+    elif argv[:2] == ["experiment", "fridge"]:
+        from app.lab.experiments.fridge import main as fridge_main
+
+        code = fridge_main(argv[2:])
     elif argv[:2] == ["experiment", "floor"]:
         from app.lab.experiments.floor_object import main as floor_main
 

@@ -15,7 +15,7 @@ from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output, h
 from behaviors.preview import MotionPreview, Predicted, line_in_world, point_moved
 from behaviors.servo import min_jerk_duration_s, min_jerk_rate, rotation_vector
 from controller.interpolation.hoff_arbib import min_jerk
-from controller.kinematics.rotations import rpy_to_matrix
+from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
 from controller.operation.points import OperationView, Twist
 
 SETTLE_S = 0.3  # [s] after the plan, for the IK to catch up before the check
@@ -104,3 +104,15 @@ class Reach(Behavior):
             return self.succeed(f"{p.hand} within {dist * 1000:.1f} mm and {angle:.2f} deg of the goal", **result)
         return self.fail(f"{p.hand} ended {dist * 1000:.1f} mm and {angle:.1f} deg from the goal (the IK limited "
                          "it, or the operator moved it)", **result)
+
+
+def reach_pose(hand: str, p_feet, R_feet=None, speed_m_s: float = 0.1, tolerance_m: float = 0.01,
+               tolerance_deg: float = 3.0) -> Reach:
+    """A `reach` of `hand` to `p_feet` [m, F], to the orientation `R_feet` (3, 3) or keeping its own (None): the
+    step a plan yields for each of its hand poses."""
+    kw = {}
+    if R_feet is not None:
+        roll, pitch, yaw = np.degrees(matrix_to_rpy(R_feet))
+        kw = {"keep_orientation": False, "roll_deg": float(roll), "pitch_deg": float(pitch), "yaw_deg": float(yaw)}
+    return Reach(ReachParams(hand=hand, x_m=float(p_feet[0]), y_m=float(p_feet[1]), z_m=float(p_feet[2]),
+                             speed_m_s=speed_m_s, tolerance_m=tolerance_m, tolerance_deg=tolerance_deg, **kw))

@@ -8,10 +8,13 @@ from typing import Any
 
 from behaviors.approach_table import ApproachTable
 from behaviors.base import Behavior, params_from
+from behaviors.follow_arc import FollowArc
 from behaviors.grasp import Grasp
 from behaviors.locate_can import LocateCan
+from behaviors.locate_handle import LocateHandle
 from behaviors.locate_trash_box import LocateTrashBox
 from behaviors.look_at import LookAt
+from behaviors.open_door import OpenDoor
 from behaviors.reach import Reach
 from behaviors.recognise import Recognise
 from behaviors.release import Release
@@ -23,8 +26,8 @@ from behaviors.walk_to import WalkTo
 from controller.core.errors import UnknownName
 
 STEPS: dict[str, type[Behavior]] = {cls.name: cls for cls in (
-    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateTrashBox, ApproachTable, TakeCan,
-    ThrowCan)}
+    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateHandle, LocateTrashBox,
+    ApproachTable, TakeCan, ThrowCan, FollowArc, OpenDoor)}
 
 
 def make_from(classes: Mapping[str, type[Behavior]], name: str, params: Mapping[str, Any] | None = None,

@@ -29,13 +29,12 @@ from behaviors.hand_geometry import (
 )
 from behaviors.locate_can import LocateCan
 from behaviors.perception.models import CAN, HELD, NOT_ON_THE_TABLE
-from behaviors.reach import Reach, ReachParams
+from behaviors.reach import Reach, reach_pose
 from behaviors.release import Release, ReleaseParams
 from behaviors.servo import rot_z
 from behaviors.table_model import KnownTable
 from behaviors.walk_to import WalkTo, WalkToParams
 from controller.core.constants import GRAVITY_M_S2
-from controller.kinematics.rotations import matrix_to_rpy
 from controller.walking.footsteps import FootstepParams
 
 CAN_MASS_KG = 0.33  # a full 300 ml can (robot/hrp2/README.md)
@@ -186,13 +185,7 @@ class TakeCan(Composite):
         return (*self.points(), "rhand.gripper")
 
     def _reach(self, p_feet, R_feet=None, hand: str = "rhand") -> Reach:
-        kw = {}
-        if R_feet is not None:
-            roll, pitch, yaw = np.degrees(matrix_to_rpy(R_feet))
-            kw = {"keep_orientation": False, "roll_deg": float(roll), "pitch_deg": float(pitch),
-                  "yaw_deg": float(yaw)}
-        return Reach(ReachParams(hand=hand, x_m=float(p_feet[0]), y_m=float(p_feet[1]), z_m=float(p_feet[2]),
-                                 speed_m_s=self.params.speed_m_s, tolerance_m=0.01, tolerance_deg=3.0, **kw))
+        return reach_pose(hand, p_feet, R_feet, self.params.speed_m_s)
 
     def _mean_wrist_force(self, commands):
         """(3,) the right wrist's force [N, sensor frame] averaged over WRIST_MEAN_S after WRIST_SETTLE_S (a plan

@@ -21,6 +21,8 @@ SCENES: dict[str, Path] = {
     # EXPO 2005 tasks [OP VI]: table (near edge x = 2.0 m), 300 ml can, trash box with a 120 x 280 mm hole,
     # an unknown object on the floor; objects movable with MujocoPlant.place_object
     "expo": MODEL_DIR / "scene_expo.xml",
+    # [OP VI] Fig. 8: a fridge (door on a hinge, sensor fridge_door_angle) with a can on its shelf
+    "fridge": MODEL_DIR / "scene_fridge.xml",
 }
 
 #: MuJoCo's force/torque sensors give the wrench the parent exerts on the sensor's body (the distal side);
