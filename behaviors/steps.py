@@ -10,6 +10,7 @@ from behaviors.approach_table import ApproachTable
 from behaviors.base import Behavior, params_from
 from behaviors.grasp import Grasp
 from behaviors.locate_can import LocateCan
+from behaviors.locate_trash import LocateTrash
 from behaviors.locate_trash_box import LocateTrashBox
 from behaviors.look_at import LookAt
 from behaviors.reach import Reach
@@ -23,7 +24,7 @@ from behaviors.walk_to import WalkTo
 from controller.core.errors import UnknownName
 
 STEPS: dict[str, type[Behavior]] = {cls.name: cls for cls in (
-    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateTrashBox, ApproachTable, TakeCan,
+    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateTrash, LocateTrashBox, ApproachTable, TakeCan,
     ThrowCan)}
 
 

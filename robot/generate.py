@@ -23,6 +23,8 @@ from robot.robot_model import (
     mjcf_robot,
     urdf,
 )
+from robot.scene_chair import mjcf_scene_chair
+from robot.scene_trash import mjcf_scene_trash
 from robot.scenes import (
     CAN_DIAMETER_M,
     CAN_HEIGHT_M,
@@ -67,7 +69,7 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------- main
 
 GENERATED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml", "scene_door.xml", "scene_expo.xml",
-                   "hrp2.urdf")
+                   "scene_trash.xml", "scene_chair.xml", "hrp2.urdf")
 
 
 def render(params: dict | None = None) -> dict[str, str]:
@@ -76,6 +78,8 @@ def render(params: dict | None = None) -> dict[str, str]:
     return {"hrp2.xml": mjcf_robot(params), "scene.xml": mjcf_scene(params),
             "scene_wall.xml": mjcf_scene_wall(params), "scene_valve.xml": mjcf_scene_valve(params),
             "scene_door.xml": mjcf_scene_door(params), "scene_expo.xml": mjcf_scene_expo(params),
+            "scene_trash.xml": mjcf_scene_trash(params),
+            "scene_chair.xml": mjcf_scene_chair(params),
             "hrp2.urdf": urdf(params)}
 
 

@@ -21,6 +21,10 @@ SCENES: dict[str, Path] = {
     # EXPO 2005 tasks [OP VI]: table (near edge x = 2.0 m), 300 ml can, trash box with a 120 x 280 mm hole,
     # an unknown object on the floor; objects movable with MujocoPlant.place_object
     "expo": MODEL_DIR / "scene_expo.xml",
+    # [OP] VI Fig. 8: a crumpled piece of trash on the floor (found by colour) and the EXPO trash box
+    "trash": MODEL_DIR / "scene_trash.xml",
+    # [OP] VI Fig. 8: a chair that slides and tips, its backrest's rail for the left hand
+    "chair": MODEL_DIR / "scene_chair.xml",
 }
 
 #: MuJoCo's force/torque sensors give the wrench the parent exerts on the sensor's body (the distal side);
