@@ -24,8 +24,8 @@ from behaviors.walk_to import WalkTo
 from controller.core.errors import UnknownName
 
 STEPS: dict[str, type[Behavior]] = {cls.name: cls for cls in (
-    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateTrash, LocateTrashBox, ApproachTable, TakeCan,
-    ThrowCan)}
+    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateTrash, LocateTrashBox,
+    ApproachTable, TakeCan, ThrowCan)}
 
 
 def make_from(classes: Mapping[str, type[Behavior]], name: str, params: Mapping[str, Any] | None = None,

@@ -59,5 +59,5 @@ def trash_body_lines(pos) -> list[str]:
 def mjcf_scene_trash(params: dict) -> str:
     pos = (*TRASH_START_M, 0.10 + 0.001)
     sections = [*expo_materials()[:-1], f'    <material name="trash" rgba="{TRASH_RGBA}"/>', "  </asset>"]
-    return mjcf_scene_file(params, "hrp2 trash scene", [*expo_trash_box_lines(TRASH_SCENE_BOX_M), *trash_body_lines(pos)],
-                           (*pos, 1.0, 0.0, 0.0, 0.0), sections)
+    world = [*expo_trash_box_lines(TRASH_SCENE_BOX_M), *trash_body_lines(pos)]
+    return mjcf_scene_file(params, "hrp2 trash scene", world, (*pos, 1.0, 0.0, 0.0, 0.0), sections)

@@ -13,8 +13,9 @@ def test_the_list_gives_every_behaviour_with_its_parameters_types_units_and_rang
     r = client.get("/api/behaviors")
     assert r.status_code == 200
     by_name = {b["name"]: b for b in r.json()}
-    assert sorted(by_name) == ["approach_table", "grasp", "locate_can", "locate_trash_box", "look_at", "reach",
-                               "recognise", "release", "sequence", "squat", "stand", "take_can", "throw_can", "walk_to"]
+    assert sorted(by_name) == ["approach_table", "grasp", "locate_can", "locate_trash", "locate_trash_box", "look_at",
+                               "reach", "recognise", "release", "sequence", "squat", "stand", "take_can", "throw_can",
+                               "walk_to"]
     force = next(p for p in by_name["grasp"]["params"] if p["name"] == "force_n")
     assert force == {"name": "force_n", "type": "number", "default": 10.0, "unit": "N", "min": 1.0, "max": 14.0,
                      "choices": None, "doc": "fingertip force to hold with (JRL-hand: 14 N at most)", "place": None}
@@ -54,8 +55,9 @@ def test_an_omitted_body_runs_with_the_defaults(client):
 
 def test_unknown_names_are_404_with_the_valid_ones(client):
     r = client.post("/api/behaviors/dance", json={})
-    assert r.status_code == 404 and ("valid: approach_table, grasp, locate_can, locate_trash_box, look_at, reach, "
-                                     "recognise, release, sequence, squat, stand, take_can, throw_can, walk_to") in \
+    assert r.status_code == 404 and ("valid: approach_table, grasp, locate_can, locate_trash, locate_trash_box, "
+                                     "look_at, reach, recognise, release, sequence, squat, stand, take_can, throw_can, "
+                                     "walk_to") in \
         r.json()["detail"]
     r = client.get("/api/behaviors/runs/77")
     assert r.status_code == 404 and "no run 77" in r.json()["detail"]

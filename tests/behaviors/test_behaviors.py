@@ -260,8 +260,8 @@ def test_bad_parameters_are_refused_naming_the_field(name, params, match):
 
 
 def test_unknown_behaviours_list_the_valid_names():
-    valid = (r"valid: \['approach_table', 'grasp', 'locate_can', 'locate_trash_box', 'look_at', 'reach', 'recognise', "
-             r"'release', 'sequence', 'squat', 'stand', 'take_can', 'throw_can', 'walk_to'\]")
+    valid = (r"valid: \['approach_table', 'grasp', 'locate_can', 'locate_trash', 'locate_trash_box', 'look_at', "
+             r"'reach', 'recognise', 'release', 'sequence', 'squat', 'stand', 'take_can', 'throw_can', 'walk_to'\]")
     with pytest.raises(UnknownName, match=valid):
         make("dance")
 

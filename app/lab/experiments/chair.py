@@ -21,8 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 
 import robot.generate as gen
-from app.lab.experiments.expo import run_trials
+from app.lab.experiments.fig8_plots import plot_top_view
 from app.lab.experiments.floor_object import OPEN_GAP_M, SETTLE_S, Operator, rotation_z
+from app.lab.experiments.seeded import one_trial, run_seeded, seeded_parser
 from app.service import OperatorService
 from app.service.local import LocalRobot
 from robot.scene_chair import CHAIR_RAIL_HEIGHT_M, CHAIR_RAIL_RADIUS_M, CHAIR_START_M, rail_x_in_chair_m
@@ -59,6 +60,9 @@ class ChairResult:
     sim_time_s: float
     wall_time_s: float
     message: str
+    start_m: tuple[float, float] = (0.0, 0.0)  # the chair's floor point, world (simulator)
+    end_m: tuple[float, float] = (0.0, 0.0)
+    goal_m: tuple[float, float] = (0.0, 0.0)
 
     @property
     def succeeded(self) -> bool:
@@ -156,7 +160,7 @@ def run_trial(offset_x_m: float = 0.0, offset_y_m: float = 0.0, yaw_deg_: float 
                    f"{tilt:.1f} deg")
     verdict = "succeeded" if not message else f"failed: {message}"
     return ChairResult(trial, offset_x_m, offset_y_m, yaw_deg_, verdict, error_m, dyaw, tilt, max_tilt, op.fallen,
-                       sim_s, time.perf_counter() - wall0, message)
+                       sim_s, time.perf_counter() - wall0, message, tuple(start[:2]), tuple(end[:2]), tuple(goal[:2]))
 
 
 def placements(n: int, seed: int) -> list[tuple[float, float, float]]:
@@ -177,31 +181,19 @@ def summary_table(results: list[ChairResult]) -> str:
 
 
 def main(argv) -> int:
-    import argparse
-
-    p = argparse.ArgumentParser(prog="hrp2-console experiment chair",
-                                description="[OP] Fig. 8: the left hand grasps a chair's backrest and pushes it "
-                                            f"{PUSH_M:g} m to its goal.")
-    p.add_argument("--chair", nargs=3, type=float, metavar=("DX", "DY", "YAW_DEG"),
-                   help="one trial: the chair DX, DY [m] from its start place, turned YAW_DEG [deg]")
-    p.add_argument("--trials", type=int, default=10, help="seeded trials (default 10)")
-    p.add_argument("--seed", type=int, default=8, help="seed of the placements")
-    p.add_argument("--workers", type=int, default=1, choices=range(1, 65), metavar="N",
-                   help="trials run in N processes at once (1-64; the results do not depend on it)")
-    p.add_argument("--verbose", action="store_true", help="print each step (one trial)")
+    p = seeded_parser("hrp2-console experiment chair",
+                      f"[OP] Fig. 8: the left hand grasps a chair's backrest and pushes it {PUSH_M:g} m to its goal.",
+                      "chair", ("DX", "DY", "YAW_DEG"),
+                      "one trial: the chair DX, DY [m] from its start place, turned YAW_DEG [deg]")
     args = p.parse_args(list(argv))
     if args.chair is not None:
-        r = run_trial(*args.chair, progress=(lambda m: print(m, flush=True)) if args.verbose else None)
-        print(summary_table([r]))
-        print(r.verdict)
-        return 0 if r.succeeded else 1
-    results = []
-    for done, r in enumerate(run_trials(placements(args.trials, args.seed), args.workers, run=run_trial), start=1):
-        results.append(r)
-        print(f"[{done}/{args.trials}] trial {r.trial}: {r.verdict} ({r.sim_time_s:.0f} s sim, "
-              f"{r.wall_time_s:.0f} s wall)", flush=True)
-    results.sort(key=lambda r: r.trial)
-    print(summary_table(results))
+        return one_trial(lambda progress: run_trial(*args.chair, progress=progress), args.verbose, summary_table)
+    results = run_seeded(args, placements, run_trial, summary_table)
     ok = sum(r.succeeded for r in results)
+    if args.png is not None:
+        plot_top_view(args.png, f"experiment chair: {ok}/{args.trials} within {1e3 * GOAL_TOL_M:.0f} mm of the goal "
+                      f"(seed {args.seed})", [r.start_m for r in results], [r.end_m for r in results],
+                      [r.succeeded for r in results], [r.goal_m for r in results], GOAL_TOL_M)
+        print(f"PNG: {args.png}")
     print(f"{ok}/{args.trials} succeeded")
     return 0 if ok == args.trials else 1

@@ -21,7 +21,8 @@ from dataclasses import dataclass
 import numpy as np
 
 import robot.generate as gen
-from app.lab.experiments.expo import inside_box, run_trials
+from app.lab.experiments.expo import inside_box
+from app.lab.experiments.fig8_plots import plot_top_view
 from app.lab.experiments.floor_object import (
     OBJECT_FLOOR_IN_STANCE_M,
     SETTLE_S,
@@ -31,9 +32,10 @@ from app.lab.experiments.floor_object import (
     pick_up,
     stand_up,
 )
+from app.lab.experiments.seeded import one_trial, run_seeded, seeded_parser
 from app.service import OperatorService
 from app.service.local import LocalRobot
-from robot.scene_trash import TRASH_HEIGHT_M, TRASH_SCENE_BOX_M
+from robot.scene_trash import TRASH_SCENE_BOX_M
 
 #: Seeded trash placements: ahead [m], aside (+ left) [m] of the start, yaw [rad]. Nearer than 1.3 m the floor
 #: under it is below the head's 45 deg reach with the camera's view.
@@ -43,11 +45,12 @@ TRASH_ASIDE_RANGE_M = (-0.2, 0.2)
 #: 0.20 m top: floor_object's path is tuned for that height).
 GRASP_BELOW_TOP_M = 0.03
 FLOOR_GRASP_ABOVE_CENTRE_M = 0.07  # floor_object.GRASP_ABOVE_CENTRE_M: the centre its pick_up takes
-#: The carried trash's centre [m, F] (its bottom 5 cm above the 0.60 m lid), and where the robot brings the hole's
+#: The carried trash's centre [m, F] (its bottom 0.15 m above the 0.60 m lid: 5 cm above, the trash met the lid's
+#: near edge as the robot walked up to the box and was knocked out of the hand), and where the robot brings the hole's
 #: centre [m, F]: the box (0.45 m long along x, 0.30 m across, the hole 0.28 m long) 4 cm ahead of the right toe,
 #: the trash 0.08 m behind the hole's centre (0.11 m from its end with the trash's 0.03 m half width). Out at
 #: y = -0.42 m and 0.83 m high the arm met a joint limit 4 cm short.
-CARRY_M = (0.32, -0.30, 0.75)
+CARRY_M = (0.32, -0.30, 0.85)
 HOLE_IN_FEET_M = (0.40, -0.30)
 RISE_M = (0.24, -0.30, 0.75)  # [m, F] on the way up from STAND_OBJECT_M
 LOOK_TIMEOUT_S = 30.0
@@ -69,6 +72,7 @@ class TrashResult:
     sim_time_s: float
     wall_time_s: float
     message: str
+    end_m: tuple[float, float] = (0.0, 0.0)  # where the trash ended, world (simulator)
 
     @property
     def succeeded(self) -> bool:
@@ -140,6 +144,8 @@ def run_trial(x_m: float, y_m: float, yaw_rad: float, trial: int = 0, progress=N
         press("walk_to", {"x_m": float(stance[0]), "y_m": float(stance[1]), "theta_deg": 0.0,
                           "tolerance_m": 0.01}, WALK_TIMEOUT_S)
         op.wait(0.5)
+        held = plant.object_pose("trash")[0]  # the verdict's only
+        op.say(f"before the release the trash is at ({held[0]:.3f}, {held[1]:.3f}, {held[2]:.3f}) m (simulator)")
         press("release", {"hand": "rhand"}, 10.0)
         op.wait(SETTLE_AFTER_RELEASE_S)
     except Exception as exc:  # a fall, a fault, a failed behaviour: the run ends there
@@ -152,7 +158,7 @@ def run_trial(x_m: float, y_m: float, yaw_rad: float, trial: int = 0, progress=N
     robot.close()
     verdict = "succeeded" if in_box and not message else f"failed: {message}"
     return TrashResult(trial, x_m, y_m, math.degrees(yaw_rad), verdict, locate_error_mm, lifted_m, in_box,
-                       op.fallen, sim_s, time.perf_counter() - wall0, message)
+                       op.fallen, sim_s, time.perf_counter() - wall0, message, (float(end[0]), float(end[1])))
 
 
 def placements(n: int, seed: int) -> list[tuple[float, float, float]]:
@@ -177,31 +183,23 @@ def summary_table(results: list[TrashResult]) -> str:
 
 
 def main(argv) -> int:
-    import argparse
-
-    p = argparse.ArgumentParser(prog="hrp2-console experiment trash",
-                                description="[OP] Fig. 8: the unknown trash from the floor into the trash box.")
-    p.add_argument("--trash", nargs=3, type=float, metavar=("X", "Y", "YAW_DEG"),
-                   help="one trial: the trash at (X, Y) [m] on the floor, yaw YAW_DEG [deg]")
-    p.add_argument("--trials", type=int, default=10, help="seeded trials (default 10)")
-    p.add_argument("--seed", type=int, default=8, help="seed of the placements")
-    p.add_argument("--workers", type=int, default=1, choices=range(1, 65), metavar="N",
-                   help="trials run in N processes at once (1-64; the results do not depend on it)")
-    p.add_argument("--verbose", action="store_true", help="print each step (one trial)")
+    p = seeded_parser("hrp2-console experiment trash",
+                      "[OP] Fig. 8: the unknown trash from the floor into the trash box.", "trash",
+                      ("X", "Y", "YAW_DEG"),
+                      "one trial: the trash at (X, Y) [m] on the floor, yaw YAW_DEG [deg]")
     args = p.parse_args(list(argv))
     if args.trash is not None:
         x, y, yaw_deg = args.trash
-        r = run_trial(x, y, math.radians(yaw_deg), progress=(lambda m: print(m, flush=True)) if args.verbose else None)
-        print(summary_table([r]))
-        print(r.verdict)
-        return 0 if r.succeeded else 1
-    results = []
-    for done, r in enumerate(run_trials(placements(args.trials, args.seed), args.workers, run=run_trial), start=1):
-        results.append(r)
-        print(f"[{done}/{args.trials}] trial {r.trial}: {r.verdict} ({r.sim_time_s:.0f} s sim, "
-              f"{r.wall_time_s:.0f} s wall)", flush=True)
-    results.sort(key=lambda r: r.trial)
-    print(summary_table(results))
+        return one_trial(lambda progress: run_trial(x, y, math.radians(yaw_deg), progress=progress), args.verbose,
+                         summary_table)
+    results = run_seeded(args, placements, run_trial, summary_table)
     ok = sum(r.succeeded for r in results)
+    if args.png is not None:
+        hx, hy = gen.TRASH_BOX_HOLE_M
+        bx, by = TRASH_SCENE_BOX_M
+        plot_top_view(args.png, f"experiment trash: {ok}/{args.trials} in the box (seed {args.seed})",
+                      [(r.trash_x_m, r.trash_y_m) for r in results], [r.end_m for r in results],
+                      [r.succeeded for r in results], box_m=(bx - hx / 2, by - hy / 2, bx + hx / 2, by + hy / 2))
+        print(f"PNG: {args.png}")
     print(f"{ok}/{args.trials} succeeded")
     return 0 if ok == args.trials else 1
