@@ -9,18 +9,19 @@ import math
 from robot.parameters import fmt, vec
 from robot.scenes import CAN_CONDIM, CAN_FRICTION, CAN_SOLREF, expo_materials, expo_trash_box_lines, mjcf_scene_file
 
-#: The trash: a crumpled plastic bottle, a compound of a flat base, three lumps leaning different ways and a neck
-#: ((type, size [m], position [m] in the body frame, (axis angle about x, about y) [deg])). About 60 mm across
-#: at every height (the 85 mm JRL hand opens to 0.10 m), 0.20 m tall, so the squatting robot's side grasp takes
-#: it 30 mm below its top (as the EXPO carton, app/lab/experiments/floor_object.py). Body origin: mid-height.
+#: The trash: a crumpled plastic carton, a compound of a flat base, two lumps leaning different ways and a dented
+#: upper part ((type, size [m], position [m] in the body frame, (axis angle about x, about y) [deg])). About 60 mm
+#: across at every height (the 85 mm JRL hand opens to 0.10 m), 0.20 m tall, so the squatting robot's side grasp
+#: takes it 30 mm below its top (as the EXPO carton, app/lab/experiments/floor_object.py), on the upper part's
+#: flat sides (with a 20 mm neck on top, the grasp landed 1 cm from an edge and the trash slipped out as the robot
+#: walked). Body origin: mid-height.
 TRASH_PARTS = (
     ("cylinder", (0.029, 0.015), (0.0, 0.0, -0.085), (0.0, 0.0)),
     ("ellipsoid", (0.030, 0.026, 0.040), (0.004, -0.003, -0.045), (8.0, -6.0)),
-    ("ellipsoid", (0.025, 0.030, 0.038), (-0.004, 0.004, 0.010), (-10.0, 12.0)),
-    ("box", (0.024, 0.022, 0.030), (0.003, 0.0, 0.055), (15.0, 5.0)),
-    ("capsule", (0.013, 0.012), (-0.002, 0.002, 0.085), (6.0, -8.0)),
+    ("ellipsoid", (0.025, 0.030, 0.035), (-0.004, 0.004, 0.005), (-10.0, 12.0)),
+    ("box", (0.024, 0.022, 0.045), (0.003, 0.0, 0.050), (8.0, 4.0)),
 )
-TRASH_HEIGHT_M = 0.20  # base bottom (-0.10) to neck top (0.085 + 0.012 + 0.013 = 0.11 rounded down by the lean)
+TRASH_HEIGHT_M = 0.20  # base bottom (-0.10) to the upper part's top (0.05 + 0.045, and its lean)
 TRASH_MASS_KG = 0.12
 #: Saturated orange: the only orange in the scene (the robot is grey, the floor blue-grey, the lid green), so a
 #: colour segmentation finds it without a model of its shape.
