@@ -43,8 +43,8 @@ TRASH_AHEAD_RANGE_M = (1.3, 1.6)
 TRASH_ASIDE_RANGE_M = (-0.2, 0.2)
 #: The side grasp closes this far below the located top: floor_object's path is tuned for a grasp 0.17 m high (the
 #: carton's, 0.03 m below its top), and the located top of this trash is 0.19-0.20 m (the 98th percentile of the
-#: visible points); 0.03 m below a top located at 0.189 m the hand went 1.5 cm lower and, standing up, the elbow
-#: met the chest (CollisionDetector) in 2 of 2 trials.
+#: visible points); 0.03 m below a top located at 0.189 m the hand went 1.5 cm lower, and as the forearm turned back
+#: and the robot stood up (64-66 s simulated) the elbow met the chest (CollisionDetector) in 2 of 2 trials.
 GRASP_BELOW_TOP_M = 0.02
 FLOOR_GRASP_ABOVE_CENTRE_M = 0.07  # floor_object.GRASP_ABOVE_CENTRE_M: the centre its pick_up takes
 #: The carried trash's centre [m, F] (its bottom 8 cm above the 0.60 m lid; at 0.85 m the elbow met the chest), and
