@@ -502,6 +502,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         from app.lab.experiments.fridge import main as fridge_main
 
         code = fridge_main(argv[2:])
+    elif argv[:2] == ["experiment", "trash"]:
+        from app.lab.experiments.trash import main as trash_main
+
+        code = trash_main(argv[2:])
+    elif argv[:2] == ["experiment", "chair"]:
+        from app.lab.experiments.chair import main as chair_main
+
+        code = chair_main(argv[2:])
     elif argv[:2] == ["experiment", "floor"]:
         from app.lab.experiments.floor_object import main as floor_main
 

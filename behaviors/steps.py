@@ -12,6 +12,7 @@ from behaviors.follow_arc import FollowArc
 from behaviors.grasp import Grasp
 from behaviors.locate_can import LocateCan
 from behaviors.locate_handle import LocateHandle
+from behaviors.locate_trash import LocateTrash
 from behaviors.locate_trash_box import LocateTrashBox
 from behaviors.look_at import LookAt
 from behaviors.open_door import OpenDoor
@@ -26,8 +27,8 @@ from behaviors.walk_to import WalkTo
 from controller.core.errors import UnknownName
 
 STEPS: dict[str, type[Behavior]] = {cls.name: cls for cls in (
-    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateHandle, LocateTrashBox,
-    ApproachTable, TakeCan, ThrowCan, FollowArc, OpenDoor)}
+    Stand, Squat, LookAt, WalkTo, Reach, Grasp, Release, Recognise, LocateCan, LocateHandle, LocateTrash,
+    LocateTrashBox, ApproachTable, TakeCan, ThrowCan, FollowArc, OpenDoor)}
 
 
 def make_from(classes: Mapping[str, type[Behavior]], name: str, params: Mapping[str, Any] | None = None,

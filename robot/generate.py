@@ -23,7 +23,9 @@ from robot.robot_model import (
     mjcf_robot,
     urdf,
 )
+from robot.scene_chair import mjcf_scene_chair
 from robot.scene_fridge import mjcf_scene_fridge
+from robot.scene_trash import mjcf_scene_trash
 from robot.scenes import (
     CAN_DIAMETER_M,
     CAN_HEIGHT_M,
@@ -69,7 +71,7 @@ __all__ = [
 # ----------------------------------------------------------------------------------------------- main
 
 GENERATED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml", "scene_door.xml", "scene_expo.xml",
-                   "scene_fridge.xml", "hrp2.urdf")
+                   "scene_fridge.xml", "scene_trash.xml", "scene_chair.xml", "hrp2.urdf")
 
 
 def render(params: dict | None = None) -> dict[str, str]:
@@ -79,7 +81,10 @@ def render(params: dict | None = None) -> dict[str, str]:
             "scene.xml": mjcf_scene(params),
             "scene_wall.xml": mjcf_scene_wall(params), "scene_valve.xml": mjcf_scene_valve(params),
             "scene_door.xml": mjcf_scene_door(params), "scene_expo.xml": mjcf_scene_expo(params),
-            "scene_fridge.xml": mjcf_scene_fridge(params), "hrp2.urdf": urdf(params)}
+            "scene_fridge.xml": mjcf_scene_fridge(params),
+            "scene_trash.xml": mjcf_scene_trash(params),
+            "scene_chair.xml": mjcf_scene_chair(params),
+            "hrp2.urdf": urdf(params)}
 
 
 def generate(output_dir: str | Path = MODEL_DIR) -> list[Path]:

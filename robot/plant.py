@@ -23,6 +23,10 @@ SCENES: dict[str, Path] = {
     "expo": MODEL_DIR / "scene_expo.xml",
     # [OP VI] Fig. 8: a fridge (door on a hinge, sensor fridge_door_angle) with a can on its shelf
     "fridge": MODEL_DIR / "scene_fridge.xml",
+    # [OP] VI Fig. 8: a crumpled piece of trash on the floor (found by colour) and the EXPO trash box
+    "trash": MODEL_DIR / "scene_trash.xml",
+    # [OP] VI Fig. 8: a chair that slides and tips, its backrest's rail for the left hand
+    "chair": MODEL_DIR / "scene_chair.xml",
 }
 
 #: MuJoCo's force/torque sensors give the wrench the parent exerts on the sensor's body (the distal side);

@@ -287,7 +287,7 @@ def expo_table_lines() -> list[str]:
     return lines
 
 
-def expo_trash_box_lines() -> list[str]:
+def expo_trash_box_lines(centre_m=TRASH_BOX_CENTRE_M) -> list[str]:
     lx, ly, height = TRASH_BOX_OUTER_M
     hx, hy = TRASH_BOX_HOLE_M
     t = TRASH_BOX_WALL_M
@@ -296,7 +296,7 @@ def expo_trash_box_lines() -> list[str]:
     x, y = lx / 2, ly / 2
     lid = height - t
     return [
-        f'    <body name="trash_box" mocap="true" pos="{vec((*TRASH_BOX_CENTRE_M, 0.0))}" quat="{vec(quat)}">',
+        f'    <body name="trash_box" mocap="true" pos="{vec((*centre_m, 0.0))}" quat="{vec(quat)}">',
         box_geom("trash_box_bottom", (-x, -y, 0.0), (x, y, t), "trash_box_inside"),
         box_geom("trash_box_wall_px", (x - t, -y, t), (x, y, lid), "trash_box"),
         box_geom("trash_box_wall_nx", (-x, -y, t), (-x + t, y, lid), "trash_box"),

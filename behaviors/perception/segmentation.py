@@ -23,6 +23,8 @@ class ColourRange:
 #: The can is red, the trash box lid green (robot/hrp2/README.md, EXPO scene colours).
 RED = ColourRange(hue_deg=0.0)
 GREEN = ColourRange(hue_deg=130.0, hue_tolerance_deg=25.0)
+#: The unknown trash of [OP] Fig. 8 (robot/scene_trash.py) is orange: hue 28 deg, between the can's red and yellow.
+ORANGE = ColourRange(hue_deg=28.0, hue_tolerance_deg=10.0, min_saturation=0.6)
 
 
 def hsv(rgb) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

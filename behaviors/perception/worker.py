@@ -18,13 +18,15 @@ from behaviors.base import Commands
 from behaviors.perception.head_pose import T_world_camera_estimate
 from behaviors.perception.locate import Recognition, locate_can, locate_trash_box
 from behaviors.perception.locate_fridge import locate_fridge_handle
+from behaviors.perception.locate_unknown import locate_unknown
 from controller.core.types import OdometryEstimate
 from controller.kinematics.model import RobotKinematics
 
 #: Simulated time from a capture to its result [s]: the rendering and the fit take 0.1-0.2 s of wall time on
 #: this 2-core machine (bench --scenario recognition), so paced at real time the result is nearly always ready.
 RECOGNITION_DELAY_S = 0.3
-LOCATORS = {"can": locate_can, "trash_box": locate_trash_box, "fridge_handle": locate_fridge_handle}
+LOCATORS = {"can": locate_can, "trash_box": locate_trash_box, "fridge_handle": locate_fridge_handle,
+            "trash": locate_unknown}
 
 _kin: RobotKinematics | None = None  # the analysing process's own model (the controller's belongs to the loop)
 

@@ -13,7 +13,7 @@ def test_the_list_gives_every_behaviour_with_its_parameters_types_units_and_rang
     r = client.get("/api/behaviors")
     assert r.status_code == 200
     by_name = {b["name"]: b for b in r.json()}
-    assert sorted(by_name) == ["approach_table", "follow_arc", "grasp", "locate_can", "locate_handle",
+    assert sorted(by_name) == ["approach_table", "follow_arc", "grasp", "locate_can", "locate_handle", "locate_trash",
                                "locate_trash_box", "look_at", "open_door", "reach", "recognise", "release", "sequence",
                                "squat", "stand", "take_can", "throw_can", "walk_to"]
     force = next(p for p in by_name["grasp"]["params"] if p["name"] == "force_n")
@@ -56,8 +56,8 @@ def test_an_omitted_body_runs_with_the_defaults(client):
 def test_unknown_names_are_404_with_the_valid_ones(client):
     r = client.post("/api/behaviors/dance", json={})
     assert r.status_code == 404 and ("valid: approach_table, follow_arc, grasp, locate_can, locate_handle, "
-                                     "locate_trash_box, look_at, open_door, reach, recognise, release, sequence, "
-                                     "squat, stand, take_can, throw_can, walk_to") in \
+                                     "locate_trash, locate_trash_box, look_at, open_door, reach, recognise, release, "
+                                     "sequence, squat, stand, take_can, throw_can, walk_to") in \
         r.json()["detail"]
     r = client.get("/api/behaviors/runs/77")
     assert r.status_code == 404 and "no run 77" in r.json()["detail"]

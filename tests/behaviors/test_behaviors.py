@@ -260,9 +260,9 @@ def test_bad_parameters_are_refused_naming_the_field(name, params, match):
 
 
 def test_unknown_behaviours_list_the_valid_names():
-    valid = (r"valid: \['approach_table', 'follow_arc', 'grasp', 'locate_can', 'locate_handle', 'locate_trash_box', "
-             r"'look_at', 'open_door', 'reach', 'recognise', 'release', 'sequence', 'squat', 'stand', 'take_can', "
-             r"'throw_can', 'walk_to'\]")
+    valid = (r"valid: \['approach_table', 'follow_arc', 'grasp', 'locate_can', 'locate_handle', 'locate_trash', "
+             r"'locate_trash_box', 'look_at', 'open_door', 'reach', 'recognise', 'release', 'sequence', 'squat', "
+             r"'stand', 'take_can', 'throw_can', 'walk_to'\]")
     with pytest.raises(UnknownName, match=valid):
         make("dance")
 

@@ -14,7 +14,8 @@ from robot.names import MODEL_DIR
 from robot.plant import SCENES, MujocoPlant, available_scenes
 
 REQUIRED_FILES = ("hrp2.xml", "scene.xml", "scene_wall.xml", "scene_valve.xml", "scene_door.xml", "scene_expo.xml",
-                  "scene_fridge.xml", "hrp2.urdf", "README.md", "LICENSE", "CHANGELOG.md")
+                  "scene_fridge.xml", "scene_trash.xml", "scene_chair.xml", "hrp2.urdf", "README.md", "LICENSE",
+                  "CHANGELOG.md")
 
 
 @pytest.mark.parametrize("name", REQUIRED_FILES)

@@ -10,6 +10,7 @@ as located vs where it is, the can at the release vs the hole's centre, whether 
 from __future__ import annotations
 
 import csv
+import functools
 import multiprocessing
 import time
 from collections.abc import Iterator
@@ -60,8 +61,8 @@ def _hole_true_m(box_xy) -> np.ndarray:
     return np.array([box_xy[0], box_xy[1], gen.TRASH_BOX_OUTER_M[2]])
 
 
-def _inside_box(can_m: np.ndarray, box_xy) -> bool:
-    """The can's centre inside the box's walls and below its lid."""
+def inside_box(can_m: np.ndarray, box_xy) -> bool:
+    """An object's centre (the can's, the trash's) inside the box's walls and below its lid (box yaw 0)."""
     lx, ly, height = gen.TRASH_BOX_OUTER_M
     t = gen.TRASH_BOX_WALL_M
     return (abs(can_m[0] - box_xy[0]) < lx / 2 - t and abs(can_m[1] - box_xy[1]) < ly / 2 - t
@@ -129,7 +130,7 @@ def run_trial(can_u_m: float, can_v_m: float, robot_distance_m: float = 2.0, tri
             break
     robot.run_for(1.5)  # the can falls and comes to rest
     can_end = plant.object_pose("can")[0]
-    in_box = _inside_box(can_end, box_xy) and not fallen
+    in_box = inside_box(can_end, box_xy) and not fallen
     if not message and not in_box:
         message = f"the can ended outside the box, at ({can_end[0]:.3f}, {can_end[1]:.3f}, {can_end[2]:.3f}) m"
     sim_s = float(robot.loop.snapshot.time_s)
@@ -154,16 +155,19 @@ def placements(n: int, seed: int) -> list[tuple[float, float, float]]:
 
 
 def run_trials(trials: list[tuple[float, float, float]], workers: int = 1,
-               progress=None, look_after: bool = True) -> Iterator[TrialResult]:
-    """Each (U, V, distance) as a trial, in `workers` spawned processes (each trial builds its own robot:
-    the results are the same however many run at once); yields them as they finish."""
+               progress=None, look_after: bool = True, run=None) -> Iterator:
+    """Each (U, V, distance) as a trial of `run` (default: this module's run_trial, with `look_after`; the trash
+    experiment's takes its own three numbers), in `workers` spawned processes (each trial builds its own robot: the
+    results are the same however many run at once); yields them as they finish."""
+    if run is None:
+        run = functools.partial(run_trial, look_after=look_after)
     if workers <= 1:
         for i, (u, v, d) in enumerate(trials):
-            yield run_trial(u, v, d, trial=i, progress=progress, look_after=look_after)
+            yield run(u, v, d, trial=i, progress=progress)
         return
     ctx = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=workers, mp_context=ctx) as pool:
-        futures = [pool.submit(run_trial, u, v, d, i, None, look_after) for i, (u, v, d) in enumerate(trials)]
+        futures = [pool.submit(run, u, v, d, i) for i, (u, v, d) in enumerate(trials)]
         for future in as_completed(futures):
             yield future.result()
 

@@ -286,6 +286,58 @@ class Operator:
             self.step()
 
 
+def pick_up(op: Operator, obj_rel: np.ndarray, waist0: np.ndarray) -> None:
+    """Gripper open, the hand forward and turned to the side grasp standing, squat, the waist pitched, down to
+    the object whose centre is `obj_rel` [m, F] (grasped GRASP_ABOVE_CENTRE_M above it), grasp, lift 0.10 m."""
+    R_grasp = grasp_rotation_feet(HAND_PITCH_RAD)
+    in_hand = _object_in_hand_m()
+    # going down, the object between the open jaws' middle (the fixed jaw would push it along the floor)
+    u = -in_hand / np.linalg.norm(in_hand)  # from the fixed jaw towards the finger
+    mid_open = in_hand + (OPEN_GAP_M / 2 - HALF_WIDTH_M) * u
+    approach = -R_grasp[:, 2]
+    op.press("release", {"hand": "rhand"})  # open the gripper
+    op.drive(hand_m=np.array(VIA_M), label="hand forward (standing)")
+    op.drive(hand_m=np.array(ROTATE_AT_M), hand_R=R_grasp, label="rotate (standing)")
+    op.drive(hand_m=np.array(BACK_M), hand_R=R_grasp, label="back from the table's edge")
+    op.drive(hand_m=np.array(SQUAT_HAND_M), hand_R=R_grasp, waist_z_m=waist0[2] - WAIST_DOWN_M,
+             waist_pitch_rad=0.0, label="squat")
+    op.drive(waist_pitch_rad=WAIST_PITCH_RAD, angular_rad_s=WAIST_PITCH_RATE_RAD_S, label="waist pitched")
+    grasp_at = np.asarray(obj_rel) + np.array([0.0, 0.0, GRASP_ABOVE_CENTRE_M]) - R_grasp @ mid_open
+    op.drive(hand_m=grasp_at - 0.10 * approach + np.array([0.0, 0.0, 0.05]), hand_R=R_grasp,
+             label="above, behind the object", tol_m=0.01)
+    op.drive(hand_m=grasp_at - 0.10 * approach, hand_R=R_grasp, label="pre-grasp", tol_m=0.01)
+    op.drive(hand_m=grasp_at, hand_R=R_grasp, label="grasp pose", linear_m_s=0.05)
+    op.wait(0.5)
+    if op.press("grasp", {"hand": "rhand", "force_n": GRIP_FORCE_N}).state != "succeeded":
+        raise RuntimeError("the grasp failed")
+    op.drive(hand_m=grasp_at + np.array([0.0, 0.0, 0.10]), hand_R=R_grasp, label="lift")
+
+
+def carry_rotation() -> np.ndarray:
+    """(3, 3) the hand in F carrying: the object upright, the hand turned about the vertical (the object's yaw is
+    free) where the wrist and the elbow keep a margin at standing height."""
+    return rotation_z(CARRY_YAW_RAD) @ grasp_rotation_feet(HAND_PITCH_RAD)
+
+
+def carried_hand_m(centre) -> np.ndarray:
+    """The hand position [m, F] that carries the grasped object's centre at `centre` [m, F]."""
+    return np.asarray(centre) + np.array([0.0, 0.0, GRASP_ABOVE_CENTRE_M]) - carry_rotation() @ _object_in_hand_m()
+
+
+def stand_up(op: Operator, waist0: np.ndarray) -> None:
+    """After the lift: the left hand out of the way of the left thigh (the torso turns with the right arm), the
+    forearm turned back through UNWIND_WAYPOINTS squatting, then stand with the object at STAND_OBJECT_M."""
+    R_grasp = grasp_rotation_feet(HAND_PITCH_RAD)
+    pl, Rl = op.measured("larm_end")
+    op.drive(hand_m=pl + np.array(LEFT_HAND_SHIFT_M), hand_R=Rl, point="lhand", label="left hand out")
+    for k, (pos, ypr) in enumerate(UNWIND_WAYPOINTS):
+        op.drive(hand_m=np.array(pos), hand_R=turned(ypr) @ R_grasp, label=f"unwind {k}", tol_m=0.005,
+                 tol_rad=math.radians(2.0), linear_m_s=0.05, required=True)
+    op.drive(hand_m=carried_hand_m(STAND_OBJECT_M), hand_R=carry_rotation(), waist_z_m=waist0[2],
+             waist_pitch_rad=0.0, angular_rad_s=WAIST_PITCH_RATE_RAD_S, label="stand", tol_m=0.01, waist_m_s=0.05,
+             timeout_s=12.0, required=True)
+
+
 def run(progress=None, through: str = "table") -> FloorResult:
     """The task; `through="lift"` ends after the object is lifted off the floor."""
     if through not in ("lift", "table"):
@@ -313,53 +365,14 @@ def run(progress=None, through: str = "table") -> FloorResult:
         del feet
         obj_rel = np.array([object_floor[0] - stance[0], object_floor[1] - stance[1], object_floor[2]])
         op.say(f"object seen at ({obj_rel[0]:.3f}, {obj_rel[1]:.3f}, {obj_rel[2]:.3f}) m from the feet centre")
-        R_grasp = grasp_rotation_feet(HAND_PITCH_RAD)
-        in_hand = _object_in_hand_m()
-
-        def hand_for(centre: np.ndarray, offset=in_hand) -> np.ndarray:
-            return centre + np.array([0.0, 0.0, GRASP_ABOVE_CENTRE_M]) - R_grasp @ offset
-
-        # going down, the object between the open jaws' middle (the fixed jaw would push it along the floor)
-        u = -in_hand / np.linalg.norm(in_hand)  # from the fixed jaw towards the finger
-        mid_open = in_hand + (OPEN_GAP_M / 2 - HALF_WIDTH_M) * u
-
-        approach = -R_grasp[:, 2]
-        op.press("release", {"hand": "rhand"})  # open the gripper
-        op.drive(hand_m=np.array(VIA_M), label="hand forward (standing)")
-        op.drive(hand_m=np.array(ROTATE_AT_M), hand_R=R_grasp, label="rotate (standing)")
-        op.drive(hand_m=np.array(BACK_M), hand_R=R_grasp, label="back from the table's edge")
-        op.drive(hand_m=np.array(SQUAT_HAND_M), hand_R=R_grasp, waist_z_m=waist0[2] - WAIST_DOWN_M,
-                 waist_pitch_rad=0.0, label="squat")
-        op.drive(waist_pitch_rad=WAIST_PITCH_RAD, angular_rad_s=WAIST_PITCH_RATE_RAD_S, label="waist pitched")
-        grasp_at = hand_for(obj_rel, mid_open)
-        op.drive(hand_m=grasp_at - 0.10 * approach + np.array([0.0, 0.0, 0.05]), hand_R=R_grasp,
-                 label="above, behind the object", tol_m=0.01)
-        op.drive(hand_m=grasp_at - 0.10 * approach, hand_R=R_grasp, label="pre-grasp", tol_m=0.01)
-        op.drive(hand_m=grasp_at, hand_R=R_grasp, label="grasp pose", linear_m_s=0.05)
-        op.wait(0.5)
-        if op.press("grasp", {"hand": "rhand", "force_n": GRIP_FORCE_N}).state != "succeeded":
-            raise RuntimeError("the grasp failed")
-        op.drive(hand_m=grasp_at + np.array([0.0, 0.0, 0.10]), hand_R=R_grasp, label="lift")
+        pick_up(op, obj_rel, waist0)
         lifted_m = float(plant.object_pose("unknown_object")[0][2] - object_floor[2])  # the verdict's only
         op.say(f"lift: the object {1e3 * lifted_m:.0f} mm above where it stood (simulator, for the verdict)")
         if through == "lift":
             raise _Done
-        # carrying: the object upright, the hand turned about the vertical (the object's yaw is free) where the
-        # wrist and the elbow keep a margin at standing height
-        R_carry = rotation_z(CARRY_YAW_RAD) @ R_grasp
-
-        def carried(centre) -> np.ndarray:
-            return np.asarray(centre) + np.array([0.0, 0.0, GRASP_ABOVE_CENTRE_M]) - R_carry @ in_hand
-
-        # the left hand out of the way of the left thigh (the torso turns with the right arm)
-        pl, Rl = op.measured("larm_end")
-        op.drive(hand_m=pl + np.array(LEFT_HAND_SHIFT_M), hand_R=Rl, point="lhand", label="left hand out")
-        for k, (pos, ypr) in enumerate(UNWIND_WAYPOINTS):
-            op.drive(hand_m=np.array(pos), hand_R=turned(ypr) @ R_grasp, label=f"unwind {k}", tol_m=0.005,
-                     tol_rad=math.radians(2.0), linear_m_s=0.05, required=True)
-        op.drive(hand_m=carried(STAND_OBJECT_M), hand_R=R_carry, waist_z_m=waist0[2], waist_pitch_rad=0.0,
-                 angular_rad_s=WAIST_PITCH_RATE_RAD_S, label="stand", tol_m=0.01, waist_m_s=0.05,
-                 timeout_s=12.0, required=True)
+        R_carry = carry_rotation()
+        carried = carried_hand_m
+        stand_up(op, waist0)
         op.drive(hand_m=carried(RISE_OBJECT_M), hand_R=R_carry, label="up, behind the table's edge", tol_m=0.01,
                  required=True)
         op.drive(hand_m=carried(ABOVE_EDGE_OBJECT_M), hand_R=R_carry, label="above the edge", tol_m=0.01,
