@@ -35,7 +35,7 @@ PROBABILITIES: Mapping[str, float] = {
 GAP_MEAN_S = 1.5  # [s] mean simulated time between two actions (exponential)
 GAP_RANGE_S = (0.05, 6.0)  # [s] the gap is clipped to this
 STREAM_S = (0.3, 3.0)  # [s] a stick stream's or a second client's duration
-STREAM_POINTS = ("rhand", "lhand", "head", "waist", "walk")
+STREAM_POINTS = ("rhand", "lhand", "head", "waist", "walk", "rfoot", "lfoot")
 #: [m/s] / [deg/s] the stick's range per point and component, inside the door's limits (README, PUT
 #: /api/operator/velocity; each point's unused components stay 0)
 STICK_LIMITS: Mapping[str, tuple[tuple[float, float, float], tuple[float, float, float]]] = {
@@ -44,6 +44,8 @@ STICK_LIMITS: Mapping[str, tuple[tuple[float, float, float], tuple[float, float,
     "head": ((0.0, 0.0, 0.0), (0.0, 30.0, 30.0)),
     "waist": ((0.0, 0.0, 0.05), (10.0, 10.0, 10.0)),
     "walk": ((0.3, 0.15, 0.0), (0.0, 0.0, 30.0)),
+    "rfoot": ((0.1, 0.1, 0.1), (0.0, 0.0, 0.0)),  # the sole (standing: the weight goes over the other foot first)
+    "lfoot": ((0.1, 0.1, 0.1), (0.0, 0.0, 0.0)),
 }
 WALK_STRIDE_M = (0.05, 0.3)  # [m] the walk point's max_stride (the AutoBalancer's range is 0-0.3)
 WALK_FOOT_DISTANCE_M = (0.16, 0.24)  # [m] its foot_distance (range 0.14-0.30)
