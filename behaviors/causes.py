@@ -14,7 +14,8 @@ RUN_CAUSES: Mapping[str, str] = {
     "fall": r"\bfell\b|fallen|a fall",
     "lock": r"operator lock",
     "limit": r"IK limited|joint limit|collision|out of reach|unreachable",
-    "timeout": r"overran its nominal duration",
+    "timeout": r"overran its nominal duration|\btimeout\b",
+    "state": r"the robot is walking|is lifted \(its operational point\)",
     "perception": r"not in the image|not seen|closed on nothing|slipped|short of open",
 }
 

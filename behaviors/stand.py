@@ -23,7 +23,9 @@ HALF_SITTING_STANCE = (0.0, 0.19, 0.0)
 STANCE_TOLERANCE_M = 0.01
 STANCE_TOLERANCE_RAD = math.radians(2.0)
 ALIGN_START_TIMEOUT_S = 0.5  # [s] the aligning walk shows in the view a tick after goPos
-
+#: [s] an operated foot put down and the weight shared again: at most 0.29 m at 0.12 m/s, 0.4 s settled, 1.2 s of
+#: shift (controller/walking/foot_lift.py), and a margin
+FOOT_DOWN_MAX_S = 5.0
 
 def across_m(lsole_from_rsole) -> float:
     """How far apart the soles' centres are across [m], in the frame of their mean heading."""
@@ -67,9 +69,10 @@ class Stand(Behavior):
         if feet_side_by_side(view.lsole_from_rsole):
             self._to_half_sitting(ctx)
             return
-        # the operated targets back first: a tilted waist leaves the legs no range to walk (campaign seed 6017)
-        self._walk_s = ctx.commands.reset_operation_targets()
-        self._walk_at_s = ctx.elapsed_s + self._walk_s
+        # the operated targets back first: a tilted waist leaves the legs no range to walk (campaign seed 6017); an
+        # operated foot goes down with them, and the aligning walk waits for it (campaign seed 1019 with the feet)
+        self._walk_s = ctx.commands.reset_operation_targets() + (FOOT_DOWN_MAX_S if view.foot_lifted else 0.0)
+        self._walk_at_s = ctx.elapsed_s + self._walk_s - (FOOT_DOWN_MAX_S if view.foot_lifted else 0.0)
 
     def _walk(self, ctx: Context, lsole_from_rsole) -> None:
         self._walk_at_s, self._walked, self._asked_s = None, False, ctx.elapsed_s
@@ -84,7 +87,11 @@ class Stand(Behavior):
     def step(self, ctx: Context) -> Output:
         if self._walk_at_s is not None:
             if ctx.elapsed_s >= self._walk_at_s:
-                self._walk(ctx, ctx.require_view().lsole_from_rsole)
+                view = ctx.require_view()
+                if view.foot_lifted is None:
+                    self._walk(ctx, view.lsole_from_rsole)
+                elif ctx.elapsed_s - self._walk_at_s > FOOT_DOWN_MAX_S:
+                    return self.fail(f"timeout: the {view.foot_lifted} was not down within {FOOT_DOWN_MAX_S:g} s")
             return NOTHING
         if self._posture_from_s is None:
             view = ctx.require_view()

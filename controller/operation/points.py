@@ -139,6 +139,9 @@ class OperationView:
     #: the left sole in the right sole's frame: (x [m], y [m], yaw [rad]) as the gait plan has them (half-sitting:
     #: side by side, 0.19 m apart; after an emergency step wherever it landed)
     lsole_from_rsole: tuple[float, float, float] = (0.0, 0.19, 0.0)
+    #: "rfoot" or "lfoot" while the AutoBalancer operates that foot (weight going over, lifted, going down, weight
+    #: coming back; no walk starts meanwhile), else None
+    foot_lifted: str | None = None
 
     def placed_in_world(self, world_from_control) -> OperationView:
         """This view with its world coordinates (the feet frame F, the points' world poses) moved from the

@@ -73,6 +73,7 @@ class ViewOfTick:
                              points=points, gaze_rad=(gaze.pitch_rad, gaze.yaw_rad),
                              waist_height_m=float(points["waist"].p_feet_m[2]), walking=last.walking,
                              motion_stopped=last.stopped, collision_pairs=last.collision_pairs,
-                             lsole_from_rsole=soles)
+                             lsole_from_rsole=soles,
+                             foot_lifted=None if gait is None or gait.foot_lift is None else gait.foot_lift[0])
         self._cache = (key, view)
         return view

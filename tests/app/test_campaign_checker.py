@@ -82,6 +82,10 @@ def test_a_stream_refusal_needs_a_reason_too():
     ("overran its nominal duration of 2.00 s by 50 % (3.01 s)", "timeout"),
     ("rhand ended 40.0 mm and 3.0 deg from the goal (the IK limited it, or the operator moved it)", "limit"),
     ("the jaw closed on nothing", "perception"),
+    # the campaign with the foot points (seeds 1015, 1019): a walk refused, a foot lifted; stand's own timeouts
+    ("step 1 (stand) refused: stand refused: the robot is walking; stop it first", "state"),
+    ("Refused: goPos: the lfoot is lifted (its operational point); goPos once it is down", "state"),
+    ("timeout: the aligning steps did not start within 0.5 s", "timeout"),
     ("stopped 5.0 cm and 1.0 deg from the goal (tolerance 3 cm, 3 deg) after 2 correction(s)", None),
     ("TypeError: unsupported operand", None),
 ])

@@ -308,3 +308,25 @@ def test_seed_6003_a_collision_while_walking_holds_the_arm_and_the_legs_walk_on(
         assert not obs.fallen
     assert held > 0 and not flag and not obs.layers["abc"].walking
     assert obs.truth.base_pos_world[0] - x0 == pytest.approx(0.3, abs=0.05)  # the simulated robot walked the goal
+
+
+@pytest.mark.slow
+def test_seed_1019_stand_with_a_foot_lifted_waits_for_it_to_come_down_then_aligns():
+    # the campaign with the foot points: `stand` run while the left foot was operated (lifted, moved back) had its
+    # aligning goPos refused ("the lfoot is lifted"), a cause outside the closed set. Now the reset of the operated
+    # targets puts the foot down and the aligning walk waits for it
+    robot = LocalRobot("default")
+    robot.run_for(2.5)
+    stick = Setpoint("lfoot", (-0.05, 0.0, 0.05), (0.0, 0.0, 0.0))
+    for k in range(int(round(3.0 / 0.005))):
+        if k % STICK_PERIOD_TICKS == 0:
+            robot.put_setpoint(stick)
+        obs = robot.step()
+    assert obs.layers["abc"].foot_lift == "lifted" and obs.layers["abc"].lifted_foot == "lfoot"
+    status, _, flag = stand_from(robot)
+    assert status.state == "succeeded", status.message
+    assert not flag
+    obs = robot.step()
+    assert obs.layers["abc"].foot_lift == "idle"
+    assert max(abs(obs.q_cmd_rad[i] - HALF_SITTING_RAD[n]) for i, n in enumerate(JOINT_NAMES)
+               if "JOINT6" not in n or "LEG" in n) < math.radians(3.0)

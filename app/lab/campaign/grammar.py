@@ -55,9 +55,11 @@ PUSH_DURATION_S = 0.1  # [s] a push lasts this long; its force is impulse / dura
 PUSH_BEYOND_FACTOR = (1.5, 3.0)  # a push beyond the envelope: this many times it
 
 #: [N s] the documented push envelope (docs/push-map.md): standing, the ankles absorb >= 20 N s in every
-#: direction; walking it is the walking issue's (in progress elsewhere): 10 N s. Frozen by the hard e-stop the
-#: robot balances nothing (docs/safety-path.md): a push then is beyond any envelope, drawn as standing or walking
-PUSH_ENVELOPE_NS: Mapping[str, float] = {"standing": 20.0, "walking": 10.0, "frozen": 0.0}
+#: direction; walking it is the walking issue's (in progress elsewhere): 10 N s. A foot operated (the weight going
+#: over the other foot, or on it; no step catches a push there): 10 N s (8 directions stand, lifted and shifting;
+#: 15 N s fell 2 of 8: docs/foot-can.md). Frozen by the hard e-stop the robot balances nothing
+#: (docs/safety-path.md): a push then is beyond any envelope, drawn as standing or walking
+PUSH_ENVELOPE_NS: Mapping[str, float] = {"standing": 20.0, "walking": 10.0, "foot": 10.0, "frozen": 0.0}
 
 #: A few parameters safe to change, with the range the grammar draws from (inside each one's schema):
 #: (PUT path, field, low, high)
@@ -196,10 +198,11 @@ def catalogue_of(behaviors: Sequence[Mapping[str, Any]]) -> dict[str, list[Mappi
     return {b["name"]: list(b["params"]) for b in behaviors}
 
 
-def push_request(action: Action, walking: bool, frozen: bool = False) -> tuple[dict[str, Any], float, float]:
-    """The POST /api/sim/push body of a push action given whether the robot walks and whether the hard e-stop
-    holds it frozen: (body, impulse [N s], envelope [N s] the fall invariant holds it to)."""
-    drawn = PUSH_ENVELOPE_NS["walking" if walking else "standing"]
+def push_request(action: Action, walking: bool, frozen: bool = False,
+                 foot: bool = False) -> tuple[dict[str, Any], float, float]:
+    """The POST /api/sim/push body of a push action given whether the robot walks, whether a foot is operated and
+    whether the hard e-stop holds it frozen: (body, impulse [N s], envelope [N s] the fall invariant holds it to)."""
+    drawn = PUSH_ENVELOPE_NS["walking" if walking else "foot" if foot else "standing"]
     impulse = drawn * float(action.params["envelope_fraction"])
     envelope = PUSH_ENVELOPE_NS["frozen"] if frozen else drawn
     force = impulse / PUSH_DURATION_S

@@ -20,6 +20,7 @@ from websockets.sync.client import ClientConnection, connect
 
 from app.lab.campaign.checker import Checker, Expectation, Violation
 from app.lab.campaign.grammar import Action, actions_for, push_request
+from behaviors.stand import FOOT_DOWN_MAX_S
 
 log = logging.getLogger(__name__)
 
@@ -36,6 +37,7 @@ STAND_RETRY_S = 2.0  # [s] simulated between two tries
 SELF_ENDING = ("collision", "walking_stop")  # the stops that end by themselves (no release verb)
 #: actions after which what an earlier ok promised may no longer show (the expectation is void)
 STOPS = frozenset({"estop", "motion_stop", "walk_stop", "walk_emergency_stop", "reset", "push", "push_beyond"})
+FEET = ("rfoot", "lfoot")
 WALK_VOIDS = STOPS | {"go_velocity", "go_pos", "behavior", "stick", "closed_tab", "compete", "cancel"}
 
 
@@ -104,6 +106,7 @@ class Session:
         self._last_time: float | None = None
         self.state: dict[str, Any] = {}
         self.streams: dict[str, _Stream] = {}  # by name: "main:<point>", "tab-<k>", "other-<k>"
+        self._foot_until_s = -math.inf  # [s] session time a streamed foot may still be operated until
         self.main_ws: ClientConnection | None = None
         self.watchers: list[tuple[ClientConnection, float]] = []
         self.lock: tuple[str, float] | None = None  # (the second client's lease token, until [s])
@@ -169,6 +172,12 @@ class Session:
                 return False
             self.serve()
             time.sleep(POLL_SLEEP_S)
+
+    def _foot_operated(self, now_s: float) -> bool:
+        """A foot operated (the AutoBalancer's lift in any phase but idle), or one streamed recently enough that the
+        state read may not show it yet."""
+        abc = (self.state.get("layers") or {}).get("abc") or {}
+        return abc.get("foot_lift") in ("shifting", "lifted", "lowering", "returning") or now_s < self._foot_until_s
 
     def emergency(self) -> dict[str, Any]:
         return dict(self.state.get("emergency") or {})
@@ -343,6 +352,8 @@ class Session:
                 name = f"{'tab' if a.kind == 'closed_tab' else 'other'}-{self._k}"
                 ws, zero, close = self.ws(f"/ws/operator?client={name}"), a.kind == "compete", True
             self.streams[name] = _Stream(ws, dict(p["body"]), now + float(p["duration_s"]), zero, close, name)
+            if p["body"]["point"] in FEET:  # the foot comes down after its stream, unless the state says sooner
+                self._foot_until_s = max(self._foot_until_s, now + float(p["duration_s"]) + FOOT_DOWN_MAX_S)
         elif a.kind == "go_velocity":
             status, _ = self.request("POST", "/api/walk/go-velocity", dict(p))
             if status == 200 and any(abs(float(v)) > 0.02 for v in p.values()):
@@ -404,7 +415,8 @@ class Session:
                     t + 1.0, frozenset({"motion_stop", "reset"})))
         elif a.kind in ("push", "push_beyond"):
             body, impulse, envelope = push_request(a, walking=bool(self.state.get("walking")),
-                                                   frozen=bool(self.state["emergency"].get("hard_stop")))
+                                                   frozen=bool(self.state["emergency"].get("hard_stop")),
+                                                   foot=self._foot_operated(now))
             status, _ = self.request("POST", "/api/sim/push", body)
             if status == 200:
                 self.checker.push(impulse, envelope)
