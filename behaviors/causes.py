@@ -15,7 +15,7 @@ RUN_CAUSES: Mapping[str, str] = {
     "lock": r"operator lock",
     "limit": r"IK limited|joint limit|collision|out of reach|unreachable",
     "timeout": r"overran its nominal duration|\btimeout\b",
-    "state": r"the robot is walking|is lifted \(its operational point\)",
+    "state": r"the robot is walking|is lifted \(its operational point\)|the capture-point flag is up",
     "perception": r"not in the image|not seen|closed on nothing|slipped|short of open",
 }
 

@@ -86,6 +86,9 @@ def test_a_stream_refusal_needs_a_reason_too():
     ("step 1 (stand) refused: stand refused: the robot is walking; stop it first", "state"),
     ("Refused: goPos: the lfoot is lifted (its operational point); goPos once it is down", "state"),
     ("timeout: the aligning steps did not start within 0.5 s", "timeout"),
+    # the soak (seed 10019): stand's aligning walk asked while the robot balanced a disturbance
+    ("Refused: goPos: the capture-point flag is up (the robot is balancing a disturbance); goPos again once it "
+     "drops (status: st.emergency false)", "state"),
     ("stopped 5.0 cm and 1.0 deg from the goal (tolerance 3 cm, 3 deg) after 2 correction(s)", None),
     ("TypeError: unsupported operand", None),
 ])
