@@ -10,11 +10,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output, held_by_collision
-from behaviors.servo import min_jerk_duration_s, rot_z
+from behaviors.servo import MinJerkMove, min_jerk_duration_s, rot_z
 from controller.interpolation.hoff_arbib import min_jerk
 from controller.operation.points import Twist
-
-SETTLE_S = 0.3  # [s] after the plan, before the hand is checked against the arc's end
 
 
 def arc_point(p0, centre, angle_rad: float) -> np.ndarray:
@@ -49,7 +47,7 @@ class FollowArcParams(BehaviorParams):
                                                               "end (a held door pulls back)"})
 
 
-class FollowArc(Behavior):
+class FollowArc(MinJerkMove, Behavior):
     name = "follow_arc"
     Params = FollowArcParams
     summary = "A hand along a circle about a vertical axis in the feet frame, turning with it (a door's arc)"
@@ -64,12 +62,6 @@ class FollowArc(Behavior):
         self.angle_rad = math.radians(p.angle_deg)
         self.plan_s = min_jerk_duration_s(self.angle_rad, math.radians(p.speed_deg_s), ctx.dt_s)
 
-    def nominal_duration_s(self) -> float:
-        return getattr(self, "plan_s", 1.0) + SETTLE_S + 0.5
-
-    def progress(self, ctx: Context) -> float:
-        return float(min_jerk(ctx.elapsed_s / self.plan_s))
-
     def step(self, ctx: Context) -> Output:
         t, dt = ctx.elapsed_s, ctx.dt_s
         if t < self.plan_s:
@@ -77,7 +69,7 @@ class FollowArc(Behavior):
             a1 = self.angle_rad * float(min_jerk(min(t + dt, self.plan_s) / self.plan_s))
             linear, angular = arc_twist(self.p0, self.centre, a0, a1, dt)
             return Output({self.params.hand: Twist.of(linear, angular)})
-        if t < self.plan_s + SETTLE_S:
+        if not self.settled(t):
             return NOTHING
         view = ctx.require_view()
         end = arc_point(self.p0, self.centre, self.angle_rad)

@@ -13,12 +13,9 @@ import numpy as np
 
 from behaviors.base import NOTHING, Behavior, BehaviorParams, Context, Output, held_by_collision
 from behaviors.preview import MotionPreview, Predicted, line_in_world, point_moved
-from behaviors.servo import min_jerk_duration_s, min_jerk_rate, rotation_vector
-from controller.interpolation.hoff_arbib import min_jerk
+from behaviors.servo import MinJerkMove, min_jerk_duration_s, min_jerk_rate, rotation_vector
 from controller.kinematics.rotations import matrix_to_rpy, rpy_to_matrix
 from controller.operation.points import OperationView, Twist
-
-SETTLE_S = 0.3  # [s] after the plan, for the IK to catch up before the check
 
 
 @dataclass(frozen=True)
@@ -40,7 +37,7 @@ class ReachParams(BehaviorParams):
     tolerance_deg: float = field(default=2.0, metadata={"unit": "deg", "min": 0.1, "max": 20.0})
 
 
-class Reach(Behavior):
+class Reach(MinJerkMove, Behavior):
     name = "reach"
     Params = ReachParams
     summary = "A hand to a pose in the feet frame (minimum-jerk line; the operator's motion adds to it)"
@@ -79,18 +76,12 @@ class Reach(Behavior):
                           min_jerk_duration_s(float(np.linalg.norm(self.dw_rad)), math.radians(p.angular_speed_deg_s),
                                               ctx.dt_s))
 
-    def nominal_duration_s(self) -> float:
-        return getattr(self, "plan_s", 1.0) + SETTLE_S + 0.5
-
-    def progress(self, ctx: Context) -> float:
-        return float(min_jerk(ctx.elapsed_s / self.plan_s))
-
     def step(self, ctx: Context) -> Output:
         t, dt = ctx.elapsed_s, ctx.dt_s
         if t < self.plan_s:
             rate = min_jerk_rate(t, dt, self.plan_s)  # [1/s], sums to 1
             return Output({self.params.hand: Twist.of(self.dp_m * rate, self.dw_rad * rate)})
-        if t < self.plan_s + SETTLE_S:
+        if not self.settled(t):
             return NOTHING
         view = ctx.require_view()
         e_p, e_R = self._errors(view)

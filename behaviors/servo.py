@@ -59,3 +59,26 @@ def min_jerk_rate(t_s: float, dt_s: float, duration_s: float) -> float:
     from controller.interpolation.hoff_arbib import min_jerk
 
     return float(min_jerk((t_s + dt_s) / duration_s) - min_jerk(t_s / duration_s)) / dt_s
+
+
+#: [s] after a minimum-jerk plan, for the IK to catch up before a move checks where its point ended
+MOVE_SETTLE_S = 0.3
+
+
+class MinJerkMove:
+    """The timing a behaviour moving one point along a minimum-jerk plan of `plan_s` [s] shares (reach, follow_arc):
+    its nominal duration, its progress, and whether it is still moving or settling."""
+
+    plan_s: float
+
+    def nominal_duration_s(self) -> float:
+        return getattr(self, "plan_s", 1.0) + MOVE_SETTLE_S + 0.5
+
+    def progress(self, ctx) -> float:
+        from controller.interpolation.hoff_arbib import min_jerk
+
+        return float(min_jerk(ctx.elapsed_s / self.plan_s))
+
+    def settled(self, t_s: float) -> bool:
+        """The plan and the settle after it are over at `t_s` [s] of the behaviour's time: check the result."""
+        return t_s >= self.plan_s + MOVE_SETTLE_S
