@@ -219,8 +219,6 @@ class OperationLayer(Layer):
                 return self._seed(point, anchor, float(F.p[2]) - ground_z(gait, F))
             stepped_from = points.integrate(total, self.params, ctx.dt_s, seed)
             FootPoints.integrate(total, points, self.params.foot_speed_m_s, ctx.dt_s, gait)
-            if self._reset.pending:  # a new motion during a reset: from where the blend is
-                self._reset.cancel()
         self._command_feet(ctx, stopped, F.yaw)
         q_out, base_out, rpy_out = ref.q_rad, ref.base_pos_world, ref.base_rpy_rad
         if "waist" in points.targets:
@@ -242,6 +240,8 @@ class OperationLayer(Layer):
             out = ref.with_owned(q_rad=q_out) if q_out is not ref.q_rad else ref
         else:
             out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
+        if self._reset.pending:  # a new motion during a reset: the blend goes on toward it (soak seed 10091: it
+            out = self._reset.step(out, ctx.dt_s)  # was dropped, and BODY rose 4 cm in a tick from a squat)
         last.ref_out = out
         return out
 

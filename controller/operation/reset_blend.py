@@ -29,7 +29,7 @@ class ResetBlend:
         self.pending = True
 
     def cancel(self) -> None:
-        """A new motion during the blend: the output goes on from where the blend is."""
+        """The blend is over (the output is the reference from now on)."""
         self._weight = self._start = None
         self.pending = False
 

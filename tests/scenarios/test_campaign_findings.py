@@ -330,3 +330,32 @@ def test_seed_1019_stand_with_a_foot_lifted_waits_for_it_to_come_down_then_align
     assert obs.layers["abc"].foot_lift == "idle"
     assert max(abs(obs.q_cmd_rad[i] - HALF_SITTING_RAD[n]) for i, n in enumerate(JOINT_NAMES)
                if "JOINT6" not in n or "LEG" in n) < math.radians(3.0)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("head_after_s", [0.01, 0.06, 0.4])
+def test_seed_10091_stand_after_a_squat_with_the_head_stick_held_rises_smoothly(head_after_s):
+    # the soak: `stand` reset the squat's waist target and the operator's head stick, streamed on, came a tick
+    # later; the reset blend was dropped, BODY rose 4 cm in a tick, the measured CP jumped 0.33 m, an emergency
+    # step, a fall. Now the blend goes on under the new motion
+    robot = LocalRobot("default")
+    robot.run_for(2.5)
+    down = Setpoint("waist", (0.0, 0.0, -0.05), (0.0, 0.0, 0.0))
+    for k in range(int(round(1.2 / 0.005))):
+        if k % STICK_PERIOD_TICKS == 0:
+            robot.put_setpoint(down)
+        robot.step()
+    robot.run_for(1.0)
+    service = OperatorService(robot)
+    run_id = service.run_behavior("stand", {"time_s": 2.0})
+    head = Setpoint("head", (0.0, 0.0, 0.0), (0.0, math.radians(-3.0), math.radians(18.0)))
+    flag = False
+    for k in range(int(round(6.0 / 0.005))):
+        t = k * 0.005
+        if t >= head_after_s and t < head_after_s + 2.0 and k % STICK_PERIOD_TICKS == 0:
+            robot.put_setpoint(head)
+        obs = robot.step()
+        assert not obs.fallen
+        flag = flag or obs.layers["st"].emergency
+    assert not flag
+    assert service.get_run(run_id).state == "succeeded", service.get_run(run_id).message

@@ -181,6 +181,26 @@ def test_reset_targets_blends_back_to_the_reference_then_is_identity(shared_ik):
     assert out is REF
 
 
+def test_a_new_motion_during_the_reset_blend_goes_on_from_where_the_blend_is(shared_ik):
+    """Soak seed 10091: `stand` reset the targets of a squat and the operator's head stick came a tick later; the
+    blend was dropped and BODY rose 5 cm in a tick onto the reference (the flag, an emergency step, a fall)."""
+    op = layer(shared_ik)
+    run(op, 100, before=lambda k, t: op.set_motion("waist", Twist.of((0, 0, -0.1)), t))
+    low = op.tick(make_ctx(t=100 * DT, tick=100), REF)
+    assert REF.base_pos_world[2] - low.base_pos_world[2] > 0.03  # the squat: several cm down
+    op.reset_targets()
+    z = [low.base_pos_world[2]]
+    t0 = 101 * DT
+    for k in range(int(OperationParams().reset_time_s / DT) + 2):
+        if k > 0:
+            op.set_motion("head", Twist.of((0, 0, 0), (0, 0, 0.2)), t0 + k * DT)
+        z.append(op.tick(make_ctx(t=t0 + k * DT, tick=101 + k), REF).base_pos_world[2])
+    steps_mm = np.abs(np.diff(z)) * 1e3
+    # a min-jerk blend of ~5 cm over reset_time_s moves at most ~1.9 x the mean per tick; 1 mm is well under a jump
+    assert steps_mm.max() < 1.0, steps_mm.max()
+    assert abs(z[-1] - REF.base_pos_world[2]) < 1e-6  # and it arrives on the reference
+
+
 def test_the_params_class_is_registered_for_the_params_api():
     assert layer_params_classes()["op"] is OperationParams
     with pytest.raises(InvalidCommand, match="hand_speed_m_s"):
