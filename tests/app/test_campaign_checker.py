@@ -89,6 +89,9 @@ def test_a_stream_refusal_needs_a_reason_too():
     # the soak (seed 10019): stand's aligning walk asked while the robot balanced a disturbance
     ("Refused: goPos: the capture-point flag is up (the robot is balancing a disturbance); goPos again once it "
      "drops (status: st.emergency false)", "state"),
+    # the soak (seeds 10039, 10050): a walk refused while the waist's tilt leaves a knee too little range
+    ("step 1 (walk_to) refused: goPos: LLEG_JOINT3 is 6.5 deg from its limit (the waist's tilt) and walking needs "
+     "12 deg; straighten the waist first", "limit"),
     ("stopped 5.0 cm and 1.0 deg from the goal (tolerance 3 cm, 3 deg) after 2 correction(s)", None),
     ("TypeError: unsupported operand", None),
 ])

@@ -4,12 +4,14 @@ through the command interface (refusals fail the run)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
 import pytest
 
 from behaviors.base import describe, params_from
+from behaviors.causes import run_cause
 from behaviors.registry import BEHAVIORS, make
 from behaviors.stand import HALF_SITTING_RAD
 from behaviors.steps import STEPS
@@ -158,6 +160,41 @@ def test_stand_resets_the_operation_targets_and_interpolates_to_half_sitting_but
     assert time_s == 1.0 and angles == HALF_SITTING_RAD and GRIP not in angles and len(angles) == 28
     assert h.run_until_done(rid).state == "succeeded"
     assert h.runner.get(rid).ended_s == pytest.approx(1.0, abs=0.011)
+
+
+def _aligning(h, ends):
+    """The fake's walks: each goPos walks 20 ticks, then the soles stand at the next of `ends` (lsole_from_rsole)."""
+    ends, state = list(ends), {"soles": (0.30, 0.30, 0.0), "left": 0}
+    view, go_pos, tick = h.op.view, h.commands.go_pos, h.op.tick
+
+    def walk(x_m, y_m, theta_rad):
+        state["left"] = 20
+        return go_pos(x_m, y_m, theta_rad)
+
+    def step():
+        tick()
+        if state["left"] > 0:
+            state["left"] -= 1
+            if state["left"] == 0:
+                state["soles"] = ends.pop(0)
+
+    h.commands.go_pos, h.op.tick = walk, step
+    h.op.view = lambda: dataclasses.replace(view(), lsole_from_rsole=state["soles"], walking=state["left"] > 0)
+
+
+@pytest.mark.parametrize("ends, walks, state", [
+    ([(0.0, 0.19, 0.0)], 1, "succeeded"),
+    ([(0.05, 0.25, 0.0), (0.0, 0.19, 0.0)], 2, "succeeded"),  # soak seed 10050: the first walk ended 6 cm off
+    ([(0.05, 0.25, 0.0)] * 3, 3, "failed"),
+])
+def test_stand_walks_again_when_its_aligning_walk_ends_off_and_gives_up_after_three(ends, walks, state):
+    h = harness()
+    _aligning(h, ends)
+    run = h.run_until_done(h.runner.run(make("stand", {"time_s": 1.0})))
+    assert [e[0] for e in h.commands.log].count("go_pos") == walks
+    assert run.state == state, run.message
+    if state == "failed":
+        assert run_cause(run.message) == "timeout" and "3 aligning walks" in run.message
 
 
 def test_stand_is_refused_while_walking():
