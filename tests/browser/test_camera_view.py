@@ -1,9 +1,10 @@
-"""Perception in the camera view (issue 29) in a real headless Chromium against a real `hrp2-console` in the EXPO
-scene, the EXPO task run through the API as a script would: the recognition pop-ups stay inside the camera frame
-with their text whole (1280x800, 1920x1080, the frame resized), the can's pop-up goes once take_can holds it (no
-second Confirm beside another), and after throw_can the page shows where the robot saw the can end. The console
-runs without its 3D view (--headless: the camera is the page's own stream), which spares software WebGL's load.
-Every test saves a screenshot (HRP2_ARTIFACTS, else pytest's tmp dir), like test_operator_page.py."""
+"""A full EXPO run from the operator page (issue 29) in a real headless Chromium against a real `hrp2-console` in the
+EXPO scene: each behaviour typed in the command box, each step told in the dialogue in words, the recognitions
+confirmed from their pop-ups, which stay inside the camera frame with their text whole (1280x800, 1920x1080, the
+frame resized); the can's pop-up goes once take_can holds it (no second Confirm beside another), and after
+throw_can the page shows "in the box" where the robot saw the can end. The console runs without its 3D view
+(--headless: the camera is the page's own stream), which spares software WebGL's load. Every test saves a
+screenshot (HRP2_ARTIFACTS, else pytest's tmp dir), like test_operator_page.py."""
 
 from __future__ import annotations
 
@@ -13,7 +14,8 @@ import playwright.sync_api as playwright_api
 import pytest
 
 from tests.browser import test_operator_page as op
-from tests.browser.test_operator_page import get_json, post_json, shot, wait_until
+from tests.browser.test_dialogue import line, newest_run_id, run_of
+from tests.browser.test_operator_page import get_json, post_json, run_command, shot, wait_until
 
 # the operator page's fixtures, by name (its page opens on this module's console): the Chromium page, where the
 # screenshots go
@@ -44,10 +46,31 @@ def hrp2_console():
         c.stop()
 
 
-def run_to_end(c: op.Console, behavior: str, params: dict | None = None) -> dict:
-    run = post_json(f"{c.base}/api/behaviors/{behavior}", params or {})
-    return wait_until(lambda: next((r for r in c.state()["runs"] if r["id"] == run["id"] and r["state"] != "running"),
+def run_from_the_page(page, c: op.Console, behavior: str) -> dict:
+    """`behavior` typed in the command box and run to its end; the dialogue says the operator's command, the run's
+    start and its outcome in words (`... succeeded in N s: <its message> (run N)`)."""
+    before = newest_run_id(c)
+    run_command(page, behavior)
+    playwright_api.expect(line(page, "you", behavior)).to_have_count(1, timeout=10_000)
+    run = run_of(c, behavior, before)
+    playwright_api.expect(line(page, "robot", f"{behavior} started (run {run['id']})")).to_have_count(1)
+    done = wait_until(lambda: next((r for r in c.state()["runs"] if r["id"] == run["id"] and r["state"] != "running"),
                                    None), RUN_TIMEOUT_S, f"{behavior} to end", period=0.5)
+    assert done["state"] == "succeeded", done["message"]
+    outcome = line(page, "robot", f"(run {run['id']})").filter(has_text=f"{behavior} succeeded in")
+    playwright_api.expect(outcome).to_have_count(1)
+    assert done["message"] in outcome.locator(".words").inner_text()  # the behaviour's own words
+    return done
+
+
+def confirm_from_the_popup(page, c: op.Console, name: str) -> None:
+    """The recognition `name` confirmed with its pop-up's button; the robot has it confirmed, the dialogue says so."""
+    pop = page.locator(".rec-pop", has_text=f"{name} at")
+    pop.get_by_role("button", name="Confirm").click()
+    wait_until(lambda: get_json(f"{c.base}/api/recognitions")["recognitions"][name].get("status") == "confirmed",
+               10.0, f"the {name} confirmed")
+    playwright_api.expect(pop).to_contain_text("confirmed")
+    playwright_api.expect(page.locator("#history")).to_contain_text(f"{name} confirmed at (")
 
 
 def popups_inside(page, where: str) -> list:
@@ -62,11 +85,10 @@ def popups_inside(page, where: str) -> list:
     return pops
 
 
-def test_recognition_popups_stay_inside_the_camera_frame(page, hrp2_console, artifacts):
+def test_expo_from_the_page_locate_can_its_popup_inside_the_frame_confirmed_from_it(page, hrp2_console, artifacts):
     post_json(f"{hrp2_console.base}/api/sim/reset", {"scene": "expo"}, timeout=60.0)
     wait_until(lambda: hrp2_console.state()["scene"] == "expo", 30.0, "the expo scene")
-    done = run_to_end(hrp2_console, "locate_can")
-    assert done["state"] == "succeeded", done["message"]
+    run_from_the_page(page, hrp2_console, "locate_can")
     # the camera renders the new scene in a new process: on a loaded 2-core machine its first frame came >15 s late
     playwright_api.expect(page.locator(".rec-pop")).to_have_count(1, timeout=60_000)
     for w, h in SIZES:
@@ -84,29 +106,28 @@ def test_recognition_popups_stay_inside_the_camera_frame(page, hrp2_console, art
     page.evaluate("(() => { const f = document.getElementById('camera-frame'); f.style.width = ''; "
                   "f.style.height = ''; })()")
     page.set_viewport_size({"width": 1280, "height": 800})
+    confirm_from_the_popup(page, hrp2_console, "can")
 
 
-def test_the_taken_cans_popup_goes_and_one_confirm_remains(page, hrp2_console, artifacts):
+def test_expo_from_the_page_take_can_its_popup_goes_and_the_boxs_is_confirmed(page, hrp2_console, artifacts):
     """In the EXPO trial's order ([OP] VI): take the can, then locate the box (the head turns to it)."""
-    done = run_to_end(hrp2_console, "take_can")
-    assert done["state"] == "succeeded", done["message"]
+    run_from_the_page(page, hrp2_console, "take_can")
     assert get_json(f"{hrp2_console.base}/api/recognitions")["recognitions"]["can"]["status"] == "held"
     playwright_api.expect(page.locator(".rec-pop")).to_have_count(0)
-    done = run_to_end(hrp2_console, "locate_trash_box")
-    assert done["state"] == "succeeded", done["message"]
+    run_from_the_page(page, hrp2_console, "locate_trash_box")
     playwright_api.expect(page.locator(".rec-pop")).to_have_count(1)  # the trash box's alone
     playwright_api.expect(page.locator(".rec-pop", has_text="trash_box at")).to_have_count(1)
     playwright_api.expect(page.locator("#camera-popups").get_by_role("button", name="Confirm")).to_have_count(1)
     popups_inside(page, "the trash box")
     shot(page, artifacts, "camera_can_taken")
+    confirm_from_the_popup(page, hrp2_console, "trash_box")
 
 
-def test_after_throw_can_the_page_shows_where_the_can_landed(page, hrp2_console, artifacts):
-    done = run_to_end(hrp2_console, "throw_can")
-    assert done["state"] == "succeeded", done["message"]
+def test_expo_from_the_page_throw_can_and_the_page_shows_it_landed_in_the_box(page, hrp2_console, artifacts):
+    done = run_from_the_page(page, hrp2_console, "throw_can")
     landing = done["result"]["landing"]
     print("landing:", landing)
-    assert landing["verdict"] in ("in the box", "out of the box")
+    assert landing["verdict"] == "in the box"  # (EXPO from rendered perception: 20 of 20 in the box)
     verdict = page.locator(".rec-pop.verdict")
     playwright_api.expect(verdict).to_contain_text(f"can: {landing['verdict']}")
     playwright_api.expect(verdict.get_by_role("button")).to_have_count(0)  # a verdict, not a question
