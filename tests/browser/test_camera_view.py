@@ -8,6 +8,7 @@ screenshot (HRP2_ARTIFACTS, else pytest's tmp dir), like test_operator_page.py."
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import playwright.sync_api as playwright_api
@@ -63,6 +64,38 @@ def run_from_the_page(page, c: op.Console, behavior: str) -> dict:
     return done
 
 
+def stepped_from_the_preview(page, c: op.Console, behavior: str) -> dict:
+    """`behavior` previewed from its form and run with Step: each phase runs, then the run holds (the robot not
+    walking) until the next Step. Returns the ended run and the phases stepped."""
+    before = newest_run_id(c)
+    page.locator("#behaviors").get_by_role("button", name=behavior, exact=True).click()
+    page.locator("#behavior-form").get_by_role("button", name="Preview").click()
+    step = page.locator("#preview").get_by_role("button", name=re.compile(r"^Step"))
+    step.click()
+    run = run_of(c, behavior, before)
+    phases = []
+    while True:
+        now = wait_until(lambda: next((r for r in c.state()["runs"] if r["id"] == run["id"]
+                                       and (r["waiting"] or r["state"] != "running")), None),
+                         RUN_TIMEOUT_S, f"{behavior}'s next phase", period=0.2)
+        if now["state"] != "running":
+            break
+        phases.append(now["result"]["phase"])
+        if len(phases) == 1:  # held: nothing moves on before the operator's Step
+            page.wait_for_timeout(1000)
+            held = c.state()
+            assert held["layers"]["abc"]["walking"] is False
+            assert next(r for r in held["runs"] if r["id"] == run["id"])["waiting"]
+        playwright_api.expect(step).to_have_text(f"Step (next: {phases[-1]})")
+        step.click()
+        wait_until(lambda: not next(r for r in c.state()["runs"] if r["id"] == run["id"])["waiting"], 10.0,
+                   f"{behavior} stepped on")
+    assert now["state"] == "succeeded", now["message"]
+    outcome = line(page, "robot", f"(run {run['id']})").filter(has_text=f"{behavior} succeeded in")
+    playwright_api.expect(outcome).to_have_count(1)
+    return now, phases
+
+
 def confirm_from_the_popup(page, c: op.Console, name: str) -> None:
     """The recognition `name` confirmed with its pop-up's button; the robot has it confirmed, the dialogue says so."""
     pop = page.locator(".rec-pop", has_text=f"{name} at")
@@ -110,8 +143,11 @@ def test_expo_from_the_page_locate_can_its_popup_inside_the_frame_confirmed_from
 
 
 def test_expo_from_the_page_take_can_its_popup_goes_and_the_boxs_is_confirmed(page, hrp2_console, artifacts):
-    """In the EXPO trial's order ([OP] VI): take the can, then locate the box (the head turns to it)."""
-    run_from_the_page(page, hrp2_console, "take_can")
+    """In the EXPO trial's order ([OP] VI): take the can (stepped phase by phase from its preview), then locate the
+    box (the head turns to it)."""
+    _, phases = stepped_from_the_preview(page, hrp2_console, "take_can")
+    print("take_can stepped through:", phases)
+    assert len(phases) >= 3 and phases[0] == "walk"  # (the tuck ran at once; then the walk, the grasp, ...)
     assert get_json(f"{hrp2_console.base}/api/recognitions")["recognitions"]["can"]["status"] == "held"
     playwright_api.expect(page.locator(".rec-pop")).to_have_count(0)
     run_from_the_page(page, hrp2_console, "locate_trash_box")
