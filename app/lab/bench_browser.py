@@ -86,12 +86,19 @@ def run_page_rates_bench(duration_s: float = 10.0, scene: str = "default") -> di
             page.set_default_timeout(60_000)
             page.goto(f"http://127.0.0.1:{console.port}/", wait_until="domcontentloaded")
             page.wait_for_function("document.getElementById('conn').textContent.startsWith('live')")
-            page.locator("#camera").scroll_into_view_if_needed()
-            rates = measure_page_rates(page, f"http://127.0.0.1:{console.port}", duration_s)
+            page.locator("#s-chain").click()  # the keys to the page, not to a field
+            page.keyboard.press("Digit1")  # the right hand; W held: a stick streaming it forward, as the issue asks
+            page.keyboard.down("KeyW")
+            try:
+                page.locator("#camera").scroll_into_view_if_needed()
+                rates = measure_page_rates(page, f"http://127.0.0.1:{console.port}", duration_s)
+                streamed = page.locator("#stream-state").inner_text()
+            finally:
+                page.keyboard.up("KeyW")
             browser.close()
     finally:
         console.stop()
-    return {"scenario": "page-rates", "scene": scene, "duration_s": duration_s, **rates,
+    return {"scenario": "page-rates", "scene": scene, "duration_s": duration_s, **rates, "stick": streamed,
             "asked_hz": {"camera": 10.0, "plots": 20.0}}
 
 
