@@ -79,6 +79,11 @@ class Commands(Protocol):
         """goStop: stop after the committed steps, feet side by side."""
         ...
 
+    def walk_plan_version(self) -> int:
+        """Changes whenever the AutoBalancer's footstep list is replaced or edited (another goPos, goVelocity or
+        footstep list, a catching step, a walking stop): whether a walk went as it was planned."""
+        ...
+
     def close_stance(self) -> float:
         """One slow, lowered step closing a stance too wide to walk from; returns its duration [s]."""
         ...

@@ -68,6 +68,7 @@ class WalkTo(Behavior):
     def _go(self, ctx: Context, d: np.ndarray, dtheta: float) -> None:
         """One goPos to the goal as the feet frame sees it now."""
         self.walk_plan_s = float(ctx.commands.go_pos(float(d[0]), float(d[1]), float(dtheta)))
+        self.plan_version = ctx.commands.walk_plan_version()
         self.plan_s += self.walk_plan_s
         self.walk_started_s = ctx.elapsed_s
         self.seen_walking = False
@@ -102,9 +103,12 @@ class WalkTo(Behavior):
             return self.succeed(f"arrived within {dist * 100:.1f} cm and {dyaw_deg:.1f} deg"
                                 + (f" ({self.corrections_made} correction{'s' if self.corrections_made > 1 else ''})"
                                    if self.corrections_made else ""), **result)
+        why = ("its walk was re-planned by another command meanwhile (goPos, goVelocity, footsteps, a catching "
+               "step or goStop)" if ctx.commands.walk_plan_version() != self.plan_version else
+               "the footsteps landed as planned: the walk's accuracy limit")  # (soak seed 10114: an operator's goPos)
         return self.fail(f"stopped {dist * 100:.1f} cm and {dyaw_deg:.1f} deg from the goal "
                          f"(tolerance {p.tolerance_m * 100:g} cm, {p.tolerance_deg:g} deg) after "
-                         f"{self.corrections_made} correction(s)", **result)
+                         f"{self.corrections_made} correction(s): {why}", **result)
 
     def stop(self, ctx: Context) -> None:
         ctx.commands.walk_stop()

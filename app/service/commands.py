@@ -73,6 +73,9 @@ class HostCommands:
     def walk_stop(self) -> None:
         self._apply(WalkStop())
 
+    def walk_plan_version(self) -> int:
+        return int(self.host.layer("abc").gait.plan_version)
+
     def close_stance(self) -> float:
         self._apply(CloseStance())
         return closing_duration_s(self.host.layer("abc").gait.params)

@@ -92,6 +92,12 @@ def test_a_stream_refusal_needs_a_reason_too():
     # the soak (seeds 10039, 10050): a walk refused while the waist's tilt leaves a knee too little range
     ("step 1 (walk_to) refused: goPos: LLEG_JOINT3 is 6.5 deg from its limit (the waist's tilt) and walking needs "
      "12 deg; straighten the waist first", "limit"),
+    # the soak (seed 10114): walk_to's walk re-planned by the operator's goPos; or its footsteps as planned
+    ("step 0 (walk_to) failed: stopped 11.7 cm and 30.6 deg from the goal (tolerance 0.99 cm, 27.4684 deg) after 0 "
+     "correction(s): its walk was re-planned by another command meanwhile (goPos, goVelocity, footsteps, a "
+     "catching step or goStop)", "state"),
+    ("stopped 1.5 cm and 1.0 deg from the goal (tolerance 1 cm, 3 deg) after 0 correction(s): the footsteps landed "
+     "as planned: the walk's accuracy limit", "limit"),
     ("stopped 5.0 cm and 1.0 deg from the goal (tolerance 3 cm, 3 deg) after 2 correction(s)", None),
     ("TypeError: unsupported operand", None),
 ])

@@ -93,6 +93,7 @@ class FakeCommands:
         self.walk_s = 0.0
         self.reset_time_s = 1.0  # [s] the operation layer's reset blend (its default reset_time_s)
         self.walk_gain = 1.0  # the fake's steps take the goal this many times (a real walk lands a little long)
+        self.plan_version = 0  # the AutoBalancer's footstep list's version: each goPos, or a test's other walk
 
     def _check(self) -> None:
         if self.refuse:
@@ -111,6 +112,7 @@ class FakeCommands:
     def go_pos(self, x_m: float, y_m: float, theta_rad: float) -> float:
         self._check()
         self.log.append(("go_pos", x_m, y_m, theta_rad))
+        self.plan_version += 1
         if self.op is not None:  # the fake walks at once
             R = _rot_z(self.op.feet_yaw)
             self.op.feet_p = self.op.feet_p + R @ (self.walk_gain * np.array([x_m, y_m, 0.0]))
@@ -119,6 +121,9 @@ class FakeCommands:
 
     def walk_stop(self) -> None:
         self.log.append(("walk_stop",))
+
+    def walk_plan_version(self) -> int:
+        return self.plan_version
 
     def set_joint_angles(self, angles_rad: Mapping[str, float], time_s: float) -> None:
         self._check()

@@ -131,6 +131,19 @@ def test_walk_to_walks_again_for_what_a_walk_left_as_the_feet_frame_measures_it(
     assert status.nominal_duration_s == pytest.approx(4.0 + 2.0 + 4.0 + 2.0)  # each walk and its settling
 
 
+@pytest.mark.parametrize("replanned, cause", [(False, "limit"), (True, "state")])
+def test_walk_to_off_its_goal_says_whether_its_walk_was_replanned_by_another_command(replanned, cause):
+    # soak seed 10114: the operator's goPos re-planned walk_to's walk, which then failed naming no cause
+    h = harness()
+    h.commands.walk_gain = 1.2  # lands 20 % long: 20 cm off the goal
+    rid = h.runner.run(make("walk_to", {"x_m": 1.0, "corrections": 0}))
+    if replanned:
+        h.commands.plan_version += 1  # another client's goPos, as the AutoBalancer counts it
+    status = h.run_until_done(rid)
+    assert status.state == "failed" and "20.0 cm" in status.message, status.message
+    assert run_cause(status.message) == cause, status.message
+
+
 def test_walk_to_that_ends_off_the_goal_fails_after_its_corrections_and_a_cancel_stops_walking():
     h = harness()
     h.commands.op = None  # the fake does not walk
