@@ -250,6 +250,16 @@ def go_pos_from(kept: Sequence[Footstep], goal_mid: Sequence[float], params: Foo
     return steps
 
 
+def stop_after(kept: Sequence[Footstep], params: FootstepParams | None = None,
+               limits: StrideLimits | None = None) -> list[Footstep]:
+    """goStop in a goPos or footstep walk: `kept` (the committed footsteps) then the aligning step that puts the
+    other foot beside the last one (go_pos_from to the mid-coords under it)."""
+    params = params or FootstepParams()
+    last = kept[-1]
+    mid = _compose((last.x, last.y, last.yaw), (0.0, -_leg_sign(last.leg) * params.leg_offset_y_m, 0.0))
+    return go_pos_from(kept, mid, params, limits)
+
+
 def _walk_to(steps: list[Footstep], mids: list[tuple], goal: tuple, z: float, params: FootstepParams,
              limits: StrideLimits) -> None:
     """Append clamped steps from mids[-1] until the goal mid-coords is reached, then the aligning step(s)."""

@@ -21,6 +21,7 @@ from controller.walking.footsteps import (
     mid_coords,
     other_leg,
     set_footsteps,
+    stop_after,
     stop_in_place,
 )
 from controller.walking.gait_edits import GaitEdits, GaitPatch
@@ -306,8 +307,15 @@ class GaitGenerator(GaitEdits):
 
     def go_stop(self) -> None:
         """hrpsys goStop: in velocity mode, the steps after the overwritable one become the aligning steps
-        (a goPos waiting for the end of the walk is dropped)."""
+        (a goPos waiting for the end of the walk is dropped). In a goPos or footstep walk too, where hrpsys walks
+        on to the end (soak seed 10139: "stopping", and a 41-step walk went on for 20 s); not in a plan with its
+        own timing (a catching step, the closing step), which ends standing anyway."""
         self._pending_goal = self._pending_velocity = None
+        if self._walking and self._stepper is None and self._plan_params is None and not self._stopping_from_rest:
+            k = self._free_index()
+            if k < len(self._footsteps):
+                self.replan(stop_after(self._footsteps[:k], self.footstep_params, self.stride_limits), k)
+            return
         if self._walking and self._stepper is not None and self._stepper.state == "walking":
             k = self._overwritable_index()
             if k > len(self._footsteps):

@@ -287,6 +287,23 @@ def test_go_pos_while_walking_replaces_the_rest_of_the_plan_relative_to_where_th
     assert yaw - origin[2] == pytest.approx(goal[2], abs=math.radians(0.5))
 
 
+@pytest.mark.parametrize("stop_tick", [50, 400, 900, 1500, 2200, 3100, 3900])
+def test_go_stop_ends_a_go_pos_walk_after_its_committed_steps_feet_side_by_side(stop_tick):
+    # soak seed 10139: goStop answered "stopping" and a 41-step goPos walk went on (hrpsys stops velocity mode only)
+    gg = GaitGenerator(dt_s=DT)
+    full = gg.go_pos(2.0, 0.0, 0.0)  # 16 footsteps of 1 s
+    samples = run(gg, {stop_tick: lambda g: g.go_stop()})
+    check_walk(gg, samples, gg.footsteps)
+    k = next((i for i, (a, b) in enumerate(zip(full, gg.footsteps, strict=False)) if a != b), len(full))
+    assert len(gg.footsteps) <= k + 2  # the committed steps, then at most the aligning step(s)
+    assert len(samples) * DT <= (stop_tick * DT) + 3 * 1.0 + GaitParams().final_double_support_s + 0.01
+    x, y, yaw = feet_mid(gg)
+    assert x <= 2.0 + 1e-9 and yaw == pytest.approx(0.0, abs=1e-9)
+    if stop_tick * DT < len(full) - 4.0:  # stopped well before the end: short of the goal
+        assert x < 2.0 - 0.1
+    assert gg.T_world_lfoot[:3, 3] - gg.T_world_rfoot[:3, 3] == pytest.approx([0.0, 0.19, 0.0], abs=1e-9)
+
+
 def test_go_pos_during_a_velocity_walk_ends_the_velocity_mode_on_the_goal():
     gg = GaitGenerator(dt_s=DT)
     gg.go_velocity(0.1, 0.0, math.radians(5.0))
