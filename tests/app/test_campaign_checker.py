@@ -199,6 +199,23 @@ def test_stand_back_at_half_sitting_the_grippers_aside_or_a_fallen_robot_is_not_
     assert invariants(c) == []
 
 
+def test_a_stand_that_fails_after_a_push_beyond_the_envelope_is_listed_not_counted_and_within_it_is_caught():
+    # soak seeds 10014, 10070, 10079, 10157: pushed while the hard e-stop held the robot frozen (envelope 0), left on
+    # one foot or tilted; beyond the envelope the invariants promise nothing, as invariant 1 for a fall
+    c = Checker()
+    c.push(8.4, 20.0)  # inside the standing envelope: stand must still bring it back
+    c.back_to_half_sitting({"state": "failed", "message": "stopped by the flag"}, HALF, HALF, fallen=False)
+    assert invariants(c) == [6] and c.beyond_stands == []
+    c.push(7.6, 0.0)  # while frozen: beyond
+    c.back_to_half_sitting({"state": "failed", "message": "stopped by the flag"}, HALF, HALF, fallen=False)
+    assert invariants(c) == [6]
+    assert len(c.beyond_stands) == 1 and "stopped by the flag" in c.beyond_stands[0]["detail"]
+    assert c.beyond_stands[0]["pushes"] == [(c.time_s, 7.6, 0.0)]
+    c.reset()  # a new stretch: the push before is forgotten
+    c.back_to_half_sitting(None, HALF, HALF, fallen=False)
+    assert invariants(c) == [6, 6]
+
+
 def test_a_controller_fault_is_caught_once_while_it_shows():
     c = Checker()
     c.state(state(1.0))

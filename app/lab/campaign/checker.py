@@ -16,7 +16,8 @@ INVARIANTS: Mapping[int, str] = {
     3: "an e-stop answered ok is engaged in the loop's state",
     4: "an answer that says ok was applied (where the state shows it)",
     5: "no 5xx, no controller fault, the robot process alive, no tick late by more than 2 ms when paced",
-    6: "after the session, releasing the stops and `stand` bring the robot back to half-sitting unless it fell",
+    6: "after the session, releasing the stops and `stand` bring the robot back to half-sitting unless it fell "
+       "or a push beyond the envelope came",
 }
 
 #: The closed set of a refusal's `reason` (409 and the stream's acks: the service's reasons and the simulation's
@@ -66,6 +67,9 @@ class Checker:
         self.last_state: Mapping[str, Any] | None = None
         self._runs_seen: set[tuple[int, str]] = set()
         self.falls: list[dict[str, Any]] = []
+        #: stands that did not bring the robot back after a push beyond the envelope in the stretch: listed in the
+        #: report, not violations (beyond it the invariants promise nothing, as for invariant 1's falls)
+        self.beyond_stands: list[dict[str, Any]] = []
         self._fault: str | None = None  # the fault the last state showed (each one is said once)
         self.runs_before: set[int] = set()  # runs a session before this one started on the same console
 
@@ -200,15 +204,23 @@ class Checker:
         every joint but the grippers within STAND_TOLERANCE_DEG of half-sitting, unless the robot fell."""
         if fallen:
             return
+        failure = None
         if stand is None or stand.get("state") != "succeeded":
             said = "no answer" if stand is None else f"{stand.get('state')}: {stand.get('message')}"
-            self.violate(6, f"`stand` after releasing the stops did not succeed ({said})")
+            failure = f"`stand` after releasing the stops did not succeed ({said})"
+        else:
+            off = {name: joints_deg[name] - q for name, q in half_sitting_deg.items()
+                   if name not in GRIPPERS and name in joints_deg
+                   and not abs(joints_deg[name] - q) <= STAND_TOLERANCE_DEG}
+            if off:
+                worst = sorted(off.items(), key=lambda kv: -abs(kv[1]))[:5]
+                failure = "after `stand` the joints are not at half-sitting: " + ", ".join(
+                    f"{n} {d:+.1f} deg" for n, d in worst)
+        if failure is None:
             return
-        off = {name: joints_deg[name] - q for name, q in half_sitting_deg.items()
-               if name not in GRIPPERS and name in joints_deg
-               and not abs(joints_deg[name] - q) <= STAND_TOLERANCE_DEG}
-        if off:
-            worst = sorted(off.items(), key=lambda kv: -abs(kv[1]))[:5]
-            self.violate(6, "after `stand` the joints are not at half-sitting: " +
-                         ", ".join(f"{n} {d:+.1f} deg" for n, d in worst))
+        beyond = [p for p in self.pushes if p[1] > p[2]]
+        if beyond:
+            self.beyond_stands.append({"time_s": round(self.time_s, 4), "detail": failure, "pushes": beyond})
+        else:
+            self.violate(6, failure)
 

@@ -54,12 +54,13 @@ class SessionResult:
     pushes: list[tuple[float, float, float]]
     trace: list[dict[str, Any]] = dataclasses.field(default_factory=list)
     recordings: dict[str, bytes] = dataclasses.field(default_factory=dict)  # MCAP of the stretches that violated
+    beyond_stands: list[dict[str, Any]] = dataclasses.field(default_factory=list)  # Checker.beyond_stands
 
     def to_dict(self) -> dict[str, Any]:
         return {"seed": self.seed, "seconds": self.seconds, "actions": [a.to_dict() for a in self.actions],
                 "violations": [v.to_dict() for v in self.violations], "counts": dict(self.counts),
                 "simulated_s": round(self.simulated_s, 3), "wall_s": round(self.wall_s, 3), "falls": self.falls,
-                "pushes": self.pushes, "trace": self.trace}
+                "pushes": self.pushes, "trace": self.trace, "beyond_stands": self.beyond_stands}
 
 
 class _Stream:
@@ -252,7 +253,8 @@ class Session:
             self.close()
         c = self.checker
         return SessionResult(self.seed, self.seconds, self.actions, list(c.violations), self.counts,
-                             self.simulated_s, time.monotonic() - wall, c.falls, [], self.trace, self.recordings)
+                             self.simulated_s, time.monotonic() - wall, c.falls, [], self.trace, self.recordings,
+                             c.beyond_stands)
 
     def _run(self) -> None:
         """Start, act and check for the session's seconds, then the end-of-session check."""
