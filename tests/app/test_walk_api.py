@@ -144,3 +144,11 @@ def test_the_walk_endpoints_are_documented(client):
     for name in ("go-pos", "go-velocity", "stop", "emergency-stop"):
         assert "post" in paths[f"/api/walk/{name}"]
     assert {"get", "post"} <= set(paths["/api/walk/footsteps"])
+
+
+def test_the_emergency_walking_stop_standing_still_says_it_has_nothing_to_stop(standing, runtime):
+    # soak seed 10176: answered ok while the robot stood, then a walk began and the ok read as a stop in force
+    r = standing.post("/api/walk/emergency-stop")
+    assert r.status_code == 409 and r.json()["reason"] == "state", r.text
+    assert r.json()["detail"] == "not walking: the emergency walking stop has nothing to stop"
+    assert standing.get("/api/state").json()["emergency"]["walking_stop"] is False

@@ -42,7 +42,7 @@ def stop(service: ServiceDep) -> Ok:
     return Ok(message=service.walk_stop())
 
 
-@router.post("/emergency-stop", response_model=Ok, responses=errors(404),
+@router.post("/emergency-stop", response_model=Ok, responses=errors(404, 409, e409="not walking: nothing to stop"),
              summary="Stop walking in place as soon as possible (emergencyStop); the arms are left alone")
 def emergency_stop(service: ServiceDep) -> Ok:
     return Ok(message=service.walk_emergency_stop())

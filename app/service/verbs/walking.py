@@ -9,7 +9,7 @@ from dataclasses import dataclass
 
 from app.service.errors import InvalidArgument
 from app.service.verbs.base import Host, Verb, check_bounded
-from controller.core.errors import InvalidCommand
+from controller.core.errors import InvalidCommand, InvalidState
 from controller.operation.ranges import WALK_MAX_ANGULAR_RAD_S, WALK_MAX_LINEAR_M_S
 from controller.walking.footsteps import StepParams
 
@@ -97,8 +97,11 @@ class WalkEmergencyStop(Verb):
     name = "walk_emergency_stop"
 
     def run(self, host: Host) -> str:
+        abc = host.layer("abc")
+        if not abc.gait.walking:  # as a release with nothing latched: an ok would say a stop is in force (soak seed
+            raise InvalidState("not walking: the emergency walking stop has nothing to stop")  # 10176)
         host.walking_stop_watch.asked = True  # what raised the stop, for the refusals it causes
-        host.layer("abc").emergency_stop_walking()
+        abc.emergency_stop_walking()
         return "walking emergency stop"
 
 
