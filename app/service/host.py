@@ -22,6 +22,7 @@ from app.service.session_recorder import SessionRecorder
 from app.service.setpoints import LocalSource, Setpoint, SetpointAck
 from app.service.stops import LatchedStop, WalkingStopWatch, motion_stop
 from app.service.verbs import RobotInfo, SetParams, Verb
+from app.service.verbs.sequence import held_against
 from app.session.inputs import outcome_of
 from behaviors.perception.worker import prepare as prepare_recognition
 from behaviors.registry import BEHAVIORS  # noqa: F401 - imported here, not at the first behaviour's boundary
@@ -367,7 +368,7 @@ class RobotHost:
             raise Refused("hard_stop", f"{verb.name} refused: the hard e-stop is engaged; release it first")
         if verb.sequence:
             co = loop.chain.layers.get("co")
-            if co is not None and co.enabled and co.in_collision:
+            if held_against(verb, co):
                 pairs = ", ".join("-".join(p) for p in co.pairs[:2])
                 raise Refused("collision", f"{verb.name} refused: the CollisionDetector holds the posture "
                                            f"({pairs}); wait until it has recovered")

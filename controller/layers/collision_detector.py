@@ -94,6 +94,7 @@ class CollisionDetector(Layer):
         self.params = params or CollisionDetectorParams()
         self.checker = checker or SelfCollisionChecker(margin_m=self.params.margin_m)
         self.q_safe = np.array(q0_rad, dtype=float)
+        self.q_in = self.q_safe  # the last input posture (tick)
         self.in_collision = False
         self.pairs: list[tuple[str, str]] = []
         self.blend: RecoverBlend | None = None
@@ -104,6 +105,7 @@ class CollisionDetector(Layer):
         self.checker.set_margin(params.margin_m)
 
     def tick(self, ctx: TickContext, ref: Reference) -> Reference:
+        self.q_in = ref.q_rad  # the input posture, as the motion commands made it (what a new one is checked on)
         if not self.enabled:
             self.q_safe = np.array(ref.q_rad, dtype=float)
             return ref
@@ -113,6 +115,8 @@ class CollisionDetector(Layer):
         if self.blend is not None:
             candidate = np.where(BALANCING_JOINTS, ref.q_rad, candidate)
         pairs = self.checker.colliding_pairs(candidate)
+        if pairs and self.blend is not None and self._legs_moved_into_it(ref, pairs):
+            pairs = []  # the way out toward a free input goes on (soak seed 10192: held against a raised thigh)
         if pairs:
             self.pairs = pairs
             self.in_collision = True
@@ -128,6 +132,12 @@ class CollisionDetector(Layer):
                 self.blend = None
             return ref.with_(q_rad=candidate)
         return ref
+
+    def _legs_moved_into_it(self, ref: Reference, pairs) -> bool:
+        """The held posture collides now (the legs, which it lets through, moved into the held arm), the input is
+        free, and this step of the blend toward it collides no more than holding does: holding would never end."""
+        held = self.checker.colliding_pairs(np.where(BALANCING_JOINTS, ref.q_rad, self.q_safe))
+        return bool(held) and set(pairs) <= set(held) and not self.checker.colliding_pairs(ref.q_rad)
 
     def status(self) -> CollisionDetectorStatus:
         pairs = tuple(tuple(p) for p in self.pairs[:4])

@@ -9,6 +9,7 @@ import pytest
 from app.console.state import jsonable
 from app.service import InvalidArgument, OperatorService, Refused
 from app.service.local import LocalRobot
+from robot.names import JOINT_NAMES
 
 
 def wait_for(predicate, timeout_s=10.0):
@@ -145,6 +146,25 @@ def test_sequence_verbs_are_refused_while_the_collision_detector_holds_or_the_mo
     assert info.value.reason == "motion_stop"
     service.release_motion()
     assert "interpolating" in service.set_some_joint_angles({"LARM_JOINT0": -0.3}, 1.0)
+
+
+def test_under_the_collision_detectors_hold_a_motion_to_a_free_posture_goes_and_ends_the_hold():
+    # soak seed 10192: `stand`'s half-sitting was refused under the hold, the one motion that could end it
+    import math
+
+    from behaviors.stand import HALF_SITTING_RAD
+    from tests.scenarios.helpers import pose_deg
+
+    robot = LocalRobot(speed=None)
+    service = OperatorService(robot)
+    service.set_joint_angles([math.radians(v) for v in pose_deg(RARM_JOINT0=-20, RARM_JOINT1=0, RARM_JOINT2=80,
+                                                                 RARM_JOINT3=-120)], 3.0)
+    robot.loop.run_until(lambda s: s.layers["co"].collision, timeout_s=4.0)
+    assert "interpolating" in service.set_some_joint_angles(HALF_SITTING_RAD, 2.0)
+    snap = robot.loop.run_for(3.0)
+    assert not snap.layers["co"].collision
+    off = max(abs(snap.q_cmd_rad[JOINT_NAMES.index(n)] - q) for n, q in HALF_SITTING_RAD.items())
+    assert math.degrees(off) < 1.0, math.degrees(off)
 
 
 def test_a_startup_parameter_document_is_loaded_checked_and_kept_across_resets():

@@ -10,6 +10,7 @@ import numpy as np
 
 from app.service.errors import InvalidArgument
 from app.service.verbs.base import Host, RobotInfo, Verb, check_bounded, check_finite, check_motion_time
+from robot.names import JOINT_NAMES
 
 MAX_TARGET_POS_M = 5.0  # [m] |pos| components of a setTargetPose target
 TARGET_LIMBS = ("rarm", "larm", "rleg", "lleg")
@@ -49,6 +50,9 @@ class SetJointAngles(Verb):
         host.layer("seq").set_joint_angles(np.array(self.q_rad), self.time_s)
         return f"interpolating over {self.time_s:g} s"
 
+    def final_posture(self, q_now_rad: np.ndarray) -> np.ndarray:
+        return np.array(self.q_rad, dtype=float)
+
 
 @dataclass(frozen=True)
 class SetSomeJointAngles(Verb):
@@ -80,6 +84,12 @@ class SetSomeJointAngles(Verb):
         for name, v in self.angles_rad:  # one command at one tick boundary
             seq.set_joint_angle(name, float(v), self.time_s)
         return f"interpolating over {self.time_s:g} s"
+
+    def final_posture(self, q_now_rad: np.ndarray) -> np.ndarray:
+        q = np.array(q_now_rad, dtype=float)
+        for name, v in self.angles_rad:
+            q[JOINT_NAMES.index(name)] = v
+        return q
 
 
 @dataclass(frozen=True)
@@ -174,3 +184,14 @@ class SequenceStatus(Verb):
 
     def run(self, host: Host) -> bool:
         return bool(host.layer("seq").is_interpolating())
+
+
+def held_against(verb, co) -> bool:
+    """The CollisionDetector `co` holds the posture and the joint motion `verb` would not free it: refused. One
+    whose final posture (on the detector's input for the joints it does not name) is free is how the hold ends, so
+    it goes (soak seed 10192: an arm held against a thigh the squat had raised refused `stand` its half-sitting,
+    and nothing else could move it)."""
+    if co is None or not co.enabled or not co.in_collision:
+        return False
+    final = getattr(verb, "final_posture", None)
+    return final is None or bool(co.checker.colliding_pairs(final(co.q_in)))
