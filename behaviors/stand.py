@@ -25,6 +25,11 @@ STANCE_TOLERANCE_RAD = math.radians(2.0)
 ALIGN_START_TIMEOUT_S = 0.5  # [s] the aligning walk shows in the view a tick after goPos
 #: aligning walks before stand gives up: a walk from far apart can end a few cm off (soak seed 10050)
 ALIGN_WALKS_MAX = 3
+#: [rad] the aligning walk waits for BODY (as the AutoBalancer carries it) this level, [s] at most this long: the
+#: reset's blend and, after a motion stop's release, the EmergencyStopper's recovery bring a tilted waist back (soak
+#: seed 10167: goPos refused 0.8 s into a 2.8 s return, "straighten the waist first")
+LEVEL_RAD = math.radians(2.0)
+LEVEL_WAIT_MAX_S = 5.0
 #: [s] an operated foot put down and the weight shared again: at most 0.29 m at 0.12 m/s, 0.4 s settled, 1.2 s of
 #: shift (controller/walking/foot_lift.py), and a margin
 FOOT_DOWN_MAX_S = 5.0
@@ -33,6 +38,11 @@ def across_m(lsole_from_rsole) -> float:
     """How far apart the soles' centres are across [m], in the frame of their mean heading."""
     x, y, yaw = lsole_from_rsole
     return abs(-math.sin(0.5 * yaw) * x + math.cos(0.5 * yaw) * y)
+
+
+def body_tilt_rad(view) -> float:
+    """BODY's tilt from the feet frame's vertical [rad], as the AutoBalancer carries it."""
+    return math.acos(max(-1.0, min(1.0, float(view.points["waist"].R_feet_point[2][2]))))
 
 
 def feet_side_by_side(lsole_from_rsole) -> bool:
@@ -56,13 +66,14 @@ class Stand(Behavior):
     _asked_s = 0.0  # [s] run time the last walk was asked
     _closing = False  # the walk under way closes a stance too wide to walk from
     _walks = 0  # the aligning walks asked
+    _levelling = False  # the aligning walk waited for BODY to come level
     summary = "Back to half-sitting (feet side by side first, operation targets reset, joints interpolated)"
 
     def points(self) -> tuple[str, ...]:
         return ("rhand", "lhand", "head", "waist", "walk")
 
     def nominal_duration_s(self) -> float:
-        return self.params.time_s + 0.5 + self._walk_s
+        return self.params.time_s + 0.5 + self._walk_s + (LEVEL_WAIT_MAX_S if self._levelling else 0.0)
 
     def start(self, ctx: Context) -> None:
         view = ctx.require_view()
@@ -92,7 +103,9 @@ class Stand(Behavior):
         if self._walk_at_s is not None:
             if ctx.elapsed_s >= self._walk_at_s:
                 view = ctx.require_view()
-                if view.foot_lifted is None:
+                level = body_tilt_rad(view) <= LEVEL_RAD or ctx.elapsed_s - self._walk_at_s > LEVEL_WAIT_MAX_S
+                self._levelling = self._levelling or not level
+                if view.foot_lifted is None and level:
                     self._walk(ctx, view.lsole_from_rsole)
                 elif ctx.elapsed_s - self._walk_at_s > FOOT_DOWN_MAX_S:
                     return self.fail(f"timeout: the {view.foot_lifted} was not down within {FOOT_DOWN_MAX_S:g} s")

@@ -210,6 +210,23 @@ def test_stand_walks_again_when_its_aligning_walk_ends_off_and_gives_up_after_th
         assert run_cause(run.message) == "timeout" and "3 aligning walks" in run.message
 
 
+@pytest.mark.parametrize("level_after_s, walks_at_s", [(0.0, 1.0), (2.5, 2.5), (9.0, 6.0)])
+def test_stands_aligning_walk_waits_for_the_waist_to_come_level(level_after_s, walks_at_s):
+    # soak seed 10167: after a motion stop's release the waist came back from 9 deg of roll over 2.8 s; the goPos
+    # asked once the reset's 1 s blend was over was refused ("straighten the waist first")
+    h = harness()
+    _aligning(h, [(0.0, 0.19, 0.0)])
+    c, s_ = math.cos(math.radians(9.0)), math.sin(math.radians(9.0))
+    h.op.R["waist"] = np.array([[1.0, 0.0, 0.0], [0.0, c, -s_], [0.0, s_, c]])  # rolled 9 deg
+    rid = h.runner.run(make("stand", {"time_s": 1.0}))
+    while not any(e[0] == "go_pos" for e in h.commands.log) and h.op.time_s < 10.0:
+        if h.op.time_s >= level_after_s:
+            h.op.R["waist"] = np.eye(3)
+        h.tick()
+    assert h.op.time_s == pytest.approx(walks_at_s, abs=0.011)  # level, or LEVEL_WAIT_MAX_S after the reset's 1 s
+    assert h.run_until_done(rid).state == "succeeded"
+
+
 def test_stand_is_refused_while_walking():
     h = harness()
     h.op.walking = True
