@@ -92,6 +92,8 @@ class OperationLayer(Layer):
         self.dt_s = dt_s
         # the upper body only: the AutoBalancer owns balance, the legs and BODY's place
         self.ik = ik or OperationIK(upper_body=True)
+        self.ik.reset()  # a shared IK (one per system, across resets) starts from this chain's reference, not the
+        # posture it last solved before a reset (soak seed 10230: a hand streamed across a reset jumped, a fall)
         self.kin = RobotKinematics()  # the reference's own kinematics in F (seeding a point)
         self._commands = CommandSum()  # the operator's (dead-man) and the behaviours' twists, Eq. 5
         self._walk = WalkPoint()

@@ -119,3 +119,28 @@ def test_a_recognition_late_at_real_time_is_not_waited_for_and_replays_where_it_
     first_due = min(seen[0][1] for seen in events.values())
     result = replay(untold)
     assert not result.identical and result.difference.tick >= first_due, result.summary()
+
+
+def test_a_session_started_by_a_reset_after_a_streamed_hand_replays_bit_for_bit(tmp_path):
+    # soak seed 10230: the operation layer's IK, shared across resets, went on from the posture it had solved
+    # before the reset: the hand streamed on into the new stretch jumped there, the robot fell 1.8 s in, and the
+    # stretch's replay (a fresh process) differed from its first tick
+    robot = LocalRobot(speed=None)
+    stick = Setpoint("lhand", (0.04, 0.08, -0.09), (0.08, -0.26, 0.08))
+    try:
+        robot.run_for(3.0)
+        for k in range(200):
+            if k % 8 == 0:
+                robot.put_setpoint(stick)
+            robot.step()
+        robot.host.start_recording(tmp_path / "s.mcap", reset=True)
+        for k in range(int(3.0 / 0.005)):
+            if k % 8 == 0 and k < 300:
+                robot.put_setpoint(stick)
+            assert not robot.step().fallen
+        robot.host.stop_recording()
+        robot.host.last_recorder.wait()
+    finally:
+        robot.close()
+    result = replay(read_session(tmp_path / "s.mcap"))
+    assert result.identical, result.first_difference
