@@ -67,13 +67,15 @@ class Stand(Behavior):
     _closing = False  # the walk under way closes a stance too wide to walk from
     _walks = 0  # the aligning walks asked
     _levelling = False  # the aligning walk waited for BODY to come level
+    _reset_s = 0.0  # [s] the operation targets' reset blend before the posture
     summary = "Back to half-sitting (feet side by side first, operation targets reset, joints interpolated)"
 
     def points(self) -> tuple[str, ...]:
         return ("rhand", "lhand", "head", "waist", "walk")
 
     def nominal_duration_s(self) -> float:
-        return self.params.time_s + 0.5 + self._walk_s + (LEVEL_WAIT_MAX_S if self._levelling else 0.0)
+        return (max(self.params.time_s, self._reset_s) + 0.5 + self._walk_s
+                + (LEVEL_WAIT_MAX_S if self._levelling else 0.0))
 
     def start(self, ctx: Context) -> None:
         view = ctx.require_view()
@@ -95,7 +97,7 @@ class Stand(Behavior):
         self._walk_s += ctx.commands.close_stance() if self._closing else ctx.commands.go_pos(0.0, 0.0, 0.0)
 
     def _to_half_sitting(self, ctx: Context) -> None:
-        ctx.commands.reset_operation_targets()
+        self._reset_s = ctx.commands.reset_operation_targets()  # (longer than time_s for a large offset)
         ctx.commands.set_joint_angles(HALF_SITTING_RAD, self.params.time_s)
         self._posture_from_s = ctx.elapsed_s
 
@@ -129,7 +131,8 @@ class Stand(Behavior):
                                  f"sole {x:.3f}, {y:.3f} m, {math.degrees(yaw):.1f} deg from the right one)")
             self._to_half_sitting(ctx)
             return NOTHING
-        if ctx.elapsed_s - self._posture_from_s >= self.params.time_s and not ctx.commands.is_interpolating():
+        if ctx.elapsed_s - self._posture_from_s >= max(self.params.time_s, self._reset_s) \
+                and not ctx.commands.is_interpolating():
             view = ctx.view
             return self.succeed("standing in half-sitting",
                                 waist_height_m=None if view is None else round(view.waist_height_m, 4))

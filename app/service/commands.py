@@ -93,7 +93,7 @@ class HostCommands:
 
     def reset_operation_targets(self) -> float:
         self._apply(ResetOperationTargets())
-        return float(self.host.layer("op").params.reset_time_s)
+        return float(self.host.layer("op").last_reset_s)  # the blend's own time (longer for a large offset)
 
     def joint(self, name: str) -> JointReading:
         i = joint_index(name)

@@ -27,7 +27,7 @@ from controller.operation.point_targets import HANDS, IK_POINTS, PointTargets
 from controller.operation.points import OperationView, Twist, check_twist
 from controller.operation.ranges import check_setpoint
 from controller.operation.release import ReleaseHistory
-from controller.operation.reset_blend import ResetBlend
+from controller.operation.reset_blend import ResetBlend, reset_duration_s
 from controller.operation.status import OperationStatus, PointStatus, operation_status
 from controller.operation.targets import GazeAngles, HandPose, WaistPose
 from controller.operation.view import LastTick, ViewOfTick
@@ -92,6 +92,7 @@ class OperationLayer(Layer):
         self.dt_s = dt_s
         # the upper body only: the AutoBalancer owns balance, the legs and BODY's place
         self.ik = ik or OperationIK(upper_body=True)
+        self.last_reset_s = 0.0  # [s] the last reset_targets()'s blend
         self.ik.reset()  # a shared IK (one per system, across resets) starts from this chain's reference, not the
         # posture it last solved before a reset (soak seed 10230: a hand streamed across a reset jumped, a fall)
         self.kin = RobotKinematics()  # the reference's own kinematics in F (seeding a point)
@@ -136,14 +137,21 @@ class OperationLayer(Layer):
             check_foot_allowed(point, twist, self._last.walking, self._points.targets)
         self._commands.set_behavior(twists, walk)
 
-    def reset_targets(self) -> None:
+    def reset_targets(self) -> float:
         """Nothing offset any more: the targets go back onto the upstream reference (the output blends there
-        over reset_time_s); the operator's setpoints are dropped."""
+        over reset_time_s, longer for a large offset: reset_duration_s); the operator's setpoints are dropped.
+        Returns the blend's duration [s]."""
         self._commands.streamed.clear()
         self._commands.drop_behavior()
-        if self._points.targets and self._last.ref_out is not None:
-            self._reset.start(self._last.ref_out, self.params.reset_time_s)
+        duration = self.params.reset_time_s
+        last = self._last
+        if self._points.targets and last.ref_out is not None:
+            if last.ref_in is not None:
+                duration = reset_duration_s(last.ref_out, last.ref_in, duration)
+            self._reset.start(last.ref_out, duration)
         self._deactivate()
+        self.last_reset_s = duration
+        return duration
 
     def _deactivate(self) -> None:
         self._points.clear()

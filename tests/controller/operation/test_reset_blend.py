@@ -1,6 +1,7 @@
 """After reset_targets(): the output blends from the last one onto the reference, then is the reference (unit)."""
 
 import numpy as np
+import pytest
 
 from controller.kinematics.model import RobotKinematics
 from controller.operation.reset_blend import ResetBlend
@@ -29,3 +30,21 @@ def test_a_cancelled_blend_is_no_longer_pending():
     blend.start(REF, 1.0)
     blend.cancel()
     assert not blend.pending
+
+
+def test_a_reset_is_as_slow_as_its_largest_offset_asks_and_never_quicker_than_asked():
+    from controller.operation.reset_blend import (
+        RESET_HEIGHT_SPEED_M_S,
+        RESET_JOINT_RATE_RAD_S,
+        RESET_TILT_RATE_RAD_S,
+        reset_duration_s,
+    )
+
+    assert reset_duration_s(REF, REF, 1.0) == 1.0
+    tilted = REF.with_(base_rpy_rad=REF.base_rpy_rad + (0.0, np.radians(12.0), 0.0))  # soak seed 10110's waist
+    assert reset_duration_s(tilted, REF, 1.0) == pytest.approx(np.radians(12.0) / RESET_TILT_RATE_RAD_S)  # 2.1 s
+    low = REF.with_(base_pos_world=REF.base_pos_world + (0.0, 0.0, -0.1))
+    assert reset_duration_s(low, REF, 1.0) == pytest.approx(0.1 / RESET_HEIGHT_SPEED_M_S)
+    arm = REF.with_(q_rad=REF.q_rad + np.where(np.arange(len(REF.q_rad)) == 20, 1.5, 0.0))
+    assert reset_duration_s(arm, REF, 1.0) == pytest.approx(1.5 / RESET_JOINT_RATE_RAD_S)
+    assert reset_duration_s(arm, REF, 5.0) == 5.0
