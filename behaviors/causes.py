@@ -13,7 +13,8 @@ RUN_CAUSES: Mapping[str, str] = {
     "reset": r"the simulation was reset",
     "fall": r"\bfell\b|fallen|a fall",
     "lock": r"operator lock",
-    "limit": r"IK limited|joint limit|from its limit|collision|out of reach|unreachable|accuracy limit",
+    "limit": r"IK limited|joint limit|from its limit|reaches its limit|collision|out of reach|unreachable|"
+             r"accuracy limit",
     "timeout": r"overran its nominal duration|\btimeout\b",
     "state": r"the robot is walking|is lifted \(its operational point\)|the capture-point flag is up|"
              r"re-planned by another command",

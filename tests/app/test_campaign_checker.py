@@ -98,6 +98,9 @@ def test_a_stream_refusal_needs_a_reason_too():
      "catching step or goStop)", "state"),
     ("stopped 1.5 cm and 1.0 deg from the goal (tolerance 1 cm, 3 deg) after 0 correction(s): the footsteps landed "
      "as planned: the walk's accuracy limit", "limit"),
+    # the soak (seed 10303): stand refused a stance only just wider than a closing step leaves
+    ("Refused: closeStance: the feet stand 0.430 m apart across; it closes 0.34-0.43 m (narrower: goPos walks from "
+     "there; wider: with the COM over one foot the far leg's hip roll reaches its limit)", "limit"),
     ("stopped 5.0 cm and 1.0 deg from the goal (tolerance 3 cm, 3 deg) after 2 correction(s)", None),
     ("TypeError: unsupported operand", None),
 ])

@@ -445,9 +445,11 @@ class Session:
                         self.checker.violate(4, f"the lock answered ok to {SECOND_CLIENT} and is held by {held}")
 
     def _expect_walking(self, t: float, what: str) -> None:
+        # (or a stop did it: the hard e-stop, the walking stop, the capture-point flag, which refuses a walk not yet
+        # begun; soak seed 10306: a goVelocity accepted 0.14 s after a push, before the push's flag rose)
         self.checker.expect(Expectation(
-            4, what, lambda s: bool(s["walking"]) or s["emergency"]["hard_stop"] or s["emergency"]["walking_stop"],
-            t + 2.0, WALK_VOIDS))
+            4, what, lambda s: bool(s["walking"]) or s["emergency"]["hard_stop"] or s["emergency"]["walking_stop"]
+            or bool(s["emergency"].get("flag")), t + 2.0, WALK_VOIDS))
 
     # ---- the end: invariant 6 ------------------------------------------------------------------------------------
     def finish(self, half_sitting: Mapping[str, float]) -> None:
