@@ -1,6 +1,7 @@
 """The operator service on a robot in this process: verbs and a reset while the loop thread runs, refusals
 that name what is in the way, and the run statistics."""
 
+import math
 import time
 
 import numpy as np
@@ -122,17 +123,21 @@ def test_the_board_gives_every_reader_the_last_value_whole_while_the_writer_goes
     board.close()
 
 
-def test_sequence_verbs_are_refused_while_the_collision_detector_holds_or_the_motion_is_stopped():
-    import math
-
+def held_arm_through_the_torso() -> tuple[LocalRobot, OperatorService]:
+    """A robot whose CollisionDetector holds the right arm, sent through the torso."""
     from tests.scenarios.helpers import pose_deg
 
     robot = LocalRobot(speed=None)
     service = OperatorService(robot)
-    # 1. an arm motion through the torso: the CollisionDetector holds the posture, and says so
     service.set_joint_angles([math.radians(v) for v in pose_deg(RARM_JOINT0=-20, RARM_JOINT1=0, RARM_JOINT2=80,
                                                                  RARM_JOINT3=-120)], 3.0)
     robot.loop.run_until(lambda s: s.layers["co"].collision, timeout_s=4.0)
+    return robot, service
+
+
+def test_sequence_verbs_are_refused_while_the_collision_detector_holds_or_the_motion_is_stopped():
+    # 1. an arm motion through the torso: the CollisionDetector holds the posture, and says so
+    robot, service = held_arm_through_the_torso()
     with pytest.raises(Refused, match="CollisionDetector") as info:
         service.set_some_joint_angles({"LARM_JOINT0": -0.3}, 1.0)
     assert info.value.reason == "collision"
@@ -150,16 +155,9 @@ def test_sequence_verbs_are_refused_while_the_collision_detector_holds_or_the_mo
 
 def test_under_the_collision_detectors_hold_a_motion_to_a_free_posture_goes_and_ends_the_hold():
     # soak seed 10192: `stand`'s half-sitting was refused under the hold, the one motion that could end it
-    import math
-
     from behaviors.stand import HALF_SITTING_RAD
-    from tests.scenarios.helpers import pose_deg
 
-    robot = LocalRobot(speed=None)
-    service = OperatorService(robot)
-    service.set_joint_angles([math.radians(v) for v in pose_deg(RARM_JOINT0=-20, RARM_JOINT1=0, RARM_JOINT2=80,
-                                                                 RARM_JOINT3=-120)], 3.0)
-    robot.loop.run_until(lambda s: s.layers["co"].collision, timeout_s=4.0)
+    robot, service = held_arm_through_the_torso()
     assert "interpolating" in service.set_some_joint_angles(HALF_SITTING_RAD, 2.0)
     snap = robot.loop.run_for(3.0)
     assert not snap.layers["co"].collision
