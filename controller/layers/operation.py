@@ -193,7 +193,11 @@ class OperationLayer(Layer):
             else:  # idle
                 gait = last.gait = ports.gait  # the view stays current: the feet frame, walking
                 last.walking = gait is not None and gait.walking
-                out = last.ref_out = ref if not self._reset.pending else self._reset.step(ref, ctx.dt_s)
+                if not self._reset.pending:
+                    out = last.ref_out = ref
+                    return out
+                # the reset's blend holds still under the hard e-stop's hold, as the integration does below
+                out = last.ref_out = self._reset.step(ref, 0.0 if ports.hold else ctx.dt_s)
                 return out
         # the hard e-stop's hold (and its release blend) freezes the integration too: the AutoBalancer holds its
         # output meanwhile, and a waist target integrated under it came in as one jump when the blend ended (a
@@ -251,7 +255,8 @@ class OperationLayer(Layer):
         else:
             out = ref.with_owned(q_rad=q_out, base_pos_world=base_out, base_rpy_rad=rpy_out)
         if self._reset.pending:  # a new motion during a reset: the blend goes on toward it (soak seed 10091: it
-            out = self._reset.step(out, ctx.dt_s)  # was dropped, and BODY rose 4 cm in a tick from a squat)
+            out = self._reset.step(out, 0.0 if ctx.last_ports.hold else ctx.dt_s)  # was dropped, and BODY rose
+            # 4 cm in a tick from a squat); still under the hard e-stop's hold
         last.ref_out = out
         return out
 

@@ -397,3 +397,28 @@ def test_seed_10110_stand_undoing_a_tilted_waist_and_a_foots_weight_shift_raises
     status, _, flag = stand_from(robot)
     assert status.state == "succeeded", status.message
     assert not flag
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("estop_after_s", [0.3, 0.5, 1.2, 2.4])
+def test_the_hard_estop_during_stands_return_from_a_squat_then_its_release_leave_the_robot_standing(estop_after_s):
+    # found attacking the slower reset blend: it went on under the hard e-stop's hold, and the release blended the
+    # held posture into one 10-14 cm higher; the robot fell after the release (at 0.5 s also before the change)
+    robot = LocalRobot("default")
+    robot.run_for(2.5)
+    down = Setpoint("waist", (0.0, 0.0, -0.07), (0.0, 0.0, 0.0))
+    for k in range(int(round(2.0 / 0.005))):
+        if k % STICK_PERIOD_TICKS == 0:
+            robot.put_setpoint(down)
+        robot.step()
+    robot.run_for(0.5)
+    service = OperatorService(robot)
+    service.run_behavior("stand", {"time_s": 1.0})
+    robot.run_for(estop_after_s)
+    service.estop()
+    robot.run_for(1.0)
+    service.release_estop()
+    assert not robot.run_for(3.0).fallen
+    status, _, flag = stand_from(robot)
+    assert status.state == "succeeded", status.message
+    assert not flag
