@@ -31,6 +31,10 @@ TRASH_START_M = (1.0, 0.0)
 #: The trash box's hole centre (floor) in this scene: beyond the trash, seen from where the robot picks it up
 #: without turning (within 30 deg of ahead), 0.27 m beyond the farthest trash placement.
 TRASH_SCENE_BOX_M = (2.1, 0.0)
+#: MuJoCo's noslip post-solver in this scene: its soft contacts let the held trash creep out of a grip that
+#: Coulomb friction locks (pads mu 1.2 on its 8 deg tilted upper part): 8 mm along the jaws in 10 s, then out
+#: (docs/fig8-tasks.md); with it, none.
+TRASH_SCENE_NOSLIP_ITERATIONS = 10
 
 
 def trash_part_lines(ind: str = "      ") -> list[str]:
@@ -59,6 +63,7 @@ def trash_body_lines(pos) -> list[str]:
 
 def mjcf_scene_trash(params: dict) -> str:
     pos = (*TRASH_START_M, 0.10 + 0.001)
-    sections = [*expo_materials()[:-1], f'    <material name="trash" rgba="{TRASH_RGBA}"/>', "  </asset>"]
+    sections = [*expo_materials()[:-1], f'    <material name="trash" rgba="{TRASH_RGBA}"/>', "  </asset>",
+                f'  <option noslip_iterations="{TRASH_SCENE_NOSLIP_ITERATIONS}"/>']
     world = [*expo_trash_box_lines(TRASH_SCENE_BOX_M), *trash_body_lines(pos)]
     return mjcf_scene_file(params, "hrp2 trash scene", world, (*pos, 1.0, 0.0, 0.0, 0.0), sections)

@@ -3,10 +3,9 @@ seeded sample, the first four of the documented 10): the trash found by colour s
 (no model), walked to, picked from the floor with the right hand (squat), the robot standing up with it and
 raising it to the carry pose; then carried to the trash box and dropped in.
 
-What holds (asserted): every location within 20 mm of the truth; the trash lifted >= 50 mm off the floor in at
-least 3 of 4 trials; the robot never falls. What does not yet (strict xfail, docs/fig8-tasks.md): the walk to the
-box holding the trash raises the capture-point flag and the EmergencyStopper stops it, so no trash reaches the
-box. The simulator's poses only place the trash and measure the outcome."""
+What holds (asserted): every location within 20 mm of the truth; the trash lifted >= 50 mm off the floor and
+dropped into the box in at least 3 of 4 trials (measured 4/4; the CLI's 10: docs/fig8-tasks.md); the robot never
+falls. The simulator's poses only place the trash and measure the outcome."""
 
 from __future__ import annotations
 
@@ -41,7 +40,5 @@ def test_the_trash_is_picked_from_the_floor_in_three_of_four_trials_and_the_robo
         [(r.trial, r.lifted_m, r.verdict) for r in results]
 
 
-@pytest.mark.xfail(strict=True, reason="open: the trash slides out of the jaws at the top of the rise, and the right "
-                                        "sole steps on it on the way to the box (the flag; docs/fig8-tasks.md)")
 def test_the_trash_ends_in_the_box_in_three_of_four_trials(results):
     assert sum(r.succeeded and r.in_box for r in results) >= 3, [(r.trial, r.verdict) for r in results]
