@@ -192,8 +192,9 @@ class AutoBalancer(Layer):
 
     @property
     def walking_stop(self) -> bool:
-        """The emergency walking stop is in force: asked for, and the robot still stepping in place."""
-        return self._walking_stop_requested and self.gait.walking
+        """The emergency walking stop is in force: asked for, and the robot still stepping (in place, or an
+        emergency step)."""
+        return self._walking_stop_requested and (self.gait.walking or self.estep.active)
 
     def _require_active(self, what: str) -> None:
         if not self.active or self._blend is not None:
@@ -287,10 +288,10 @@ class AutoBalancer(Layer):
     def emergency_stop_walking(self) -> None:
         """Remaining footsteps replaced so the robot stops in place (manipulation is left alone). The walking
         point is ignored from now until it reads zero (a held stick does not walk on after the stop). An emergency
-        step in progress goes on (it ends standing by itself)."""
-        if self.estep.active:
-            return
-        self.gait.emergency_stop()
+        step in progress goes on (it ends standing by itself), the stop in force until it has (soak seed 10495:
+        it was answered ok and not in force)."""
+        if not self.estep.active:
+            self.gait.emergency_stop()
         self._walking_stop_requested = True
         self._disarm_walk_point()
 

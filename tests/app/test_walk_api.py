@@ -152,3 +152,21 @@ def test_the_emergency_walking_stop_standing_still_says_it_has_nothing_to_stop(s
     assert r.status_code == 409 and r.json()["reason"] == "state", r.text
     assert r.json()["detail"] == "not walking: the emergency walking stop has nothing to stop"
     assert standing.get("/api/state").json()["emergency"]["walking_stop"] is False
+
+
+def test_the_emergency_walking_stop_during_a_catching_step_is_answered_only_as_a_stop_in_force(standing, runtime):
+    # soak seed 10495: answered ok during an emergency step, not applied and not shown
+    r = standing.post("/api/sim/push", json={"body": "BODY", "force": [400.0, 0.0, 0.0], "duration": 0.1})
+    assert r.status_code == 200, r.text
+    for _ in range(100):  # 40 N s forward: the ankles hold 28, a step catches it
+        step(runtime, 0.01)
+        if standing.get("/api/state").json()["walking"]:
+            break
+    r = standing.post("/api/walk/emergency-stop")
+    assert r.status_code == 200, r.text
+    step(runtime, 0.05)
+    s = standing.get("/api/state").json()
+    assert s["walking"] and s["emergency"]["walking_stop"]
+    step(runtime, 4.0)
+    s = standing.get("/api/state").json()
+    assert not s["walking"] and not s["emergency"]["walking_stop"] and not s["fallen"]

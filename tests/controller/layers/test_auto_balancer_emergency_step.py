@@ -103,6 +103,19 @@ def test_while_stepping_the_operators_walking_commands_are_refused():
     assert t.abc.status().emergency_step
 
 
+def test_the_emergency_walking_stop_during_an_emergency_step_is_in_force_until_the_robot_stands():
+    # soak seed 10495: asked during a step it was answered ok, did nothing, and the state did not show it
+    t = Ticker()
+    t.run(DT, cp_xy=(TOE_X + 0.03, 0.0))
+    t.abc.emergency_stop_walking()
+    st = t.run(DT, cp_xy=None)
+    assert st.emergency_step and st.walking_stop
+    (record,) = st.emergency_steps  # the step goes on as planned
+    st = t.run(3.0, cp_xy=None)
+    assert not st.emergency_step and not st.walking and not st.walking_stop
+    assert st.emergency_steps[-1].landed
+
+
 def test_the_landing_follows_the_measured_capture_point_then_the_robot_stands_with_its_feet_apart():
     t = Ticker()
     first = t.run(DT, cp_xy=(TOE_X + 0.02, 0.0)).emergency_steps[-1].landing
