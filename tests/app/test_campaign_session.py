@@ -27,3 +27,21 @@ def test_a_session_without_the_state_ends_with_an_invariant_5_finding(monkeypatc
 
 def test_the_state_unavailable_names_the_answer():
     assert "answered 503: {'detail': 'x'}" in str(StateUnavailable(503, {"detail": "x"}))
+
+
+def test_the_old_simulations_states_after_a_reset_are_not_the_new_robots(monkeypatch):
+    # soak seed 10618: a robot fallen before the reset (after a push beyond the envelope) was still in the state
+    # documents read while the reset took effect, and counted as the new robot's fall without a push (invariant 1)
+    fallen = {"time": 59.5, "tick": 11900, "fallen": True}
+    states = iter([fallen, {**fallen, "time": 59.56, "tick": 11912}, {"time": 0.01, "tick": 2, "fallen": False},
+                   {"time": 2.6, "tick": 520, "fallen": False}])
+
+    def request(self, method, path, body_=None, headers=None, check=True):
+        return (200, next(states)) if (method, path) == ("GET", "/api/state") else (200, {})
+
+    monkeypatch.setattr(Session, "request", request)
+    session = Session(port=9, seed=1, seconds=1.0, catalogue={}, actions=[])
+    session.checker.push(42.0, 20.0)  # beyond the envelope: the fall before the reset is no violation
+    session.reset_and_warm_up()
+    assert session.checker.violations == [] and session.checker.falls == [{"time_s": 59.5,
+                                                                            "pushes": [(0.0, 42.0, 20.0)]}]
