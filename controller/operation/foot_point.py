@@ -12,12 +12,16 @@ from controller.core.errors import InvalidCommand
 from controller.core.types import FootCommand
 from controller.operation.limits import BALANCING, REACH, VELOCITY, speed_scale
 from controller.operation.points import Twist
+from controller.walking.foot_lift import CLEARANCE_M
 
 FEET = ("rfoot", "lfoot")
 #: [m] the right sole's offset from its rest place in F: (lower, upper) per axis x, y, z (the left foot's y is
 #: mirrored): 0.2 m forward is a walk's half stride; across, 3 cm inward at most (the soles 0.118 m apart at
-#: their inner edges stay clear) and 0.15 m outward; up to 0.15 m, never below the floor
-RFOOT_REACH_M = ((-0.15, 0.20), (-0.15, 0.03), (0.0, 0.15))
+#: their inner edges stay clear) and 0.15 m outward; up to 0.15 m, never lower than the lift's clearance: a sole
+#: pressed onto the floor while lifted loads a foot the balance counts as in the air (soak seed 10712: the right
+#: sole driven down 0.16 m out from its rest place, the robot tipped over the left sole's outer edge); releasing
+#: the point puts it down over its rest place
+RFOOT_REACH_M = ((-0.15, 0.20), (-0.15, 0.03), (CLEARANCE_M, 0.15))
 
 
 @dataclass(frozen=True, slots=True)

@@ -110,3 +110,17 @@ def test_the_capture_point_flag_during_foot_motion_stops_and_reverts_it():
     es.release_motion()
     robot.drive(None, 4.0)  # nothing drives the foot after the release: put down
     assert robot.phases[-1] == "idle" and robot.snap.safety.fall is None
+
+
+@pytest.mark.parametrize("outward_m_s", [0.05, -0.02])
+def test_a_foot_pressed_down_while_lifted_stays_off_the_floor_until_released(outward_m_s):
+    # soak seed 10712: the right sole driven down away from its rest place reached the floor while the balance
+    # counted it in the air; the flag rose and the robot tipped over the left sole's outer edge
+    robot = OnOneFoot()
+    robot.drive(Twist.of((0.02, -outward_m_s, -0.08)), 4.0)  # out (or in) and down
+    robot.drive(Twist.of(), 2.0)  # the stick let go to the centre, the dead-man held
+    lowest_m = min(offset[2] for _, offset in robot.history[-round(1.5 / DT):])
+    assert lowest_m > 0.005, lowest_m  # held at the lift's 1 cm clearance: measured 8.5-12.5 mm (before: 0.6)
+    assert not robot.snap.layers["es"].stopped
+    robot.drive(None, 5.0)  # released: put down over its rest place, the weight shared again
+    assert robot.phases[-1] == "idle" and np.linalg.norm(robot.right_from_left() - robot.rest_m) < 0.008

@@ -98,8 +98,9 @@ class WalkEmergencyStop(Verb):
 
     def run(self, host: Host) -> str:
         abc = host.layer("abc")
-        if not abc.gait.walking and not abc.estep.active:  # as a release with nothing latched: an ok would say a
-            raise InvalidState("not walking: the emergency walking stop has nothing to stop")  # stop is in force (10176)
+        # as a release with nothing latched: an ok would say a stop is in force (soak seed 10176)
+        if not abc.gait.walking and not abc.estep.active:
+            raise InvalidState("not walking: the emergency walking stop has nothing to stop")
         host.walking_stop_watch.asked = True  # what raised the stop, for the refusals it causes
         abc.emergency_stop_walking()
         return "walking emergency stop"

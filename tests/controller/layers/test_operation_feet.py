@@ -10,6 +10,7 @@ import pytest
 from controller.core.errors import InvalidCommand
 from controller.core.types import Ports
 from controller.operation.points import Twist
+from controller.walking.foot_lift import CLEARANCE_M
 from tests.controller.layers.test_operation import DT, gait_port, layer, run
 
 
@@ -51,8 +52,10 @@ def test_the_foot_waits_while_balancing_then_integrates_then_goes_down_when_let_
     cmds = commands(op, 10, gait_port(False, 0.0), up)  # the COM not over the left foot yet
     assert all(c is not None and c.foot == "rfoot" and c.offset_m == (0.0, 0.0, 0.0) for c in cmds)
     assert op.status().points["rfoot"].limited == "balancing"
-    cmds = commands(op, 20, lifted_port(), up, t0=10 * DT)  # lifted: 0.05 m/s x 20 ticks = 5 mm
-    assert cmds[-1].offset_m == pytest.approx((0.0, 0.0, 0.005))
+    # lifted: from the lift's clearance (the reach's floor), then 0.05 m/s for the 19 ticks after
+    cmds = commands(op, 20, lifted_port(), up, t0=10 * DT)
+    assert cmds[0].offset_m == pytest.approx((0.0, 0.0, CLEARANCE_M))
+    assert cmds[-1].offset_m == pytest.approx((0.0, 0.0, CLEARANCE_M + 19 * 0.05 * DT))
     assert op.status().points["rfoot"].limited is None
     cmds = commands(op, 1, lifted_port((0.0, 0.0, 0.005)), None, t0=1.0)  # the stream stopped (dead-man)
     assert cmds == [None] and op.status().points["rfoot"].target is None
@@ -76,11 +79,12 @@ def test_feet_are_refused_while_walking_and_the_walk_while_a_foot_is_operated(sh
 def test_the_motion_stop_publishes_the_offset_its_revert_went_back_to(shared_ik):
     op = layer(shared_ik)
     commands(op, 1, gait_port(False, 0.0), Twist.of((0.0, 0.0, 0.05)))
-    cmds = commands(op, 100, lifted_port(), Twist.of((0.0, 0.0, 0.05)), t0=DT)  # to 25 mm at t = 0.5 s
-    assert cmds[-1].offset_m[2] == pytest.approx(0.025)
-    stopped = dataclasses.replace(lifted_port((0.0, 0.0, 0.025)), motion_stopped=True, motion_reverted_to_s=0.25)
+    # from the clearance at t = DT to 34.75 mm at t = 0.5 s
+    cmds = commands(op, 100, lifted_port(), Twist.of((0.0, 0.0, 0.05)), t0=DT)
+    assert cmds[-1].offset_m[2] == pytest.approx(CLEARANCE_M + 99 * 0.05 * DT)
+    stopped = dataclasses.replace(lifted_port((0.0, 0.0, 0.035)), motion_stopped=True, motion_reverted_to_s=0.25)
     cmds = commands(op, 5, stopped, Twist.of((0.0, 0.0, 0.05)), t0=101 * DT)
-    assert cmds[-1].offset_m[2] == pytest.approx(0.0125, abs=0.0003)  # where it was at 0.25 s
+    assert cmds[-1].offset_m[2] == pytest.approx(CLEARANCE_M + 49 * 0.05 * DT, abs=0.0003)  # where it was at 0.25 s
     assert op.status().points["rfoot"].limited == "motion_stop"
     stopped = dataclasses.replace(stopped, motion_reverted_to_s=-1.0)  # before the foot was operated: down
     assert commands(op, 1, stopped, None, t0=106 * DT) == [None]

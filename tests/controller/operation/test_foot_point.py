@@ -8,6 +8,7 @@ from controller.core.errors import InvalidCommand
 from controller.operation.foot_point import RFOOT_REACH_M, FootOffset, check_foot_allowed, integrate_foot, reach_of
 from controller.operation.limits import REACH, VELOCITY
 from controller.operation.points import Twist
+from controller.walking.foot_lift import CLEARANCE_M
 
 
 def test_the_left_foot_reach_mirrors_the_right_one_across():
@@ -24,7 +25,8 @@ def test_a_foot_integrates_its_velocity_scaled_to_the_speed_limit():
 
 
 @pytest.mark.parametrize(("foot", "start", "v", "clamped"), [
-    ("rfoot", (0.0, 0.0, 0.0), (0.0, 0.0, -0.1), (0.0, 0.0, 0.0)),  # not through the floor
+    ("rfoot", (0.0, 0.0, 0.0), (0.0, 0.0, -0.1), (0.0, 0.0, CLEARANCE_M)),  # not onto the floor while lifted
+    ("rfoot", (0.1, -0.1, 0.011), (0.0, 0.0, -0.1), (0.1, -0.1, CLEARANCE_M)),  # nor away from its rest place
     ("rfoot", (0.0, 0.029, 0.05), (0.0, 0.1, 0.0), (0.0, 0.03, 0.05)),  # not into the other foot
     ("lfoot", (0.0, -0.029, 0.05), (0.0, -0.1, 0.0), (0.0, -0.03, 0.05)),
     ("rfoot", (0.199, 0.0, 0.05), (0.1, 0.0, 0.0), (0.2, 0.0, 0.05)),
