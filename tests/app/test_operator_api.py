@@ -4,6 +4,7 @@ dead-man lets go of a setpoint not renewed; the validation and refusals; the ope
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import threading
 import time
@@ -330,3 +331,17 @@ def test_under_the_estop_with_two_clients_streaming_no_velocity_request_is_answe
     assert reasons <= {"hard_stop", "point_taken"} and "hard_stop" in reasons and "point_taken" in reasons, reasons
     assert all(a["status"] == 409 for a in answers if "status" in a)
     assert all(m == [0.0] * 6 for m in motions), motions
+
+
+def test_a_setpoint_the_robot_does_not_acknowledge_within_a_second_is_answered_naming_the_timeout(client, service,
+                                                                                                 runtime,
+                                                                                                 monkeypatch):
+    # soak seed 10705 (a robot process starved by the machine's load): the answer named no cause of the closed set
+    runtime.run_for(0.1)
+    published = service.published()
+    monkeypatch.setattr(service, "published", lambda: dataclasses.replace(published, setpoint_acks={}))
+    with client.websocket_connect("/ws/operator") as ws:
+        ws.send_json({"point": "lhand", "linear": [0, 0.02, 0]})
+        answer = ws.receive_json()
+    assert answer["ok"] is False and answer["reason"] == "timeout", answer
+    assert answer["detail"].startswith("the robot did not acknowledge setpoint") and "within 1 s" in answer["detail"]

@@ -236,7 +236,7 @@ async def operator_stream(ws: WebSocket) -> None:
                     await send(answer)
                 elif now - put_at > ACK_GIVE_UP_S:
                     await send(_error(f"the robot did not acknowledge setpoint {numbered.seq} within "
-                                      f"{ACK_GIVE_UP_S:g} s", seq=numbered.seq))
+                                      f"{ACK_GIVE_UP_S:g} s", reason="timeout", seq=numbered.seq))
                 else:
                     still.append((numbered, put_at))
             pending[:] = still

@@ -20,9 +20,9 @@ INVARIANTS: Mapping[int, str] = {
        "or a push beyond the envelope came",
 }
 
-#: The closed set of a refusal's `reason` (409 and the stream's acks: the service's reasons and the simulation's
-#: divergence; 423: the operator lock)
-REFUSAL_REASONS: frozenset[str] = frozenset((*Refused.REASONS, "diverged", "locked"))
+#: The closed set of a refusal's `reason` (409 and the stream's acks: the service's reasons, the simulation's
+#: divergence and a setpoint the robot did not acknowledge in time; 423: the operator lock)
+REFUSAL_REASONS: frozenset[str] = frozenset((*Refused.REASONS, "diverged", "timeout", "locked"))
 LATE_TICK_MS = 2.0  # [ms] a paced tick may start at most this late
 STAND_TOLERANCE_DEG = 3.0  # [deg] every joint (grippers aside) this close to half-sitting after `stand`
 GRIPPERS = ("RARM_JOINT6", "LARM_JOINT6")
