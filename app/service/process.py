@@ -67,6 +67,12 @@ class UnexpectedError(ServiceError):
 
 
 # ---- inside the robot process -------------------------------------------------------------------------------
+#: [s] the e-stop door is served in the wait between ticks only while this much is left before the next tick:
+#: a serve (4 socket operations, a hostile handshake's parse and refusal the dearest) took up to 1.4 ms under the
+#: socket fuzz, and one just before the deadline made that tick late by as much
+DOOR_RESERVE_S = 2e-3
+
+
 def _raise_priority() -> str:
     """SCHED_FIFO if allowed, else a lower nice value, else nothing; says which. For the calling thread only:
     threads and processes it starts later (the camera process, the session writer) are not real-time
@@ -176,21 +182,28 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             except ValueError as exc:  # larger than the board: say so once in a while, keep ticking
                 log.error("snapshot not published: %s", exc)
 
+    door_watched = [False]  # a wait since the last tick boundary had the door's sockets watched
+
     def wait(delay_s: float) -> None:
+        # the door is served while a serve cannot make the tick late; what comes later waits for after the tick
+        watch_door = door is not None and loop.due_s - time.perf_counter() >= DOOR_RESERVE_S
+        door_watched[0] = door_watched[0] or watch_door
         # select() sleeps to the microsecond (connection.wait's poll() rounds up to whole milliseconds)
-        ready, _, _ = select.select(pipes if door is None else (*pipes, *door.sockets), (), (), delay_s)
+        ready, _, _ = select.select((*pipes, *door.sockets) if watch_door else pipes, (), (), delay_s)
         if ready:
             handle_estop()
-            if door is not None:
+            if watch_door:
                 door.serve(ready)
             handle_commands()
 
     def between_ticks() -> None:
         handle_estop()
         if door is not None:
-            door.new_tick()
-            if loop.speed is None:  # as fast as possible: no waits between ticks, so here (paced: in wait())
+            # unpaced there are no waits; paced, ticks that leave no time to spare still serve it once per tick
+            if not door_watched[0]:
                 door.poll()
+            door.new_tick()
+            door_watched[0] = False
         handle_commands()
         publish()
 

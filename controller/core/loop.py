@@ -125,6 +125,7 @@ class ControlLoop:
         self.lateness = LatenessMeter()
         self.resets = 0  # replace_plant calls: a paced run starts a new schedule at each
         self.nap_s = 0.0  # [s] run_paced waits for the next tick in naps this long (0: one sleep)
+        self.due_s: float | None = None  # [s] time.perf_counter() at which the awaited tick is due (paced waits)
         self._fall_detector_factory = fall_detector_factory
         #: called with the control time [s] at the start of every step(), after the command queue is drained
         #: (behaviours and the operator's streamed setpoints step here); an exception is logged, never fatal
@@ -383,7 +384,7 @@ class ControlLoop:
                 meter.clear()
                 meter.speed_target = speed
             if speed is not None:
-                due = wall0 + (t_sim - sim0) / speed
+                due = self.due_s = wall0 + (t_sim - sim0) / speed
                 delay = due - clock()
                 while delay > 0 and not self._stop_event.is_set() and self.resets == anchored_resets:
                     sleep(min(delay, self.nap_s) if self.nap_s > 0.0 else delay)

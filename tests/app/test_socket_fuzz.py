@@ -277,4 +277,6 @@ def test_no_client_bytes_end_or_delay_the_robot_and_a_pages_estop_engages_throug
     assert inputs >= EXAMPLES - 10 and counts["refused handshakes"] <= EXAMPLES // 100, counts
     assert not page.errors, page.errors
     assert len(page.presses) >= 3 and all(ok and engaged for ok, engaged in page.presses), page.presses
-    assert page.p99_ms and max(page.p99_ms) <= idle + LATENESS_MARGIN_MS, (idle, page.p99_ms)
+    # the bound is the robot process's own: with its real-time priority refused (health's "priority"), the
+    # machine's other processes take its cores (measured without it: p99 0.7-2.8 ms on 2 cores)
+    assert page.p99_ms and max(page.p99_ms) <= idle + LATENESS_MARGIN_MS, (idle, page.p99_ms, health["priority"])
