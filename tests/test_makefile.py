@@ -3,10 +3,12 @@ git ignores (a CI run keeps it as its artifacts; nothing of it is committed). `m
 tests and a walk on Python 3.13 in a git-ignored environment of its own, and `.ci/run` runs it after `make test`,
 failing at once, naming python3.13, on a machine without it."""
 
+import os
 import re
 import shlex
 import shutil
 import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -92,3 +94,25 @@ def test_ci_without_python_3_13_fails_at_once_naming_it(tmp_path):
     assert done.returncode != 0
     assert "python3.13 not found" in done.stderr
     assert not (tmp_path / "make.calls").exists(), "the suite ran before the missing interpreter was reported"
+
+
+def collected(which: str, paths: list[str]) -> set[str]:
+    env = {**os.environ, "HRP2_TEST_PASS": which}
+    out = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", "-p", "no:cacheprovider", *paths],
+                         cwd=ROOT, capture_output=True, text=True, env=env)
+    assert out.returncode in (0, 5), out.stdout + out.stderr
+    return {ln.split("::")[0] for ln in out.stdout.splitlines() if "::" in ln}
+
+
+def test_make_test_runs_two_passes_that_share_out_the_suite():
+    """The in-process tests on two workers; a console's, a browser's or a worker pool's one at a time."""
+    lines = " ".join(dry_run("test"))
+    assert "HRP2_TEST_PASS=parallel" in lines and "-n 2" in lines and "HRP2_TEST_PASS=serial" in lines, lines
+    paths = ["tests/scenarios/test_walking.py", "tests/scenarios/test_expo_trials.py", "tests/app/test_board.py",
+             "tests/controller/core/test_chain_and_loop.py"]
+    parallel, serial = collected("parallel", paths), collected("serial", paths)
+    assert parallel == {"tests/scenarios/test_walking.py", "tests/controller/core/test_chain_and_loop.py"}, parallel
+    assert serial == {"tests/scenarios/test_expo_trials.py", "tests/app/test_board.py"}, serial
+    bad = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", paths[2]], cwd=ROOT,
+                         capture_output=True, text=True, env={**os.environ, "HRP2_TEST_PASS": "both"})
+    assert bad.returncode != 0 and "HRP2_TEST_PASS='both'" in bad.stdout + bad.stderr

@@ -15,7 +15,7 @@ import pytest
 
 from app.lab.experiments.fridge import DOOR_OPEN_MIN_DEG, placements, run_trials, trial_line
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.pool]
 
 TRIALS = 10
 SEED = 8  # the CLI's default

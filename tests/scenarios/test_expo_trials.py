@@ -13,7 +13,7 @@ import pytest
 
 from app.lab.experiments.expo import placements, run_trials, summary_table
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.pool]
 
 TRIALS = 20
 SEED = 2005  # the CLI's default

@@ -12,7 +12,7 @@ import pytest
 from app.lab.experiments.chair import GOAL_TOL_M, UPRIGHT_TOL_DEG, placements, run_trial, summary_table
 from app.lab.experiments.expo import run_trials
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.pool]
 
 TRIALS = 4  # the CLI runs 10
 SEED = 8  # the CLI's default: these are its first four trials

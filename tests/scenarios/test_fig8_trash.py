@@ -14,7 +14,7 @@ import pytest
 from app.lab.experiments.expo import run_trials
 from app.lab.experiments.trash import placements, run_trial, summary_table
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.pool]
 
 TRIALS = 4  # the CLI runs 10
 SEED = 8  # the CLI's default: these are its first four trials
