@@ -11,14 +11,16 @@ from pathlib import Path
 import pytest
 
 TESTS = Path(__file__).resolve().parent
-#: the folders whose tests run on the parallel pass (those marked `pool` excepted)
+#: the folders whose tests run on the parallel pass, with the tests marked `in_process` elsewhere (tests/app's
+#: TestClient ones); those marked `pool` excepted
 PARALLEL_FOLDERS = ("controller", "robot", "behaviors", "scenarios")
 PASSES = ("parallel", "serial")
 
 
 def on_parallel_pass(item: pytest.Item) -> bool:
     folder = Path(str(item.path)).resolve().relative_to(TESTS).parts[0]
-    return folder in PARALLEL_FOLDERS and item.get_closest_marker("pool") is None
+    in_process = folder in PARALLEL_FOLDERS or item.get_closest_marker("in_process") is not None
+    return in_process and item.get_closest_marker("pool") is None
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

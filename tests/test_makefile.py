@@ -109,10 +109,11 @@ def test_make_test_runs_two_passes_that_share_out_the_suite():
     lines = " ".join(dry_run("test"))
     assert "HRP2_TEST_PASS=parallel" in lines and "-n 2" in lines and "HRP2_TEST_PASS=serial" in lines, lines
     paths = ["tests/scenarios/test_walking.py", "tests/scenarios/test_expo_trials.py", "tests/app/test_board.py",
-             "tests/controller/core/test_chain_and_loop.py"]
+             "tests/controller/core/test_chain_and_loop.py", "tests/app/test_cli.py"]
     parallel, serial = collected("parallel", paths), collected("serial", paths)
-    assert parallel == {"tests/scenarios/test_walking.py", "tests/controller/core/test_chain_and_loop.py"}, parallel
-    assert serial == {"tests/scenarios/test_expo_trials.py", "tests/app/test_board.py"}, serial
-    bad = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", paths[2]], cwd=ROOT,
+    assert parallel == {"tests/scenarios/test_walking.py", "tests/controller/core/test_chain_and_loop.py",
+                        "tests/app/test_board.py"}, parallel
+    assert serial == {"tests/scenarios/test_expo_trials.py", "tests/app/test_cli.py"}, serial
+    bad = subprocess.run([sys.executable, "-m", "pytest", "--collect-only", "-q", paths[4]], cwd=ROOT,
                          capture_output=True, text=True, env={**os.environ, "HRP2_TEST_PASS": "both"})
     assert bad.returncode != 0 and "HRP2_TEST_PASS='both'" in bad.stdout + bad.stderr

@@ -4,6 +4,10 @@ the field, 409 naming the run that holds the point)."""
 
 from __future__ import annotations
 
+import pytest
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def _step(runtime, seconds: float) -> None:
     runtime.run_for(seconds)

@@ -9,6 +9,8 @@ import re
 
 import pytest
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 WARM_UP_S = 2.5  # AutoBalancer and Stabilizer blended in
 
 

@@ -8,6 +8,8 @@ import pytest
 from app.service.board import Board
 from app.service.setpoints import BoardSource
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 @pytest.fixture
 def board():

@@ -22,6 +22,8 @@ from app.lab.campaign.grammar import (
 )
 from behaviors.registry import BEHAVIORS
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 @pytest.fixture(scope="module")
 def catalogue():

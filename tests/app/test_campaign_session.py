@@ -7,6 +7,8 @@ import pytest
 
 from app.lab.campaign.session import Session, StateUnavailable
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 @pytest.mark.parametrize("status, body", [(503, {"detail": "the robot process is not running"}),
                                           (200, {"detail": "not a state document"}), (502, "Bad Gateway")])

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import pytest
+
 from app.lab.campaign.shrink import ddmin
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def test_two_culprits_among_forty_items_are_all_that_is_left():

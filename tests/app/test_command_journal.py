@@ -5,7 +5,11 @@ from __future__ import annotations
 
 import json
 
+import pytest
+
 from app.console.command_journal import CommandJournal
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def _commands(client) -> list[dict]:

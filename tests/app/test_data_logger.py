@@ -5,9 +5,12 @@ import csv
 import io
 
 import numpy as np
+import pytest
 
 from app.service.data_logger import DataLogger, csv_header
 from app.service.host import RobotHost
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def test_logger_keeps_only_the_newest_rows_and_exports_csv(tmp_path):

@@ -7,6 +7,10 @@ from __future__ import annotations
 import re
 from urllib.parse import urljoin
 
+import pytest
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def test_docs_load_swagger_ui_from_the_console_only(client):
     r = client.get("/docs")

@@ -9,6 +9,8 @@ from app.lab.experiments import EXPERIMENTS
 from app.lab.experiments.common import DisturbanceParam
 from tests.app.test_cli import run
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def test_no_values_give_every_declared_disturbance_at_its_default():
     for exp in EXPERIMENTS.values():

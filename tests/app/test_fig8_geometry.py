@@ -11,6 +11,8 @@ import pytest
 from app.lab.experiments.chair import hand_rotation
 from app.lab.experiments.trash import in_feet, stance_for
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 @pytest.mark.parametrize("yaw_deg", [0.0, 30.0, -120.0])
 def test_the_stance_puts_the_target_where_asked_in_the_feet_frame(yaw_deg):

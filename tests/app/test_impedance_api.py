@@ -4,6 +4,8 @@ import pytest
 
 from controller.layers.impedance_controller import LIMBS, ImpedanceParams
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def step(runtime, seconds):
     return runtime.system.loop.run_for(seconds)

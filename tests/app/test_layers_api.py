@@ -7,6 +7,8 @@ import pytest
 from controller.layers.auto_balancer import AutoBalancerParams
 from controller.layers.stabilizer import StabilizerParams
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def step(runtime, seconds):
     return runtime.system.loop.run_for(seconds)

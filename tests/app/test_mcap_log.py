@@ -13,6 +13,8 @@ from app.service.log_row import COLUMNS, TICK_TOPICS, column
 from app.service.verbs import GoVelocity
 from app.session.channels import TF_TOPIC
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def _check_against_schema(value, schema, where):
     """The parts of JSON schema the channels use: object properties, nullable types, arrays, enums."""

@@ -6,6 +6,8 @@ from starlette.websockets import WebSocketDisconnect
 
 from app.console.security import origin_allowed, repeated_header, split_origin
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 LOOPBACK = frozenset({"127.0.0.1", "localhost", "::1"})
 
 

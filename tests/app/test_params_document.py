@@ -3,9 +3,13 @@
 import copy
 import json
 
+import pytest
+
 from app.cli import run_parser
 from app.service import OperatorService
 from app.service.local import LocalRobot
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def test_a_document_with_one_invalid_value_is_refused_whole_naming_the_field(client):

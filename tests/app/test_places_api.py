@@ -3,6 +3,8 @@ added, an unknown name a 404 listing the valid ones; look_at's x_m, y_m, z_m say
 
 import pytest
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def test_the_default_scene_has_no_named_place_and_says_so(client):
     assert client.get("/api/places").json() == {"places": {}, "aliases": {}}

@@ -6,8 +6,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from app.console.viewer_preview import MAX_GHOST_SEGMENTS, PreviewGhost, ghost_segments
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 WARM_UP_S = 2.5  # [s] the AutoBalancer blends in
 

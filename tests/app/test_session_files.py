@@ -3,7 +3,11 @@ the bytes allowed; the one being recorded stays (and counts); files that are not
 
 import os
 
+import pytest
+
 from app.session.files import prune_sessions
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def _session(folder, name: str, size: int, age_s: float):

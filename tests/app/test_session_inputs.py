@@ -22,6 +22,8 @@ from app.session.inputs import (
 from controller.operation.points import POINTS
 from controller.walking.footsteps import StepParams
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 VERBS = [
     v.GoPos(0.3, -0.1, 0.1 / 3),
     v.SetFootsteps((v.Footstep("rleg", (0.0, -0.1, 0.0)), v.Footstep("lleg", (0.2, 0.1, 0.0), (0.0, 0.0, 0.1))),

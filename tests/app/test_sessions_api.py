@@ -11,6 +11,8 @@ from app.console.settings import Settings
 from app.session.reader import read_stream
 from app.session.replay import replay
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 @pytest.fixture
 def client(service, tmp_path):

@@ -12,6 +12,8 @@ from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.local import LocalRobot
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def client_for(scene: str):
     robot = LocalRobot(scene, speed=None)

@@ -1,6 +1,10 @@
 """app/lab/stats.py: latency percentiles."""
 
+import pytest
+
 from app.lab.stats import percentiles_ms
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def test_no_samples_reports_only_the_count():

@@ -1,6 +1,10 @@
 """Walking endpoints: goPos, goVelocity / stop, emergency stop, footsteps, remaining footsteps, errors."""
 
+import math
+
 import pytest
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 WARM_UP_S = 2.5  # the AutoBalancer blends in over 2 s; walking commands need it running
 
@@ -154,14 +158,27 @@ def test_the_emergency_walking_stop_standing_still_says_it_has_nothing_to_stop(s
     assert standing.get("/api/state").json()["emergency"]["walking_stop"] is False
 
 
-def test_the_emergency_walking_stop_during_a_catching_step_is_answered_only_as_a_stop_in_force(standing, runtime):
+#: (push direction [deg], impulse [N s], when in the step the stop is asked [s]): a seeded sample of the pushes the
+#: standing emergency step catches (the ankles hold 28 N s forward and 22 back; the step catches up to 56 forward
+#: and 40 back within 15 deg of the axis; 30 deg off it, 38 N s forward or 30 back fell, stop or not) and of the
+#: moments of the step's 0.35 s swing
+CATCHES = [(0.0, 40.0, 0.0), (15.0, 40.0, 0.2), (-15.0, 40.0, 0.1), (180.0, 35.0, 0.15)]
+
+
+@pytest.mark.parametrize("direction_deg, impulse_ns, after_s", CATCHES)
+def test_the_emergency_walking_stop_during_a_catching_step_is_answered_only_as_a_stop_in_force(
+        standing, runtime, direction_deg, impulse_ns, after_s):
     # soak seed 10495: answered ok during an emergency step, not applied and not shown
-    r = standing.post("/api/sim/push", json={"body": "BODY", "force": [400.0, 0.0, 0.0], "duration": 0.1})
+    a = math.radians(direction_deg)
+    force = [impulse_ns / 0.1 * math.cos(a), impulse_ns / 0.1 * math.sin(a), 0.0]
+    r = standing.post("/api/sim/push", json={"body": "BODY", "force": force, "duration": 0.1})
     assert r.status_code == 200, r.text
-    for _ in range(100):  # 40 N s forward: the ankles hold 28, a step catches it
+    for _ in range(100):
         step(runtime, 0.01)
         if standing.get("/api/state").json()["walking"]:
             break
+    assert standing.get("/api/state").json()["walking"], "no emergency step"
+    step(runtime, after_s)
     r = standing.post("/api/walk/emergency-stop")
     assert r.status_code == 200, r.text
     step(runtime, 0.05)

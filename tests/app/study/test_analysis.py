@@ -3,9 +3,13 @@ first, then standing; its bootstrap stability; the held-out validation's counts.
 
 import math
 
+import pytest
+
 from app.lab.study.analysis import collect, recommend, summarise, validate
 from app.lab.study.space import Case, EstopParams
 from app.lab.study.spec import RunSpec
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 LOW, MID, HIGH = EstopParams(0.02, 1.0, 0.5), EstopParams(0.04, 1.0, 0.5), EstopParams(0.06, 1.0, 0.5)
 CASES = [Case.make("wall-push-forward", None, {"wall_gap_m": g}) for g in (-0.02, 0.0, 0.05)]

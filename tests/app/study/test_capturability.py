@@ -7,6 +7,8 @@ import pytest
 
 from app.lab.study.capturability import GaitTiming, Lip, StepLimits, gait_moment, push_capturability
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 #: HRP-2 as the AutoBalancer sees it: 58.0 kg, COM 0.8105 m above the soles (omega 3.48 1/s)
 LIP = Lip(58.0, 0.8105)
 STANDING = 0.05  # a phase inside the first double support: with speed 0 the soles side by side

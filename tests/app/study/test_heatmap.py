@@ -1,10 +1,13 @@
 """The heatmaps: a grid's own levels, a sample binned, a PNG with the recommended cell."""
 
 import numpy as np
+import pytest
 
 from app.lab.study.analysis import ParamSummary
 from app.lab.study.heatmap import BINS, levels, plot_heatmaps
 from app.lab.study.space import EstopParams
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def test_few_distinct_values_are_their_own_levels_and_many_are_binned():

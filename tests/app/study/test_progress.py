@@ -2,7 +2,11 @@
 
 import io
 
+import pytest
+
 from app.lab.study.progress import Progress, clock_text
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 class Clock:

@@ -15,6 +15,8 @@ from app.lab.study.space import (
     param_sample,
 )
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 ALL = ("wall-push-forward", "wall-push-left", "valve", "door")
 
 

@@ -1,7 +1,11 @@
 """A study run's key names exactly what the run does."""
 
+import pytest
+
 from app.lab.study.space import Case, EstopParams
 from app.lab.study.spec import SETTLE_S, RunSpec
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 CASE = Case.make("wall-push-left", None, {"wall_gap_m": -0.01})
 

@@ -1,6 +1,10 @@
 """Finished runs survive a restart; a torn last line (a study killed mid-write) is skipped and written past."""
 
+import pytest
+
 from app.lab.study.store import RunStore
+
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
 
 
 def record(key: str, verdict: str = "stood") -> dict:

@@ -4,6 +4,8 @@ import pytest
 
 from app.lab.study.wilson import wilson_interval
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def test_known_values():
     lo, hi = wilson_interval(8, 10)
