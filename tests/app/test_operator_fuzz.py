@@ -14,7 +14,7 @@ from app.console.settings import Settings
 from app.service import OperatorService
 from app.service.local import LocalRobot
 
-pytestmark = [pytest.mark.slow, pytest.mark.in_process]  # in_process: on make test's parallel pass
+pytestmark = [pytest.mark.slow, pytest.mark.in_process]  # in_process, but serial: see tests/conftest.py
 EXAMPLES = int(os.environ.get("FUZZ_EXAMPLES", "25"))  # per operation (a longer run: FUZZ_EXAMPLES=300)
 
 _robot = LocalRobot(speed=None)
