@@ -489,10 +489,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         from app.lab.study.push_cli import main as push_main
 
         code = push_main(argv[2:])
+    elif argv[:2] == ["study", "estop-walking"]:
+        from app.lab.study.estop_walking_cli import main as estop_walking_main
+
+        code = estop_walking_main(argv[2:])
     elif argv and argv[0] == "study":
-        print("hrp2-console study: error: expected a study name: estop, push-walking (hrp2-console study estop "
-              "--help)",
-              file=sys.stderr)
+        print("hrp2-console study: error: expected a study name: estop, estop-walking, push-walking (hrp2-console "
+              "study estop --help)", file=sys.stderr)
         code = 2
     elif argv[:2] == ["experiment", "foot-can"]:
         from app.lab.experiments.foot_can import main as foot_can_main

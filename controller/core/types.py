@@ -84,6 +84,9 @@ class StepInProgress:
 
     touchdown_time_s: float  # control time [s] the swing foot touches (or touched) down: planned, or measured early
     catching: bool  # a capture-point emergency step (its double support after the touchdown still catches the robot)
+    #: a walk's swing the hard e-stop's landing would cut short (EmergencyStepping.cut): it lands at most this long
+    #: [s] after the next tick instead; None: not cut (it lands as planned, or it cannot be cut)
+    cut_swing_s: float | None = None
 
 
 @dataclass(frozen=True, slots=True)

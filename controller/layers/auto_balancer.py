@@ -16,7 +16,7 @@ from controller.balance.hand_forces import HandForceOffset
 from controller.balance.tilt_anchor import TiltAnchor
 from controller.core.errors import InvalidState
 from controller.core.layer import Layer
-from controller.core.types import GaitState, Ports, Reference, StepInProgress, TickContext, WalkCommand, read_only
+from controller.core.types import GaitState, Ports, Reference, TickContext, WalkCommand, read_only
 from controller.interpolation.blend import Transition
 from controller.interpolation.rate_limit import approach
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, nearest_leg_limit
@@ -104,8 +104,7 @@ class AutoBalancer(Layer):
         self._last_out: Reference | None = None  # the last working tick's output (repeated while held)
         self._last_in: Reference | None = None  # that tick's input reference
         self._holding = False  # the hard e-stop holds the chain
-        #: the plan seen from a robot that tipped onto its swing foot while the e-stop held it (None: level)
-        self._tilt: TiltAnchor | None = None
+        self._tilt: TiltAnchor | None = None  # the plan seen from a robot tipped onto its swing foot while held
         self._port_walking = False  # the walk in progress is driven by the walking point (Ports.walk_command)
         self._walk_armed = True  # False after an e-stop or walking stop, until the walking point reads zero
         self._walk_point = "idle"
@@ -117,7 +116,6 @@ class AutoBalancer(Layer):
         self._walk_base_z_m = float(initial.base_pos_world[2])  # [m] the height walks plan at (the preview's)
         self._walk_lowering_m = 0.0  # [m] BODY below a raised waist while walking (and while closing a stance)
         self._closing_stance = False  # the walk is close_stance's step
-        self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
         self._prepared: PreparedReplan | None = None  # after_write's re-plan, for the next tick only
         self.lift = FootLift(dt_s)  # a foot moved by its operational point while standing
         if active:
@@ -386,7 +384,9 @@ class AutoBalancer(Layer):
         if self._holding:
             self._resume(ctx)
         if ctx.last_ports.landing and self.gait.walking and not self.estep.active and not self._walking_stop_requested:
-            self.emergency_stop_walking()  # the hard e-stop lets this step land: no step after it
+            if self._blend is None:  # the hard e-stop lets this step land, a late swing cut short; none after it
+                self.estep.cut(ctx, self.params, self.preview)
+            self.emergency_stop_walking()
         if self._blend is not None:
             self._weight = self._blend.step(ctx.dt_s)
             if self._blend.done:
@@ -478,25 +478,10 @@ class AutoBalancer(Layer):
         self._last_in = ref
         ctx.ports.cog_acc_world = gait.cog_acc_world
         ctx.ports.gait = gait
-        ctx.ports.step = self._step_in_progress(ctx)
+        ctx.ports.step = self.estep.step_port(ctx, self.params)
         if self.estep.active:
             self.estep.k += 1
         return self._last_out
-
-    def _step_in_progress(self, ctx: TickContext) -> StepInProgress | None:
-        """Ports.step this tick: the emergency step until it ends, or a walk's swing while its foot is in the air."""
-        if self.estep.active:
-            samples, catching = self.estep.plan.touchdown_k - self.estep.k, True
-        else:
-            samples, catching = self.gait.swing_samples_left(), False
-            if samples == 0:
-                self._step_port = None
-                return None
-        touchdown_s = ctx.time_s + samples * ctx.dt_s
-        last = self._step_port
-        if last is None or last.catching != catching or abs(last.touchdown_time_s - touchdown_s) > 0.5 * ctx.dt_s:
-            last = self._step_port = StepInProgress(touchdown_s, catching)
-        return last
 
     # ---- the capture-point emergency step ---------------------------------------------------------------
     def _can_catch_while_walking(self, ctx: TickContext) -> bool:

@@ -22,7 +22,8 @@ _EPS_S = 1e-9
 class HardEmergencyStopperParams(Params):
     recover_time_s: float = field(default=2.5, metadata={"unit": "s", "min": 0.0, "max": 30.0})
     #: the longest an operator's e-stop lets a step land before it freezes (IEC 60204-1 stop category 1: stop,
-    #: then remove power); a walk's swing landing later than this is frozen at once (it would freeze in the air)
+    #: then remove power); a walk's swing landing later is cut short to land within it (the AutoBalancer's catch),
+    #: or, when it cannot be (this set shorter than the cut swing, the emergency step off), frozen at once
     landing_max_s: float = field(default=0.35, metadata={"unit": "s", "min": 0.0, "max": 0.35})
     #: after an emergency step's touchdown its double support runs on this long before the freeze (within
     #: landing_max_s): frozen at the touchdown the robot still carries the push's momentum (a walk's swing freezes
@@ -55,8 +56,9 @@ class HardEmergencyStopper(Layer):
     is), so that the live input stays where the robot is.
 
     An operator's e-stop during a step lets it land first (a controlled stop): in an emergency step (Ports.step
-    catching), in a walk's swing whose foot is planned down within landing_max_s, or standing with a capture-point
-    error over landing_cp_error_m (a push: an emergency step may come), the output stays the live command and the
+    catching), in a walk's swing whose foot is down within landing_max_s as planned or cut short (the AutoBalancer
+    lands a later swing where the capture point will be: frozen on one foot the robot tips), or standing with a
+    capture-point error over landing_cp_error_m (a push: a step may come), the output stays the live command and the
     `landing` port lets the balance layers run on (the motion layers hold; abc plans no step after this one),
     until the swing foot's touchdown (landing_settle_s after it for an emergency step), or the error is back under
     landing_cp_error_m with no step taken, and at the latest landing_max_s after the press; then the command
@@ -118,12 +120,15 @@ class HardEmergencyStopper(Layer):
             self._freeze(self.q_out if q_rad is None else q_rad)
 
     def _step_to_land(self) -> bool:
-        """At a press: a step is in progress that lands within landing_max_s (or the push that may need one)."""
+        """At a press: a step is in progress that lands within landing_max_s, as planned or cut short by the
+        AutoBalancer (StepInProgress.cut_swing_s), or the push that may need one."""
         step, p = self._step, self.params
         if step is None:
             return self._pushed and p.landing_max_s > 0.0
         t = self._next_tick_s
-        return step.touchdown_time_s - t < p.landing_max_s - _EPS_S and t < self._freeze_time_s(step) - _EPS_S
+        left_s = step.touchdown_time_s - t if step.cut_swing_s is None else min(step.touchdown_time_s - t,
+                                                                               step.cut_swing_s)
+        return left_s < p.landing_max_s - _EPS_S and t < self._freeze_time_s(step) - _EPS_S
 
     def _freeze(self, q_rad: np.ndarray) -> None:
         self.landing = False

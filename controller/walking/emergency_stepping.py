@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.core.constants import GRAVITY_M_S2
-from controller.core.types import BalanceEstimate, GaitState, Ports, TickContext
+from controller.core.types import BalanceEstimate, GaitState, Ports, StepInProgress, TickContext
 from controller.kinematics.rotations import homogeneous
 from controller.walking.auto_balancer_params import FEET, SWING_FOOT_LOADED_N, AutoBalancerParams, EmergencyStepRecord
 from controller.walking.emergency_step import EmergencyStepParams, EmergencyStepPlan, SupportRegion, swing_leg_for
@@ -66,6 +66,7 @@ class EmergencyStepping:
         self._in_a_row = 0  # emergency steps taken one after the other (the first included)
         self._from_walk = False  # the emergency step in progress caught a walk (it may step again)
         self._support: tuple[object, SupportRegion] | None = None  # (the idle soles it is for, the region)
+        self._step_port: StepInProgress | None = None  # the last Ports.step published (reused while it holds)
 
     @property
     def active(self) -> bool:
@@ -131,6 +132,41 @@ class EmergencyStepping:
         self._start(ctx, bal, rows[FEET[0]][2], rows[FEET[1]][2], p, preview, swing_leg=swing_leg)
         self._from_walk = True
         return True
+
+    def step_port(self, ctx: TickContext, params: AutoBalancerParams) -> StepInProgress | None:
+        """Ports.step this tick: the emergency step until it ends, or a walk's swing while its foot is in the air."""
+        if self.active:
+            samples, catching, cut_s = self.plan.touchdown_k - self.k, True, None
+        else:
+            samples, catching = self.gait.swing_samples_left(), False
+            if samples == 0:
+                self._step_port = None
+                return None
+            cut_s = self.cut_swing_s(params, samples)
+        touchdown_s = ctx.time_s + samples * ctx.dt_s
+        last = self._step_port
+        if last is None or (last.catching, last.cut_swing_s) != (catching, cut_s) \
+                or abs(last.touchdown_time_s - touchdown_s) > 0.5 * ctx.dt_s:
+            last = self._step_port = StepInProgress(touchdown_s, catching, cut_s)
+        return last
+
+    def cut_swing_s(self, params: AutoBalancerParams, swing_samples_left: int) -> float | None:
+        """How long [s] after the next tick a walk's swing with that many samples left would land if the hard
+        e-stop's landing cut it short (`cut`: seen a tick after the press, then at most CATCH_SWING_S's longest);
+        None when it would not be cut (it lands within that anyway, or the emergency step is off)."""
+        if not params.emergency_step.enabled or swing_samples_left * self.dt_s <= CATCH_SWING_S[1]:
+            return None
+        return CATCH_SWING_S[1] + 2.0 * self.dt_s
+
+    def cut(self, ctx: TickContext, params: AutoBalancerParams, preview: PreviewController) -> bool:
+        """The hard e-stop lets the step in progress land before it freezes (Ports.landing): a walk's swing planned
+        down later than CATCH_SWING_S allows is cut short as `catch` cuts it, the foot landing where the capture
+        point will be, so that the robot freezes on both feet, not on one (soak seed 10705: frozen in the air, it
+        tipped toward its swing foot and a release before that foot had touched could not catch it). False when
+        nothing was cut (a swing landing sooner, double support, the emergency step off, no balance estimate)."""
+        if ctx.last_ports.balance is None or self.cut_swing_s(params, self.gait.swing_samples_left()) is None:
+            return False
+        return self.catch(ctx, params, preview)
 
     def _start(self, ctx: TickContext, bal: BalanceEstimate, fz_r: float, fz_l: float,
                step_params: EmergencyStepParams, preview: PreviewController, swing_leg: str | None = None) -> None:

@@ -103,16 +103,15 @@ def _cp_from_sole(obs, phase: float) -> list[float]:
     return [c * dx + s_ * dy, -s_ * dx + c * dy]  # a list: as it reads back from the store
 
 
-def _push_run(s: PushSpec) -> tuple[dict[str, Any], float]:
-    from app.service.local import LocalRobot
-    from app.service.verbs import GoVelocity, Push
+def walk_to_phase(robot, vx_m_s: float, vy_m_s: float, vtheta_rad_s: float, phase: float
+                  ) -> tuple[float | None, float]:
+    """goVelocity, then step `robot` (a LocalRobot) to `phase` of the gait cycle: 0 is the first right touchdown
+    (support lleg -> both on the AutoBalancer's status) at least WARMUP_S into the walk. Returns the cycle measured
+    between the last two right touchdowns [s] (None with one) and when the support last changed [s]."""
+    from app.service.verbs import GoVelocity
 
-    robot = LocalRobot("default")
-    robot.run_for(SETTLE_S)
-    vx, vtheta = WALKS[s.walk]
-    robot.submit(GoVelocity(vx, 0.0, vtheta)).result()
+    robot.submit(GoVelocity(vx_m_s, vy_m_s, vtheta_rad_s)).result()
     t_walk = robot.host.observation.time_s
-    # the gait's own timing: right touchdowns (support lleg -> both) found on the AutoBalancer's status
     prev, touchdowns, last_change = robot.host.observation.layers["abc"].support, [], t_walk
     while True:
         obs = robot.step()
@@ -128,15 +127,25 @@ def _push_run(s: PushSpec) -> tuple[dict[str, Any], float]:
             break
         if obs.time_s - t_walk > WARMUP_S + 3 * CYCLE_S:
             raise RuntimeError(f"no right touchdown {WARMUP_S:g} s into the walk (support {support})")
-    t_td = touchdowns[-1]
     cycle = touchdowns[-1] - touchdowns[-2] if len(touchdowns) > 1 else None
-    t_push = t_td + s.phase * CYCLE_S
-    while robot.host.observation.time_s < t_push - 1e-9:
+    t_at = touchdowns[-1] + phase * CYCLE_S
+    while robot.host.observation.time_s < t_at - 1e-9:
         obs = robot.step()
         support = obs.layers["abc"].support
         if support != prev:
             last_change = obs.time_s
         prev = support
+    return cycle, last_change
+
+
+def _push_run(s: PushSpec) -> tuple[dict[str, Any], float]:
+    from app.service.local import LocalRobot
+    from app.service.verbs import Push
+
+    robot = LocalRobot("default")
+    robot.run_for(SETTLE_S)
+    vx, vtheta = WALKS[s.walk]
+    cycle, last_change = walk_to_phase(robot, vx, 0.0, vtheta, s.phase)
     obs = robot.host.observation
     yaw = _yaw(obs.truth.base_quat_wxyz) + math.radians(s.direction_deg)
     force = s.impulse_ns / PUSH_S * np.array([math.cos(yaw), math.sin(yaw), 0.0])

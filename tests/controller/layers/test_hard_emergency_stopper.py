@@ -182,9 +182,30 @@ def test_a_walks_swing_landing_within_the_bound_freezes_at_its_touchdown(touchdo
 
 
 @pytest.mark.parametrize("touchdown_in_s", [0.36, 0.5, 0.8])
-def test_a_walks_swing_landing_later_than_the_bound_freezes_at_once(touchdown_in_s):
+def test_a_walks_swing_landing_later_than_the_bound_and_not_cut_freezes_at_once(touchdown_in_s):
     step = StepInProgress(0.5 + touchdown_in_s, False)
     assert StepTicker().freeze_time(0.5, step_at=lambda t: step, gait=WALKING) == pytest.approx(0.5, abs=1e-9)
+
+
+@pytest.mark.parametrize("touchdown_in_s", [0.36, 0.5, 0.8])
+def test_a_walks_later_swing_that_abc_cuts_short_lands_as_a_catch_and_then_freezes(touchdown_in_s):
+    # abc's port says the swing would be cut to land 0.26 s after the next tick; a tick after the press it is
+    # (EmergencyStepping.cut): the port becomes a catching step down 0.25 s later, settled landing_settle_s after
+    p, press_s, cut_s = HardEmergencyStopperParams(), 0.5, 0.26
+    walk_swing = StepInProgress(press_s + touchdown_in_s, False, cut_swing_s=cut_s)
+    catch = StepInProgress(press_s + DT + 0.25, True)
+    frozen_at = StepTicker(p).freeze_time(press_s, step_at=lambda t: walk_swing if t < press_s + DT - 1e-9
+                                          else catch, gait=WALKING)
+    assert frozen_at == pytest.approx(min(catch.touchdown_time_s + p.landing_settle_s,
+                                          press_s + p.landing_max_s - DT), abs=1e-9)
+    assert frozen_at > catch.touchdown_time_s  # not in the air
+
+
+@pytest.mark.parametrize("landing_max_s", [0.0, 0.1, 0.25])
+def test_a_swing_cut_short_later_than_a_shortened_bound_freezes_at_once(landing_max_s):
+    p = HardEmergencyStopperParams(landing_max_s=landing_max_s)
+    step = StepInProgress(1.3, False, cut_swing_s=0.26)
+    assert StepTicker(p).freeze_time(0.5, step_at=lambda t: step, gait=WALKING) == pytest.approx(0.5, abs=1e-9)
 
 
 def test_a_pushed_robot_standing_balances_on_until_its_emergency_step_has_landed():
