@@ -95,9 +95,13 @@ const isZero = (t) => t.linear.every((v) => v === 0) && t.angular.every((v) => v
 // ---- the WS /ws/operator stream: each message answered once, in order (ack or error): the FIFO gives the round
 // trip; while open, the E-STOP sends its presses on it too (stickStream)
 export let opWsLatest = null;  // the newest socket, open or opening
-const sentAt = [];
+const sentAt = [];  // per setpoint sent, in order: {t: performance.now(), letGo: the point it let go of, or null}
 const rtts = [];
 const zeroTail = {};
+const moving = {};  // point -> the last twist sent for it was not zero
+// the newest let-go (a point's first zero after it moved): sent when, answered when, the robot's answer (the tick
+// and control time it applied the zero); the page's tests time the dead-man with it
+window.hrp2LetGo = null;
 let lastStreamError = "";
 
 export function connectOperator() {
@@ -109,13 +113,15 @@ export function connectOperator() {
       try { const d = JSON.parse(m.data); if (rec && rec.reply === null) rec.reply = d; } catch (e) { /* */ }
       return;
     }
-    const t0 = sentAt.shift();
-    if (t0 !== undefined) {
-      rtts.push(performance.now() - t0);
+    const sent = sentAt.shift();
+    const now = performance.now();
+    if (sent !== undefined) {
+      rtts.push(now - sent.t);
       if (rtts.length > 50) rtts.shift();
     }
     let d = {};
     try { d = JSON.parse(m.data); } catch (e) { return; }
+    if (sent && sent.letGo) window.hrp2LetGo = {point: sent.letGo, sent_ms: sent.t, answered_ms: now, reply: d};
     if (d.ok === false && d.detail !== lastStreamError) {
       lastStreamError = d.detail;
       log(`stream: ${d.detail}`, "bad");
@@ -142,7 +148,9 @@ function streamTick() {
     sending = true;
     if (opWs && opWs.readyState === WebSocket.OPEN && opWs.bufferedAmount < 4096) {
       opWs.send(JSON.stringify({point: p, linear: t.linear, angular: t.angular}));
-      sentAt.push(performance.now());
+      const letGo = moving[p] && isZero(t);
+      moving[p] = !isZero(t);
+      sentAt.push({t: performance.now(), letGo: letGo ? p : null});
       if (sentAt.length > 200) sentAt.shift();
     }
   }
