@@ -79,6 +79,23 @@ def positive_seconds(text: str) -> float:
     return v
 
 
+def run_or_exit_code(prog: str, store, work):
+    """`work()` for a study's command line: (its value, None), or (None, the exit code) once it has said why the
+    study stopped: no Ray cluster (2), or Ctrl-C (130: the finished runs stay in `store`, a RunStore, and the same
+    command goes on from there)."""
+    from app.lab.study.ray_backend import RayUnavailable
+
+    try:
+        return work(), None
+    except RayUnavailable as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return None, 2
+    except KeyboardInterrupt:
+        print(f"\n{prog}: interrupted; {len(store)} finished runs are kept in {store.path}: the same command goes "
+              "on from there", file=sys.stderr)
+        return None, 130
+
+
 def add_backend_arguments(p: argparse.ArgumentParser) -> None:
     """--workers (a local process pool) or --ray (a cluster): where a study's runs go."""
     where = p.add_mutually_exclusive_group()
@@ -137,7 +154,7 @@ def main(argv: Sequence[str]) -> int:
     from app.lab.study.analysis import summarise
     from app.lab.study.heatmap import plot_heatmaps
     from app.lab.study.pool import PoolBackend
-    from app.lab.study.ray_backend import RayBackend, RayUnavailable
+    from app.lab.study.ray_backend import RayBackend
     from app.lab.study.report import summary_markdown, write_params_csv, write_runs_csv
     from app.lab.study.store import RunStore
     from app.lab.study.study import StudyConfig, run_study, study_paths
@@ -167,15 +184,9 @@ def main(argv: Sequence[str]) -> int:
     print(f"study estop: {len(params)} parameter sets x {len(cases)} cases ({', '.join(args.experiments)}), "
           f"{len(held_out)} held-out cases; on {backend.describe()}; {len(store)} runs already in {paths['store']}",
           flush=True)
-    try:
-        result = run_study(config, backend, store)
-    except RayUnavailable as exc:
-        print(f"hrp2-console study estop: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"\nhrp2-console study estop: interrupted; {len(store)} finished runs are kept in {paths['store']}: "
-              "the same command goes on from there", file=sys.stderr)
-        return 130
+    result, code = run_or_exit_code("hrp2-console study estop", store, lambda: run_study(config, backend, store))
+    if code is not None:
+        return code
     summaries = summarise(result.outcomes)
     write_runs_csv(result, store, paths["runs"])
     write_params_csv(summaries, paths["params"])

@@ -7,7 +7,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -97,19 +96,10 @@ def _estop_run(s: EstopSpec) -> tuple[dict[str, Any], float]:
 
 
 def run_estop(spec: dict[str, Any]) -> dict[str, Any]:
-    """Run `spec` (EstopSpec.to_dict()) in a fresh simulation: {"key", "result", "timing"}. A failure of the run
-    itself is the result `outcome: "error"`, not a crash."""
-    from app.lab.study.run import quiet_controller_log
+    """Run `spec` (EstopSpec.to_dict()) in a fresh simulation: {"key", "result", "timing"} (run.run_timed)."""
+    from app.lab.study.run import run_timed
 
-    quiet_controller_log()
-    s = EstopSpec.from_dict(spec)
-    t0 = time.perf_counter()
-    try:
-        result, sim_s = _estop_run(s)
-    except Exception as exc:  # noqa: BLE001 - the study records it and goes on
-        result = {f: None for f in RESULT_FIELDS} | {"outcome": "error", "error": f"{type(exc).__name__}: {exc}"}
-        sim_s = 0.0
-    return {"key": s.key(), "result": result, "timing": {"wall_s": time.perf_counter() - t0, "sim_s": sim_s}}
+    return run_timed(EstopSpec.from_dict(spec), _estop_run, RESULT_FIELDS)
 
 
 def summary_markdown(rows: list[tuple[EstopSpec, dict[str, Any]]]) -> str:

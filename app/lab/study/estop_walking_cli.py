@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from app.lab.study.cli import add_backend_arguments, integer, number_list
+from app.lab.study.cli import add_backend_arguments, integer, number_list, run_or_exit_code
 from app.lab.study.estop_walking import HOLDS_S, WALKS
 
 
@@ -45,7 +44,7 @@ def parser() -> argparse.ArgumentParser:
 def main(argv: Sequence[str]) -> int:
     from app.lab.study.estop_walking import grid, run_estop, summary_markdown
     from app.lab.study.pool import PoolBackend
-    from app.lab.study.ray_backend import RayBackend, RayUnavailable
+    from app.lab.study.ray_backend import RayBackend
     from app.lab.study.store import RunStore
     from app.lab.study.study import execute
 
@@ -56,15 +55,10 @@ def main(argv: Sequence[str]) -> int:
     store = RunStore(args.out / "runs.jsonl")
     print(f"study estop-walking: {len(specs)} runs ({len(args.walks)} walks x {args.phases} phases x "
           f"{len(args.holds)} holds); on {backend.describe()}; {len(store)} runs already in {store.path}", flush=True)
-    try:
-        stats = execute("e-stop while walking", specs, backend, store)
-    except RayUnavailable as exc:
-        print(f"hrp2-console study estop-walking: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"\nhrp2-console study estop-walking: interrupted; {len(store)} finished runs are kept in "
-              f"{store.path}: the same command goes on from there", file=sys.stderr)
-        return 130
+    stats, code = run_or_exit_code("hrp2-console study estop-walking", store,
+                                   lambda: execute("e-stop while walking", specs, backend, store))
+    if code is not None:
+        return code
     text = summary_markdown([(s, store.get(s.key())["result"]) for s in specs])
     text += f"\n{stats.runs} runs now, in {stats.wall_s:.0f} s of wall time ({stats.sim_s:.0f} s simulated)\n"
     (args.out / "summary.md").write_text(text)

@@ -4,11 +4,10 @@ from __future__ import annotations
 
 import argparse
 import os
-import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from app.lab.study.cli import add_backend_arguments, integer, number_list, positive_seconds
+from app.lab.study.cli import add_backend_arguments, integer, number_list, positive_seconds, run_or_exit_code
 from app.lab.study.push_walking import WALKS, WATCH_S
 
 
@@ -53,7 +52,7 @@ def main(argv: Sequence[str]) -> int:
     from app.lab.study.pool import PoolBackend
     from app.lab.study.push_map import hrp2_lip, map_paths, plot_push_map, run_map, summary_markdown
     from app.lab.study.push_walking import grid, run_push
-    from app.lab.study.ray_backend import RayBackend, RayUnavailable
+    from app.lab.study.ray_backend import RayBackend
     from app.lab.study.store import RunStore
 
     args = parser().parse_args(list(argv))
@@ -68,15 +67,11 @@ def main(argv: Sequence[str]) -> int:
           f"{args.directions} directions x {args.phases} phases); on {backend.describe()}; {len(store)} runs already "
           f"in {paths['store']}", flush=True)
     lip = hrp2_lip()
-    try:
-        cells, stats = run_map(specs, backend, store, lip)
-    except RayUnavailable as exc:
-        print(f"hrp2-console study push-walking: error: {exc}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print(f"\nhrp2-console study push-walking: interrupted; {len(store)} finished runs are kept in "
-              f"{paths['store']}: the same command goes on from there", file=sys.stderr)
-        return 130
+    done, code = run_or_exit_code("hrp2-console study push-walking", store,
+                                  lambda: run_map(specs, backend, store, lip))
+    if code is not None:
+        return code
+    cells, stats = done
     text = summary_markdown(cells, lip, stats)
     paths["summary"].parent.mkdir(parents=True, exist_ok=True)
     paths["summary"].write_text(text)

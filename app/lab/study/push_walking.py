@@ -6,7 +6,6 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -184,16 +183,7 @@ def _push_run(s: PushSpec) -> tuple[dict[str, Any], float]:
 
 
 def run_push(spec: dict[str, Any]) -> dict[str, Any]:
-    """Run `spec` (PushSpec.to_dict()) in a fresh simulation: {"key", "result", "timing"}. A failure of the run
-    itself is the result `outcome: "error"`, not a crash."""
-    from app.lab.study.run import quiet_controller_log
+    """Run `spec` (PushSpec.to_dict()) in a fresh simulation: {"key", "result", "timing"} (run.run_timed)."""
+    from app.lab.study.run import run_timed
 
-    quiet_controller_log()
-    s = PushSpec.from_dict(spec)
-    t0 = time.perf_counter()
-    try:
-        result, sim_s = _push_run(s)
-    except Exception as exc:  # noqa: BLE001 - the study records it and goes on
-        result = {f: None for f in RESULT_FIELDS} | {"outcome": "error", "error": f"{type(exc).__name__}: {exc}"}
-        sim_s = 0.0
-    return {"key": s.key(), "result": result, "timing": {"wall_s": time.perf_counter() - t0, "sim_s": sim_s}}
+    return run_timed(PushSpec.from_dict(spec), _push_run, RESULT_FIELDS)

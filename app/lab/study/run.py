@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import logging
 import time
+from collections.abc import Callable
 from typing import Any
 
 from app.lab.study.spec import SETTLE_S, RunSpec
@@ -45,3 +46,17 @@ def run_spec(spec: dict[str, Any]) -> dict[str, Any]:
               "outcome": dict(r.outcome), "refused": list(r.refused), "faults": list(r.faults), "error": None}
     return {"key": s.key(), "result": result,
             "timing": {"wall_s": time.perf_counter() - t0, "sim_s": SETTLE_S + r.duration_s}}
+
+
+def run_timed(spec, run: Callable[[Any], tuple[dict[str, Any], float]], fields: tuple[str, ...]) -> dict[str, Any]:
+    """A walking study's run in a fresh simulation: `run(spec)` gives its result and the seconds simulated; returns
+    {"key", "result", "timing"}. A failure of the run itself is the result `outcome: "error"` (every other field of
+    `fields` None), not a crash."""
+    quiet_controller_log()
+    t0 = time.perf_counter()
+    try:
+        result, sim_s = run(spec)
+    except Exception as exc:  # noqa: BLE001 - the study records it and goes on
+        result = {f: None for f in fields} | {"outcome": "error", "error": f"{type(exc).__name__}: {exc}"}
+        sim_s = 0.0
+    return {"key": spec.key(), "result": result, "timing": {"wall_s": time.perf_counter() - t0, "sim_s": sim_s}}
