@@ -79,6 +79,21 @@ def positive_seconds(text: str) -> float:
     return v
 
 
+def walk_names(known, hint: str = ""):
+    """An argparse type: comma-separated names of walks in `known` ("0.10" reads as "0.1"), each once."""
+
+    def parse(text: str) -> list[str]:
+        names = [n.strip() for n in text.split(",") if n.strip()]
+        names = [f"{float(n):g}" if n.replace(".", "", 1).isdigit() else n for n in names]
+        bad = [n for n in names if n not in known]
+        if bad or not names:
+            raise argparse.ArgumentTypeError(f"unknown walk {bad[0] if bad else text!r}; choose from "
+                                             f"{', '.join(known)} (comma-separated{hint})")
+        return list(dict.fromkeys(names))
+
+    return parse
+
+
 def run_or_exit_code(prog: str, store, work):
     """`work()` for a study's command line: (its value, None), or (None, the exit code) once it has said why the
     study stopped: no Ray cluster (2), or Ctrl-C (130: the finished runs stay in `store`, a RunStore, and the same

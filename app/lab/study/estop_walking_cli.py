@@ -7,17 +7,10 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from app.lab.study.cli import add_backend_arguments, integer, number_list, run_or_exit_code
+from app.lab.study.cli import add_backend_arguments, integer, number_list, run_or_exit_code, walk_names
 from app.lab.study.estop_walking import HOLDS_S, WALKS
 
-
-def walk_list(text: str) -> list[str]:
-    names = list(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
-    bad = [n for n in names if n not in WALKS]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"unknown walk {bad[0] if bad else text!r}; choose from {', '.join(WALKS)} "
-                                         "(comma-separated)")
-    return names
+walk_list = walk_names(WALKS, "")
 
 
 def parser() -> argparse.ArgumentParser:

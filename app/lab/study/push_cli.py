@@ -7,18 +7,17 @@ import os
 from collections.abc import Sequence
 from pathlib import Path
 
-from app.lab.study.cli import add_backend_arguments, integer, number_list, positive_seconds, run_or_exit_code
+from app.lab.study.cli import (
+    add_backend_arguments,
+    integer,
+    number_list,
+    positive_seconds,
+    run_or_exit_code,
+    walk_names,
+)
 from app.lab.study.push_walking import WALKS, WATCH_S
 
-
-def walk_list(text: str) -> list[str]:
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    names = [f"{float(n):g}" if n.replace(".", "", 1).isdigit() else n for n in names]
-    bad = [n for n in names if n not in WALKS]
-    if bad or not names:
-        raise argparse.ArgumentTypeError(f"unknown walk {bad[0] if bad else text!r}; choose from {', '.join(WALKS)} "
-                                         "(comma-separated; 'turn': 0.1 m/s turning 10 deg/s)")
-    return list(dict.fromkeys(names))
+walk_list = walk_names(WALKS, "; 'turn': 0.1 m/s turning 10 deg/s")
 
 
 def parser() -> argparse.ArgumentParser:
