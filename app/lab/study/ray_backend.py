@@ -4,14 +4,35 @@ one CPU each. Every node needs this project installed (the same version) in the 
 from __future__ import annotations
 
 import os
+import socket
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from app.lab.study.run import run_spec
 
 
+#: [s] how long the cluster's address may take to accept a TCP connection before --ray gives up (Ray's own connect
+#: retries an address nothing answers at for minutes)
+PROBE_TIMEOUT_S = 5.0
+
+
 class RayUnavailable(RuntimeError):
-    """`ray` is not installed."""
+    """`ray` is not installed, or nothing answers at the cluster's address."""
+
+
+def probe_address(address: str, timeout_s: float = PROBE_TIMEOUT_S) -> None:
+    """Raise RayUnavailable unless a TCP connection to `address` ("HOST:PORT" or "ray://HOST:PORT") opens within
+    `timeout_s`: an unreachable cluster fails fast, naming the address, instead of hanging in Ray's connect."""
+    host_port = address.removeprefix("ray://")
+    host, sep, port = host_port.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise RayUnavailable(f"--ray {address!r}: expected HOST:PORT, ray://HOST:PORT, 'auto' or 'local'")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        raise RayUnavailable(f"--ray {address!r}: nothing answers at {host}:{port} within {timeout_s:g} s ({exc}); "
+                             "start the cluster (ray start --head) or check the address") from exc
 
 
 class RayBackend:
@@ -31,6 +52,8 @@ class RayBackend:
         return f"Ray ({self.address or 'the session already started'})"
 
     def _connect(self):
+        if self.address not in (None, "local", "auto"):
+            probe_address(self.address)
         try:
             import ray
         except ImportError as exc:
@@ -41,7 +64,10 @@ class RayBackend:
                 ray.init(address="local", num_cpus=os.cpu_count(), include_dashboard=False,
                          _node_ip_address="127.0.0.1", log_to_driver=False)
             else:
-                ray.init(address=self.address, log_to_driver=False)
+                try:
+                    ray.init(address=self.address, log_to_driver=False)
+                except ConnectionError as exc:  # something answers, but not a Ray cluster that accepts us
+                    raise RayUnavailable(f"--ray {self.address!r}: {exc}") from exc
             started = True
         return ray, started
 

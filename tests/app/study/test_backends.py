@@ -1,13 +1,17 @@
 """A tiny study (shortened wall pushes) on the local process pool and on a Ray instance started here gives the
-same results, run for run; a second invocation finds every run stored and runs none."""
+same results, run for run; a second invocation finds every run stored and runs none. A cluster address nothing
+answers at fails at once, naming it."""
 
+import re
 import shutil
+import socket
 import tempfile
 
+import pytest
 import ray
 
 from app.lab.study.pool import PoolBackend
-from app.lab.study.ray_backend import RayBackend
+from app.lab.study.ray_backend import RayBackend, RayUnavailable
 from app.lab.study.space import Case, EstopParams
 from app.lab.study.store import RunStore
 from app.lab.study.study import StudyConfig, run_study, tuning_specs, validation_specs
@@ -55,3 +59,33 @@ def test_the_pool_and_ray_give_the_same_study_and_a_rerun_skips_every_stored_run
     assert counting.asked == 0 and [p.runs for p in again.phases] == [0, 0]
     assert [p.skipped for p in again.phases] == [4, 2]
     assert again.recommendation.summary == on_pool.recommendation.summary
+
+
+def _closed_port() -> int:
+    """A loopback port nothing listens on (bound, then closed)."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+@pytest.mark.parametrize("address", ["127.0.0.1:{port}", "ray://127.0.0.1:{port}"])
+def test_ray_at_an_address_nothing_answers_fails_naming_it(address):
+    address = address.format(port=_closed_port())
+    with pytest.raises(RayUnavailable, match=re.escape(repr(address)) + ".*nothing answers"):
+        list(RayBackend(address).run([{"anything": 1}]))
+    assert not ray.is_initialized()
+
+
+@pytest.mark.parametrize("address", ["nohost", "host:", ":6379", "host:port", "host:0", "host:65536"])
+def test_a_malformed_ray_address_is_refused_naming_the_forms_allowed(address):
+    with pytest.raises(RayUnavailable, match="expected HOST:PORT, ray://HOST:PORT, 'auto' or 'local'"):
+        list(RayBackend(address).run([{"anything": 1}]))
+
+
+def test_the_study_command_line_exits_2_when_the_cluster_does_not_answer(tmp_path, capsys):
+    from app.lab.study.estop_walking_cli import main
+
+    address = f"127.0.0.1:{_closed_port()}"
+    code = main(["--ray", address, "--walks", "side", "--phases", "1", "--holds", "0.3", "--out", str(tmp_path)])
+    assert code == 2
+    assert f"error: --ray {address!r}: nothing answers" in capsys.readouterr().err
