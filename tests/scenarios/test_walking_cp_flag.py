@@ -17,7 +17,8 @@ prediction; now 0.11-0.13 at most):
 | toe 20 / heel 10 deg footsteps | 17.1 (31.4; 53.4) | 17.4 (33.4; 62.4) | 0.09 (1.22) | 0.11 (0.81) |
 
 The issue's goal (p99 <= 25 mm, max <= 40 mm) is met by every walk; none raises the flag (40 mm), nor do 100 m
-of mixed goVelocity walking (CP error max 21.7 mm; 29.3 before the prediction).
+of mixed goVelocity walking (CP error max 21.7 mm; 29.3 before the prediction; the test walks two cycles of the mix,
+whose maxima repeat in every cycle: 21.2 mm).
 
 Pushes during a walk, at every phase of the gait: tests/scenarios/test_push_while_walking.py.
 """
@@ -33,8 +34,11 @@ THRESHOLD_M = StabilizerParams().cp_threshold_m
 #: [m] margin on the measured CP error p99 and max: the simulation is deterministic on one machine; this is
 #: for another machine's floating point and small controller changes (every max + margin stays <= 40 mm)
 CP_MARGIN_M = 0.005
-#: [m] the CP error max over the 100 m mixed walk (test_a_hundred_metres_of_mixed_walking_raise_no_flag)
-MIXED_MEASURED_MAX_M = 0.0217  # measured 21.7 mm (29.3 before the LIP prediction)
+#: [m] the CP error max over two cycles of the mixed walk (test_mixed_walking_twice_over_raises_no_flag): measured
+#: 21.2 mm, the same in every cycle (each motion's max repeats to 0.1 mm); 21.7 mm over 100 m (14 cycles)
+MIXED_MEASURED_MAX_M = 0.0212
+#: cycles of the mix walked: the second repeats the first's maxima, so more add CI time, not cases
+MIXED_CYCLES = 2
 #: [deg] the KalmanFilter's roll and pitch error while walking: measured 0.13 deg at most (0.11-0.13 over the
 #: walks; 0.04-0.15 before the LIP prediction; 0.39-1.22 with the accelerometer's tilt), margin 0.1 deg
 MAX_ATTITUDE_ERROR_DEG = 0.23
@@ -159,10 +163,11 @@ MIXED_CYCLE = (((0.15, 0.0, 0.0), 20.0), ((0.1, 0.03, np.radians(10.0)), 15.0), 
 
 
 @pytest.mark.slow
-def test_a_hundred_metres_of_mixed_walking_raise_no_flag():
-    """goVelocity forward, turning both ways, backward and sideways, stopping after each cycle, until BODY has
-    covered 100 m (its position every 2 s, a step pair, so the sway does not count). Measured: CP error max
-    21.7 mm (29.3 before the LIP prediction), no flag, no fall."""
+def test_mixed_walking_twice_over_raises_no_flag():
+    """goVelocity forward, turning both ways, backward and sideways, stopping after each cycle, for MIXED_CYCLES
+    cycles (about 15 m of BODY's path, its position every 2 s, a step pair, so the sway does not count). Measured:
+    CP error max 21.2 mm, no flag, no fall; 100 m of it (14 cycles) measured 21.7 mm (29.3 before the
+    LIP prediction)."""
     system = make_system()
     loop = system.loop
     abc = system.chain["abc"]
@@ -170,25 +175,23 @@ def test_a_hundred_metres_of_mixed_walking_raise_no_flag():
     dt = loop.dt_control_s
     every = int(round(2.0 / dt))
     path, prev, tick, flags, worst = 0.0, np.array(loop.snapshot.truth.base_pos_world[:2]), 0, 0, 0.0
-    k = 0
-    while path < 100.0:
-        v, seconds = MIXED_CYCLE[k % len(MIXED_CYCLE)]
-        loop.call(lambda v=v: abc.go_velocity(*v))
-        for _ in range(int(round(seconds / dt))):
-            snap = loop.step()
-            assert not snap.fallen, f"fell at t={snap.time_s:.1f} s after {path:.1f} m"
-            st = snap.layers["st"]
-            flags += st.emergency
-            worst = max(worst, st.cp_error_norm)
-            tick += 1
-            if tick % every == 0:
-                p = np.array(snap.truth.base_pos_world[:2])
-                path += float(np.linalg.norm(p - prev))
-                prev = p
-        k += 1
-        if k % len(MIXED_CYCLE) == 0:
-            loop.call(lambda: abc.go_stop())
-            loop.run_for(3.0)
-    print(f"100 m mixed walking: CP error max {worst * 1e3:.1f} mm, {flags} ticks flagged")
+    for _ in range(MIXED_CYCLES):
+        for v, seconds in MIXED_CYCLE:
+            loop.call(lambda v=v: abc.go_velocity(*v))
+            for _ in range(int(round(seconds / dt))):
+                snap = loop.step()
+                assert not snap.fallen, f"fell at t={snap.time_s:.1f} s after {path:.1f} m"
+                st = snap.layers["st"]
+                flags += st.emergency
+                worst = max(worst, st.cp_error_norm)
+                tick += 1
+                if tick % every == 0:
+                    p = np.array(snap.truth.base_pos_world[:2])
+                    path += float(np.linalg.norm(p - prev))
+                    prev = p
+        loop.call(lambda: abc.go_stop())
+        loop.run_for(3.0)
+    print(f"{path:.1f} m mixed walking: CP error max {worst * 1e3:.1f} mm, {flags} ticks flagged")
+    assert path > 14.0, f"walked {path:.1f} m"  # measured 14.7 m: the mix went on walking
     assert flags == 0, f"{flags} ticks flagged, CP error max {worst * 1e3:.1f} mm"
     assert worst < MIXED_MEASURED_MAX_M + CP_MARGIN_M, f"CP error max {worst * 1e3:.1f} mm"
