@@ -10,7 +10,7 @@ from pathlib import Path
 from app.lab.study.cli import add_backend_arguments, integer, number_list, run_or_exit_code, walk_names
 from app.lab.study.estop_walking import HOLDS_S, WALKS
 
-walk_list = walk_names(WALKS, "")
+walk_list = walk_names(WALKS)
 
 
 def parser() -> argparse.ArgumentParser:

@@ -10,7 +10,6 @@ from typing import Any
 
 from app.lab.study.run import run_spec
 
-
 #: [s] how long the cluster's address may take to accept a TCP connection before --ray gives up (Ray's own connect
 #: retries an address nothing answers at for minutes)
 PROBE_TIMEOUT_S = 5.0
@@ -30,7 +29,7 @@ def probe_address(address: str, timeout_s: float = PROBE_TIMEOUT_S) -> None:
     try:
         with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout_s):
             pass
-    except OSError as exc:
+    except (OSError, UnicodeError) as exc:  # UnicodeError: a host name IDNA cannot encode (a label over 63)
         raise RayUnavailable(f"--ray {address!r}: nothing answers at {host}:{port} within {timeout_s:g} s ({exc}); "
                              "start the cluster (ray start --head) or check the address") from exc
 

@@ -82,6 +82,12 @@ def test_a_malformed_ray_address_is_refused_naming_the_forms_allowed(address):
         list(RayBackend(address).run([{"anything": 1}]))
 
 
+def test_a_host_name_no_resolver_can_encode_fails_as_unreachable_not_with_a_traceback():
+    address = "a" * 70 + ":6379"  # a DNS label over 63 characters: IDNA refuses to encode it
+    with pytest.raises(RayUnavailable, match="nothing answers"):
+        list(RayBackend(address).run([{"anything": 1}]))
+
+
 def test_the_study_command_line_exits_2_when_the_cluster_does_not_answer(tmp_path, capsys):
     from app.lab.study.estop_walking_cli import main
 
