@@ -67,10 +67,11 @@ class UnexpectedError(ServiceError):
 
 
 # ---- inside the robot process -------------------------------------------------------------------------------
-#: [s] the e-stop door is served in the wait between ticks only while this much is left before the next tick:
-#: a serve (4 socket operations, a hostile handshake's parse and refusal the dearest) took up to 1.4 ms under the
-#: socket fuzz, and one just before the deadline made that tick late by as much
-DOOR_RESERVE_S = 2e-3
+#: [s] client work (the e-stop door's sockets, the console's commands) is done in the wait between ticks only while
+#: this much is left before the next tick: a door serve (a hostile handshake's parse and refusal) took up to 1.4 ms
+#: and a command up to 3.2 ms under the socket fuzz, and one begun just before the deadline made that tick as late.
+#: E-stops are never held back.
+SERVE_RESERVE_S = 2e-3
 
 
 def _raise_priority() -> str:
@@ -154,8 +155,9 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             # the console checked the id; should one slip through, the stop engages without it
             estop.send((request, host.engage_estop(press if press_error(press) is None else None)))
 
-    def handle_commands() -> None:
-        while cmd.poll():
+    def handle_commands(until_s: float | None = None) -> None:
+        # until_s: leave what comes later in the pipe (for after the next tick)
+        while cmd.poll() and (until_s is None or time.perf_counter() <= until_s):
             handle_estop()  # an e-stop sent before a command takes effect before it
             request, verb = cmd.recv()
             try:
@@ -182,29 +184,33 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             except ValueError as exc:  # larger than the board: say so once in a while, keep ticking
                 log.error("snapshot not published: %s", exc)
 
-    door_watched = [False]  # a wait since the last tick boundary had the door's sockets watched
+    served = [False]  # a wait since the last tick boundary had time to serve the door and the commands
 
     def wait(delay_s: float) -> None:
-        # the door is served while a serve cannot make the tick late; what comes later waits for after the tick
-        watch_door = door is not None and loop.due_s - time.perf_counter() >= DOOR_RESERVE_S
-        door_watched[0] = door_watched[0] or watch_door
+        # clients are served while a serve cannot make the tick late; what comes later waits for after the tick
+        until_s = loop.due_s - SERVE_RESERVE_S
+        serve = time.perf_counter() <= until_s
+        served[0] = served[0] or serve
+        watched = ((*pipes, *door.sockets) if door is not None else pipes) if serve else (estop,)
         # select() sleeps to the microsecond (connection.wait's poll() rounds up to whole milliseconds)
-        ready, _, _ = select.select((*pipes, *door.sockets) if watch_door else pipes, (), (), delay_s)
+        ready, _, _ = select.select(watched, (), (), delay_s)
         if ready:
             handle_estop()
-            if watch_door:
-                door.serve(ready)
-            handle_commands()
+            if serve:
+                if door is not None:
+                    door.serve(ready)
+                handle_commands(until_s)
 
     def between_ticks() -> None:
         handle_estop()
-        if door is not None:
-            # unpaced there are no waits; paced, ticks that leave no time to spare still serve it once per tick
-            if not door_watched[0]:
+        # unpaced there are no waits; paced, ticks that leave no time to spare still serve clients once per tick
+        if not served[0]:
+            if door is not None:
                 door.poll()
+            handle_commands()
+        if door is not None:
             door.new_tick()
-            door_watched[0] = False
-        handle_commands()
+        served[0] = False
         publish()
 
     try:

