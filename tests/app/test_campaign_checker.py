@@ -7,6 +7,8 @@ import pytest
 
 from app.lab.campaign.checker import Checker, Expectation, run_cause
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 
 def state(time_s: float, tick: int | None = None, fallen: bool = False, **emergency) -> dict:
     e = {"hard_stop": False, "motion_stop": False, "motion_stop_time": None, "walking_stop": False, **emergency}

@@ -8,6 +8,8 @@ import pytest
 from controller.layers.emergency_stopper import EmergencyStopperParams
 from controller.layers.stabilizer import EMERGENCY_MODES, StabilizerParams
 
+pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
+
 URL = "/api/emergency-stopper/params"
 WARM_UP_S = 2.5  # AutoBalancer and Stabilizer blended in
 OWNERS = {"t1": ("es", "t1_s"), "t2": ("es", "t2_s"), "recover_time": ("es", "recover_time_s"),

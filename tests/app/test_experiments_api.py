@@ -138,6 +138,7 @@ def test_a_real_run_in_a_fresh_simulation_while_the_live_loop_keeps_ticking(clie
 
 
 @pytest.mark.slow
+@pytest.mark.in_process  # a TestClient on a robot stepped by the test: on make test's parallel pass (67 s of CPU)
 def test_thirty_runs_leave_the_console_no_bigger_and_no_folder_behind(client, tmp_path, monkeypatch):
     import glob
     import tempfile
