@@ -67,11 +67,10 @@ class UnexpectedError(ServiceError):
 
 
 # ---- inside the robot process -------------------------------------------------------------------------------
-#: [s] client work (the e-stop door's sockets, the console's commands) is done in the wait between ticks only while
-#: this much is left before the next tick: a door serve (a hostile handshake's parse and refusal) took up to 1.4 ms
-#: and a command up to 3.2 ms under the socket fuzz, and one begun just before the deadline made that tick as late.
-#: E-stops are never held back.
-SERVE_RESERVE_S = 2e-3
+#: [s] the e-stop door is served in the wait between ticks only while this much is left before the next tick:
+#: a serve (4 socket operations, a hostile handshake's parse and refusal the dearest) took up to 1.4 ms under the
+#: socket fuzz, and one just before the deadline made that tick late by as much
+DOOR_RESERVE_S = 2e-3
 
 
 def _raise_priority() -> str:
@@ -155,9 +154,8 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             # the console checked the id; should one slip through, the stop engages without it
             estop.send((request, host.engage_estop(press if press_error(press) is None else None)))
 
-    def handle_commands(until_s: float | None = None) -> None:
-        # until_s: leave what comes later in the pipe (for after the next tick)
-        while cmd.poll() and (until_s is None or time.perf_counter() <= until_s):
+    def handle_commands() -> None:
+        while cmd.poll():
             handle_estop()  # an e-stop sent before a command takes effect before it
             request, verb = cmd.recv()
             try:
@@ -184,33 +182,31 @@ def robot_main(cfg: RobotConfig, cmd: connection.Connection, estop: connection.C
             except ValueError as exc:  # larger than the board: say so once in a while, keep ticking
                 log.error("snapshot not published: %s", exc)
 
-    served = [False]  # a wait since the last tick boundary had time to serve the door and the commands
+    door_watched = [False]  # a wait since the last tick boundary had the door's sockets watched
 
     def wait(delay_s: float) -> None:
-        # clients are served while a serve cannot make the tick late; what comes later waits for after the tick
-        until_s = loop.due_s - SERVE_RESERVE_S
-        serve = time.perf_counter() <= until_s
-        served[0] = served[0] or serve
-        watched = ((*pipes, *door.sockets) if door is not None else pipes) if serve else (estop,)
+        # the door is served while a serve cannot make the tick late; what comes later waits for after the tick
+        watch_door = door is not None and loop.due_s - time.perf_counter() >= DOOR_RESERVE_S
+        door_watched[0] = door_watched[0] or watch_door
         # select() sleeps to the microsecond (connection.wait's poll() rounds up to whole milliseconds)
-        ready, _, _ = select.select(watched, (), (), delay_s)
+        ready, _, _ = select.select((*pipes, *door.sockets) if watch_door else pipes, (), (), delay_s)
         if ready:
             handle_estop()
-            if serve:
-                if door is not None:
-                    door.serve(ready)
-                handle_commands(until_s)
+            if watch_door:
+                door.serve(ready)
+            # commands are not held for after the tick as the door is: a release so held would be applied after an
+            # e-stop pressed after it was sent (the e-stop pipe is read first)
+            handle_commands()
 
     def between_ticks() -> None:
         handle_estop()
-        # unpaced there are no waits; paced, ticks that leave no time to spare still serve clients once per tick
-        if not served[0]:
-            if door is not None:
-                door.poll()
-            handle_commands()
         if door is not None:
+            # unpaced there are no waits; paced, ticks that leave no time to spare still serve it once per tick
+            if not door_watched[0]:
+                door.poll()
             door.new_tick()
-        served[0] = False
+            door_watched[0] = False
+        handle_commands()
         publish()
 
     try:
