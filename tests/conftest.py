@@ -18,8 +18,8 @@ PARALLEL_FOLDERS = ("controller", "robot", "behaviors", "scenarios")
 PASSES = ("parallel", "serial")
 #: the parallel pass's longest files (minutes each), handed out first so that the pass does not end on one of them
 #: with the other worker idle
-LONGEST_FIRST = ("scenarios/test_expo_behaviors.py", "scenarios/test_expo_carry.py",
-                 "scenarios/test_walking_cp_flag.py")
+LONGEST_FIRST = ("app/test_experiments_api.py", "scenarios/test_expo_behaviors.py", "scenarios/test_expo_carry.py",
+                 "scenarios/test_expo_floor_object.py", "scenarios/test_walking_cp_flag.py")
 
 
 def on_parallel_pass(item: pytest.Item) -> bool:
