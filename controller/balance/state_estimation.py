@@ -33,16 +33,22 @@ FLAT_SOLE_COP_MARGIN_M = 0.02
 #: [rad] a planned sole whose z axis is tilted more than this from the vertical is not planned flat (toe-off,
 #: heel-strike)
 FLAT_SOLE_PLAN_TILT_RAD = 1e-3
+#: [rad] ... and the encoders with the attitude estimate see it within this of the plan's orientation: the
+#: estimate errs by about a degree at a landing and by 5.1 deg at the first tick (it starts level); a sole seen
+#: farther off is not flat on the floor (a catching step's foot that touched down early on its heel, 18 deg
+#: pitched, was read as BODY pitch)
+FLAT_SOLE_MAX_DISAGREEMENT_RAD = math.radians(10.0)
 
 
 def body_tilt_from_flat_soles(R_body_est, R_soles_plan, R_soles_meas, wrenches_sole, rectangles: tuple[
         FootRectangle, ...], contact: tuple[bool, ...], min_load_share: float = FLAT_SOLE_MIN_LOAD_SHARE,
-        cop_margin_m: float = FLAT_SOLE_COP_MARGIN_M) -> tuple[float, float] | None:
+        cop_margin_m: float = FLAT_SOLE_COP_MARGIN_M, max_disagreement_rad: float = FLAT_SOLE_MAX_DISAGREEMENT_RAD
+        ) -> tuple[float, float] | None:
     """BODY roll, pitch [rad] from the kinematics of the soles that lie flat where the plan puts them.
 
     A sole planned in contact and flat (`contact[i]`, `R_soles_plan[i]` (3, 3) world) that carries at least
     `min_load_share` of the feet's vertical load, with its centre of pressure at least `cop_margin_m` inside
-    its rectangle's edges, is taken to have the planned orientation; BODY then is
+    its rectangle's edges, and seen within `max_disagreement_rad` of that orientation, is taken to have it; BODY then is
     R_plan R_sole_meas^T R_body_est, where `R_soles_meas[i]` (3, 3) is the sole's orientation that the
     encoders and the attitude estimate `R_body_est` (3, 3) give (world-aligned). `wrenches_sole` (n, 6):
     the external wrench on each foot at its sole frame's origin, in the sole frame [N, N m]. The soles that
@@ -68,6 +74,9 @@ def body_tilt_from_flat_soles(R_body_est, R_soles_plan, R_soles_meas, wrenches_s
         if not (-rect.rear_m + m <= cop_x <= rect.front_m - m and -rect.right_m + m <= cop_y <= rect.left_m - m):
             continue
         meas = R_soles_meas[i].tolist() if isinstance(R_soles_meas[i], np.ndarray) else R_soles_meas[i]
+        cos_off = plan[0][2] * meas[0][2] + plan[1][2] * meas[1][2] + plan[2][2] * meas[2][2]  # the z axes' angle
+        if cos_off < math.cos(max_disagreement_rad):
+            continue
         R = rows_mul(plan, rows_tmul(meas, R_body))
         r20, r21, r22 = R[2]
         roll_sum += f * math.atan2(r21, r22)

@@ -5,6 +5,7 @@ import numpy as np
 from controller.balance.capture_point import HRP2_LEFT_SOLE, HRP2_RIGHT_SOLE
 from controller.balance.state_estimation import (
     FLAT_SOLE_COP_MARGIN_M,
+    FLAT_SOLE_MAX_DISAGREEMENT_RAD,
     FLAT_SOLE_MIN_LOAD_SHARE,
     body_tilt_from_flat_soles,
     lip_velocity_filter_step,
@@ -86,6 +87,21 @@ def test_a_sole_whose_pressure_is_near_an_edge_or_that_is_planned_pitched_does_n
     toe_off = rpy_to_matrix(np.radians([0.0, 5.0, 0.0]))
     w = np.array([[0, 0, fz, 0, 0, 0], [0, 0, 0.0, 0, 0, 0]])
     assert body_tilt_from_flat_soles(np.eye(3), [toe_off, FLAT], meas, w, RECTS, (True, True)) is None
+
+
+def test_a_sole_seen_far_from_its_planned_orientation_does_not_count():
+    # a catching step's foot touched down early, 18 deg pitched, with its pressure inside the edges: read as flat,
+    # it gave BODY 18 deg of pitch, the COG estimate ran 18 cm in 20 ms and the robot fell (issue 26, 15 N s left)
+    w = np.array([[0, 0, 200.0, 0, 0, 0], [0, 0, 250.0, 0, 0, 0]])
+    limit = np.degrees(FLAT_SOLE_MAX_DISAGREEMENT_RAD)
+    for pitch_deg, counts in ((18.0, False), (limit + 0.1, False), (limit - 0.1, True), (-(limit - 0.1), True)):
+        meas = [rpy_to_matrix(np.radians([0.0, pitch_deg, 0.0])), np.eye(3)]
+        tilt = body_tilt_from_flat_soles(np.eye(3), [FLAT, FLAT], meas, w, RECTS, (True, False))
+        assert (tilt is not None) is counts, pitch_deg
+    # the same off the roll axis; the other sole, flat, still counts alone
+    meas = [rpy_to_matrix(np.radians([limit + 0.1, 0.0, 0.0])), np.eye(3)]
+    roll, pitch = body_tilt_from_flat_soles(np.eye(3), [FLAT, FLAT], meas, w, RECTS, (True, True))
+    assert abs(roll) < 1e-12 and abs(pitch) < 1e-12
 
 
 # ---- lip_velocity_filter_step ----------------------------------------------------------------------------------
