@@ -66,6 +66,7 @@ class PressLog:
         self.window_s = float(window_s)
         self._first: dict[str, EstopAck] = {}  # press id -> the answer to its first copy
         self._released_at_s = float("-inf")
+        self._last_press_s = float("-inf")  # when the newest press (not a copy) was handled
 
     def first(self, press: str | None, now_s: float) -> EstopAck | None:
         """The answer to the first copy of `press`, if it came within the window."""
@@ -78,12 +79,18 @@ class PressLog:
     def pressed(self, press: str | None, ack: EstopAck) -> None:
         """`ack` answered a copy of `press`: kept if it is the first of the window."""
         now_s = ack.engaged_at_monotonic_s
+        self._last_press_s = max(self._last_press_s, now_s)
         self._first = {p: a for p, a in self._first.items() if now_s - a.engaged_at_monotonic_s < self.window_s}
         if press is not None:
             self._first.setdefault(press, ack)
 
     def released(self, now_s: float) -> None:
         self._released_at_s = now_s
+
+    def pressed_since(self, sent_s: float) -> bool:
+        """Whether a press (not a copy of an earlier one) was handled after `sent_s`: a release sent then must not
+        release the stop it engaged."""
+        return self._last_press_s > sent_s
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import threading
+import time
 from collections.abc import Mapping, Sequence
 from concurrent.futures import TimeoutError as FutureTimeout
 from typing import Any, Protocol
@@ -133,7 +134,7 @@ class OperatorService:
 
     def release_estop(self) -> str:
         """Release the hard e-stop: nothing the operator streamed before the release runs after it."""
-        return self.run(ReleaseEstop(self.robot.setpoint_seq()))
+        return self.run(ReleaseEstop(self.robot.setpoint_seq(), time.monotonic()))
 
     def stop_motion(self) -> str:
         return self.run(StopMotion())

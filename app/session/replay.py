@@ -5,6 +5,7 @@ same inputs, same trajectory, paced or not). The first difference is reported wi
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -14,6 +15,7 @@ import numpy as np
 
 from app.service.errors import ServiceError
 from app.service.log_row import COLUMNS
+from app.service.verbs import ReleaseEstop
 from app.session.inputs import BadInput, decode, outcome_of, same_outcome
 from app.session.reader import Session
 from app.session.writer import qpos_digest
@@ -174,6 +176,10 @@ def _apply(host, source: ReplaySource, doc: Mapping[str, Any]) -> str | None:
         if got != recorded.get("acks", got):
             return f"setpoints acknowledged {got}, recorded {recorded['acks']}"
         return None
+    if isinstance(value, ReleaseEstop):  # its sent time is of the recorded run's clock, not this one's
+        if recorded.get("ok") is False and recorded.get("reason") == "hard_stop":
+            return None  # refused for a press after it was sent: it changed nothing
+        value = dataclasses.replace(value, sent_monotonic_s=None)
     try:
         outcome = outcome_of(host.apply(value))
     except ServiceError as exc:

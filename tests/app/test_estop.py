@@ -2,12 +2,15 @@
 late copy; and the host that applies them to the loop."""
 
 import json
+import time
 
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from app.service.errors import Refused
 from app.service.estop import COPY_WINDOW_S, EstopAck, PressLog, parse_message, parse_text, request_of
+from app.service.verbs import ReleaseEstop
 
 
 def ack_at(t_s: float) -> EstopAck:
@@ -86,3 +89,33 @@ def test_the_host_engages_every_press_but_a_late_copy_and_answers_a_copy_with_it
     assert again.engaged and host.loop.hard_stop_engaged
     host.release_estop()
     assert host.engage_estop(None).engaged  # no id: always a new press
+
+
+def test_a_press_handled_after_a_release_was_sent_is_not_released_by_it_and_a_copy_does_not_count():
+    log = PressLog()
+    log.pressed("a", EstopAck(tick=1, sim_time_s=0.0, engaged_at_monotonic_s=10.0, engaged=True))
+    assert not log.pressed_since(10.0) and log.pressed_since(9.99)
+    log.pressed("b", EstopAck(tick=2, sim_time_s=0.0, engaged_at_monotonic_s=10.5, engaged=True,
+                              already_engaged=True))  # another client's press, the stop already engaged
+    assert log.pressed_since(10.2) and not log.pressed_since(10.5)
+
+
+def test_a_release_sent_before_another_clients_press_leaves_the_stop_engaged(runtime):
+    # the robot process reads the e-stop pipe and the door before the commands: a release sent before another
+    # client's press can be handled after that press, which then answered "already engaged"
+    host = runtime.host
+    runtime.run_for(0.05)
+    assert host.engage_estop("page-1:1").engaged
+    sent_s = time.monotonic()
+    assert host.engage_estop("page-1:1").copy  # a copy of the press the release is for: does not count
+    host.release_estop(sent_monotonic_s=sent_s)
+    assert not host.loop.hard_stop_engaged
+    assert host.engage_estop("page-1:2").engaged
+    sent_s = time.monotonic()
+    assert host.engage_estop("page-2:1").already_engaged  # another client presses after the release was sent
+    with pytest.raises(Refused) as refused:
+        runtime.submit(ReleaseEstop(0, sent_s)).result()
+    assert refused.value.reason == "hard_stop" and "pressed after this release was sent" in str(refused.value)
+    assert host.loop.hard_stop_engaged
+    runtime.submit(ReleaseEstop(0, time.monotonic())).result()  # released again, after the press
+    assert not host.loop.hard_stop_engaged

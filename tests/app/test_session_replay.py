@@ -8,8 +8,10 @@ import time
 import pytest
 
 from app.service import OperatorService
+from app.service.errors import Refused
 from app.service.local import LocalRobot
 from app.service.setpoints import Setpoint
+from app.service.verbs import ReleaseEstop
 from app.session.reader import read_session
 from app.session.replay import replay
 
@@ -143,4 +145,31 @@ def test_a_session_started_by_a_reset_after_a_streamed_hand_replays_bit_for_bit(
     finally:
         robot.close()
     result = replay(read_session(tmp_path / "s.mcap"))
+    assert result.identical, result.first_difference
+
+
+def test_a_release_refused_for_a_press_after_it_and_the_release_after_replay_bit_for_bit(tmp_path):
+    # a release carries the console's monotonic time when it was sent, a clock the replay does not share: the
+    # refused one changed nothing and is not applied again, the accepted one is applied unchecked
+    robot = LocalRobot(speed=None)
+    try:
+        robot.host.start_recording(tmp_path / "s.mcap", reset=True)
+        robot.run_for(2.5)
+        robot.host.engage_estop("page-1:1")
+        sent_s = time.monotonic()
+        robot.run_for(0.1)
+        robot.host.engage_estop("page-2:1")  # another client, after the release below was sent
+        with pytest.raises(Refused):
+            robot.submit(ReleaseEstop(0, sent_s)).result()
+        robot.run_for(0.3)
+        assert robot.host.loop.hard_stop_engaged
+        robot.submit(ReleaseEstop(0, time.monotonic())).result()
+        robot.run_for(0.5)
+        assert not robot.host.loop.hard_stop_engaged
+        robot.host.stop_recording()
+        robot.host.last_recorder.wait()
+    finally:
+        robot.close()
+    session = read_session(tmp_path / "s.mcap")
+    result = replay(session)
     assert result.identical, result.first_difference

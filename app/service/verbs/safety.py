@@ -12,9 +12,12 @@ from app.service.verbs.base import Host, Verb
 class ReleaseEstop(Verb):
     name = "release_estop"
     setpoints_before: int = 0  # the console's newest setpoint number when the release was sent
+    #: [s] the console's time.monotonic() when the release was sent (one clock for the machine's processes): a
+    #: press handled after it is not released by it. None: not checked (a replay: its clock is another run's)
+    sent_monotonic_s: float | None = None
 
     def run(self, host: Host) -> str:
-        host.release_estop(self.setpoints_before)
+        host.release_estop(self.setpoints_before, self.sent_monotonic_s)
         return "hard e-stop released"
 
 
