@@ -36,7 +36,8 @@ async def engage(service: ServiceDep, x_estop_press: Annotated[str | None, Heade
 
 @router.post("/release", response_model=Ok, responses=errors(409),
              summary="Release the hard e-stop (blends to where the robot is) and clear the fault; refused after "
-                     "a fall (reset instead)")
+                     "a fall (reset instead), and when a press reached the robot after this release was sent (409 "
+                     "hard_stop: that press stays in force)")
 def release(service: ServiceDep) -> Ok:
     return Ok(message=service.release_estop())
 
