@@ -413,11 +413,8 @@ class RobotHost:
         return ack
 
     def release_estop(self, setpoints_before: int = 0, sent_monotonic_s: float | None = None) -> None:
-        """Release the hard e-stop; the operator's setpoints numbered up to `setpoints_before` (sent before the
-        release) are never applied, those streamed before the stop are forgotten. A release sent (`sent_monotonic_s`,
-        time.monotonic()) before a press handled since is refused: the press came after it and stays in force (the
-        e-stop pipe and the door are read before the commands, so a release and a later press can meet here in
-        either order)."""
+        """Release the hard e-stop; the operator's setpoints numbered up to `setpoints_before` are never applied,
+        those streamed before the stop are forgotten. Refused if sent (`sent_monotonic_s`) before a press since."""
         loop = self.loop
         if loop.fall is not None and loop.fall.reason is not None:
             raise Refused("fallen", f"the robot has fallen ({loop.fall.reason}); only a reset recovers")
@@ -426,8 +423,7 @@ class RobotHost:
             raise Refused("diverged", f"the simulation has diverged ({diverged}); only a reset recovers "
                                       "(POST /api/sim/reset)")
         if sent_monotonic_s is not None and self._presses.pressed_since(sent_monotonic_s):
-            raise Refused("hard_stop", "not released: an e-stop was pressed after this release was sent; the hard "
-                                       "e-stop stays engaged (release it again)")
+            raise Refused("hard_stop", "not released: an e-stop was pressed after this release was sent; release again")
         self.layer("hes").release()  # InvalidState (-> 409) when not engaged
         self._presses.released(time.monotonic())
         self.release_barrier_seq = max(self.release_barrier_seq, int(setpoints_before))
