@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from controller.balance.fall_detector import FallDetectorParams
 from controller.core.types import Reference
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, legs_within_limits
 from controller.kinematics.model import RobotKinematics
@@ -19,6 +20,17 @@ from controller.operation.limits import MOTION_STOP, REACH
 #: COG over either sole as well (seed 5010: rolled 8.5 deg and pitched 16 deg, the stance hip roll reached its limit
 #: on the right foot though 15 deg were left on the left one)
 WAIST_LEG_LIMIT_MARGIN_RAD = math.radians(3.0)
+#: [rad] a waist target tilts BODY at most this far from the vertical: the loop's fall detector reads BODY past
+#: FallDetectorParams.max_tilt_deg (30) as a fall (soak seed 11019: a waist stick on one foot tilted BODY to 30 deg
+#: while the robot stood, and the safe stop latched "fallen"); 5 deg are left for BODY's sway about its target
+WAIST_MAX_TILT_RAD = math.radians(FallDetectorParams().max_tilt_deg - 5.0)
+
+
+def tilt_rad(rpy_rad) -> float:
+    """[rad] how far BODY's z axis is from the vertical for roll, pitch, yaw in a level frame (the fall
+    detector's measure)."""
+    roll, pitch = float(rpy_rad[0]), float(rpy_rad[1])
+    return math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
 
 
 def ground_z(gait, F: PlanarFrame) -> float:
@@ -45,6 +57,9 @@ class WaistPoint:
         (PointTargets); a height or tilt the legs cannot reach is set back to the achieved one (reason "reach")."""
         target = points.targets["waist"]
         R_F = None
+        if target is not self._checked and tilt_rad(target.rpy_rad) > WAIST_MAX_TILT_RAD and "waist" in points.achieved:
+            target = points.targets["waist"] = points.achieved["waist"]
+            points.limited["waist"] = REACH
         if gait is not None and not stopped and target is not self._checked:
             R_F = rpy_to_matrix(target.rpy_rad)
             walking = getattr(gait, "walking", False)

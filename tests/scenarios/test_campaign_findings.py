@@ -422,3 +422,24 @@ def test_the_hard_estop_during_stands_return_from_a_squat_then_its_release_leave
     status, _, flag = stand_from(robot)
     assert status.state == "succeeded", status.message
     assert not flag
+
+
+SEED_11019 = [  # the stretch's time [s] (from its reset), as the soak sent it
+    (6.685, RunBehavior("squat", (("depth_m", 0.1358), ("speed_m_s", 0.1953), ("tolerance_m", 0.0118)))),
+    (14.22, (Setpoint("rfoot", (0.0277, -0.099, 0.0612), (0.0, 0.0, 0.0)), 0.86)),
+    (15.75, (Setpoint("waist", (0.0, 0.0, 0.0466), tuple(math.radians(w) for w in (-8.62, 9.05, 4.93))), 2.6)),
+    (16.065, (Setpoint("rfoot", (-0.023, -0.0375, 0.0458), (0.0, 0.0, 0.0)), 2.66)),  # a closed tab: no zero
+]
+
+
+@pytest.mark.slow
+def test_seed_11019_a_waist_stick_on_one_foot_stops_short_of_the_tilt_the_fall_detector_reads_as_a_fall():
+    # squatting on the left foot with the right one operated, a waist stick rolled and pitched BODY to 30 deg: the
+    # robot stood (CP error under 10 mm) and the loop declared a fall. The waist now stops at 25 deg ("reach")
+    robot = LocalRobot("default")
+    obs = replay([(t - RECORDED_WARM_UP_S, a) for t, a in SEED_11019], 19.0 - RECORDED_WARM_UP_S, robot)
+    assert not obs.fallen and robot.host.loop.fall.reason is None
+    _, roll, pitch, _ = (float(v) for v in obs.layers["op"].points["waist"].achieved)  # (height, roll, pitch, yaw)
+    assert 24.0 < math.degrees(math.acos(math.cos(roll) * math.cos(pitch))) <= 25.0  # the stick asked for ~33 deg
+    w, x, y, _ = (float(v) for v in obs.truth.base_quat_wxyz)
+    assert math.degrees(math.acos(1.0 - 2.0 * (x * x + y * y))) < 27.0  # BODY as simulated: the target and its sway

@@ -71,7 +71,7 @@ ABOVE_EDGE_OBJECT_M = (0.25, -0.27, 0.83)
 WITHDRAW_PITCH_RAD = math.radians(40.0)  # the empty hand turned up as it backs off (the wrist at 92 deg else)
 GRASP_ABOVE_CENTRE_M = 0.07  # [m] the jaws close this far above the object's middle
 WAIST_DOWN_M = 0.26  # [m] the squat (0.30 fell)
-WAIST_PITCH_RAD = math.radians(25.0)  # the waist pitched forward while squatting (32: tilt over 30 = fallen)
+WAIST_PITCH_RAD = math.radians(25.0)  # the waist pitched forward while squatting (the waist point's most)
 WAIST_PITCH_RATE_RAD_S = math.radians(10.0)  # ... slowly: 20 deg/s while squatting set the capture-point flag
 OPEN_GAP_M = 0.10  # [m] between the fully open jaws (robot/hrp2/README.md)
 LIFTED_MIN_M = 0.05  # [m] the lift (0.10 m of the hand) counts when the object rose this much

@@ -8,7 +8,7 @@ from controller.kinematics.model import RobotKinematics
 from controller.operation.frame import PlanarFrame
 from controller.operation.point_targets import PointTargets
 from controller.operation.targets import WaistPose, feet_frame
-from controller.operation.waist import WaistPoint, ground_z
+from controller.operation.waist import WAIST_MAX_TILT_RAD, WaistPoint, ground_z, tilt_rad
 from controller.system import initial_reference
 from robot.generate import half_sitting_deg
 
@@ -60,3 +60,22 @@ def test_a_height_the_legs_cannot_reach_is_held_at_the_achieved_one():
     assert base[2] == pytest.approx(F.p[2] + height - 0.01)
     waist.realise(pts, REF, g, F, True)
     assert pts.limited["waist"] == "motion_stop"
+
+
+def test_a_tilt_the_fall_detector_would_read_as_a_fall_is_held_at_the_achieved_one():
+    # soak seed 11019: a waist stick on one foot tilted BODY to 30 deg, the robot standing; the loop declared a fall
+    assert np.degrees(WAIST_MAX_TILT_RAD) == pytest.approx(25.0)
+    pts = PointTargets()
+    F = PlanarFrame(np.array((0.0, 0.0, 0.0)), 0.0)
+    waist = WaistPoint()
+    a = WAIST_MAX_TILT_RAD
+    within = WaistPose(0.6, (0.0, a - 0.01, 0.3))
+    pts.targets["waist"] = within
+    waist.realise(pts, REF, None, F, False)
+    assert pts.targets["waist"] is within and pts.limited.get("waist") is None
+    for rpy in ((0.0, a + 0.01, 0.0), (-(a + 0.01), 0.0, 0.0), (0.7 * a, 0.75 * a, 1.0)):  # pitch, roll, both
+        assert tilt_rad(rpy) > a
+        pts.targets["waist"] = WaistPose(0.6, rpy)
+        _, got = waist.realise(pts, REF, None, F, False)
+        assert pts.targets["waist"] is within and pts.limited["waist"] == "reach"
+        assert np.allclose(got, within.rpy_rad)
