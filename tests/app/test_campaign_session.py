@@ -3,8 +3,11 @@ of the whole campaign (a CI run under load: `KeyError: 'time'` took every other 
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
+from app.lab.campaign.grammar import Action
 from app.lab.campaign.session import Session, StateUnavailable
 
 pytestmark = pytest.mark.in_process  # in this process, no wall clock: on make test's parallel pass
@@ -47,3 +50,24 @@ def test_the_old_simulations_states_after_a_reset_are_not_the_new_robots(monkeyp
     session.reset_and_warm_up()
     assert session.checker.violations == [] and session.checker.falls == [{"time_s": 59.5,
                                                                             "pushes": [(0.0, 42.0, 20.0)]}]
+
+
+def test_a_push_just_after_a_walk_was_accepted_is_drawn_from_and_held_to_the_walking_envelope(monkeypatch):
+    # soak seed 11023: goVelocity accepted, then at once an 18 N s push drawn from the standing envelope (the state
+    # read did not show the walk yet); the robot, in its first step, fell, and the fall counted as within the envelope
+    sent = []
+
+    def request(self, method, path, body_=None, headers=None, check=True):
+        sent.append((method, path, body_))
+        return 200, {"ok": True}
+
+    monkeypatch.setattr(Session, "request", request)
+    session = Session(port=9, seed=1, seconds=1.0, catalogue={}, actions=[])
+    session.state = {"walking": False, "emergency": {"hard_stop": False}, "layers": {}}
+    push = Action(0.0, "push", {"envelope_fraction": 0.9, "direction_deg": 85.4})
+    session.act(push)  # standing: 18 N s of a 20 N s envelope
+    session.act(Action(0.0, "go_velocity", {"vx": -0.0248, "vy": -0.1044, "vtheta_deg": -14.63}))
+    session.act(push)  # the walk accepted, not yet in the state: 9 N s of the walking 10 N s
+    forces = [math.hypot(*body["force"][:2]) * body["duration"] for _, path, body in sent if path == "/api/sim/push"]
+    assert forces == pytest.approx([18.0, 9.0], abs=1e-3)  # the force is sent rounded to the mN
+    assert [(round(j, 3), e) for _, j, e in session.checker.pushes] == [(18.0, 20.0), (9.0, 10.0)]
