@@ -71,3 +71,25 @@ def test_a_push_just_after_a_walk_was_accepted_is_drawn_from_and_held_to_the_wal
     forces = [math.hypot(*body["force"][:2]) * body["duration"] for _, path, body in sent if path == "/api/sim/push"]
     assert forces == pytest.approx([18.0, 9.0], abs=1e-3)  # the force is sent rounded to the mN
     assert [(round(j, 3), e) for _, j, e in session.checker.pushes] == [(18.0, 20.0), (9.0, 10.0)]
+
+
+def test_a_request_the_console_does_not_answer_in_time_ends_the_session_with_an_invariant_5_finding():
+    # a soak piece crashed whole (TimeoutError out of GET /api/state) instead of ending the one session with a finding
+    class Silent:
+        timeout = 30.0
+
+        def request(self, *a, **k):
+            pass
+
+        def getresponse(self):
+            raise TimeoutError("timed out")
+
+        def close(self):
+            pass
+
+    session = Session(port=9, seed=1, seconds=1.0, catalogue={}, actions=[])
+    session.conn = Silent()
+    result = session.run()
+    assert [v.invariant for v in result.violations] == [5]
+    assert "the console stopped answering: GET /api/" in result.violations[0].detail
+    assert "no answer within 30 s" in result.violations[0].detail

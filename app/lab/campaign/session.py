@@ -87,6 +87,10 @@ class StateUnavailable(Exception):
         super().__init__(f"GET /api/state answered {status}: {str(body)[:300]}")
 
 
+class ConsoleSilent(Exception):
+    """A request the console did not answer within the connection's timeout (not sent again: it may have acted)."""
+
+
 class Session:
     """Drives one session on the console listening on `port`; `run()` returns its SessionResult."""
 
@@ -135,6 +139,9 @@ class Session:
                 r = self.conn.getresponse()
                 raw = r.read()
                 break
+            except TimeoutError:
+                self.conn.close()
+                raise ConsoleSilent(f"{method} {path}: no answer within {self.conn.timeout:g} s") from None
             except (ConnectionError, http.client.HTTPException):
                 self.conn.close()
                 if attempt:
@@ -258,6 +265,8 @@ class Session:
             self._run()
         except StateUnavailable as exc:  # the session cannot go on without the state: a finding, not a crash
             self.checker.violate(5, f"the state document is unavailable: {exc}")
+        except ConsoleSilent as exc:  # nor without answers (a soak piece crashed whole on one in stop 43)
+            self.checker.violate(5, f"the console stopped answering: {exc}")
         finally:
             self.close()
         c = self.checker
