@@ -13,6 +13,13 @@ from robot.names import FORCE_SENSOR_NAMES
 _FEET = (FORCE_SENSOR_NAMES.index("rfsensor"), FORCE_SENSOR_NAMES.index("lfsensor"))
 
 
+def tilt_rad(rpy_rad) -> float:
+    """[rad] how far BODY's z axis is from the vertical for roll, pitch (, yaw) in a level frame: the fall's
+    measure, and the waist point's limit on it."""
+    roll, pitch = float(rpy_rad[0]), float(rpy_rad[1])
+    return math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
+
+
 @dataclass(frozen=True)
 class FallDetectorParams(Params):
     # A standing or walking HRP-2 tilts a few degrees; a robot past 30 deg cannot be caught by the ankles
@@ -50,7 +57,7 @@ class FallDetector:
             return self.reason
         p = self.params
         # angle between BODY's z axis and the vertical for roll-pitch-yaw attitudes
-        tilt = math.degrees(math.acos(max(-1.0, min(1.0, math.cos(roll_rad) * math.cos(pitch_rad)))))
+        tilt = math.degrees(tilt_rad((roll_rad, pitch_rad)))
         if tilt > p.max_tilt_deg:
             self.reason = f"tilt {tilt:.0f} deg > {p.max_tilt_deg:g} deg (KalmanFilter attitude)"
             return self.reason

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from controller.balance.fall_detector import FallDetectorParams
+from controller.balance.fall_detector import FallDetectorParams, tilt_rad
 from controller.core.types import Reference
 from controller.kinematics.fullbody_ik import WALK_LEG_LIMIT_MARGIN_RAD, FullbodyIK, legs_within_limits
 from controller.kinematics.model import RobotKinematics
@@ -24,13 +24,6 @@ WAIST_LEG_LIMIT_MARGIN_RAD = math.radians(3.0)
 #: FallDetectorParams.max_tilt_deg (30) as a fall (soak seed 11019: a waist stick on one foot tilted BODY to 30 deg
 #: while the robot stood, and the safe stop latched "fallen"); 5 deg are left for BODY's sway about its target
 WAIST_MAX_TILT_RAD = math.radians(FallDetectorParams().max_tilt_deg - 5.0)
-
-
-def tilt_rad(rpy_rad) -> float:
-    """[rad] how far BODY's z axis is from the vertical for roll, pitch, yaw in a level frame (the fall
-    detector's measure)."""
-    roll, pitch = float(rpy_rad[0]), float(rpy_rad[1])
-    return math.acos(max(-1.0, min(1.0, math.cos(roll) * math.cos(pitch))))
 
 
 def ground_z(gait, F: PlanarFrame) -> float:
